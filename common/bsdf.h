@@ -1,0 +1,92 @@
+/* bsdf.h: materials (Mitsuba 0.6 conventions) and their BSDFs: evaluation, importance sampling
+ * and pdfs, for both radiance transport (eye paths) and importance transport (light paths).
+ *
+ * Conventions shared by every integrator:
+ *  - Directions are world-space unit vectors pointing AWAY from the surface point.
+ *  - `wo` is the direction the path arrived from (toward the previous vertex of the sub-path
+ *    being traced), `wi` the other one (sampled, or toward the connection partner).
+ *  - f excludes the cosine; integrators multiply by |dot(wi, shading normal)|.
+ *  - For PC_IMPORTANCE transport, f already includes Veach's shading-normal correction
+ *    |wo.ns||wi.ng| / (|wo.ng||wi.ns|) and omits the radiance eta^2 scaling of refraction,
+ *    so light sub-path throughputs are correct as is.
+ *  - Delta lobes (smooth conductor/dielectric/plastic's specular) are never returned by eval
+ *    or pdf; only sample produces them, flagged is_delta, with pdf the discrete lobe
+ *    probability (the Dirac factors cancel in f*cos/pdf and in MIS ratios).
+ *  - A material that is not twosided reflects only on the front side of the shading frame
+ *    (as in Mitsuba); dielectric is two-sided by nature. */
+#ifndef PC_BSDF_H
+#define PC_BSDF_H
+
+#include <stdbool.h>
+
+#include "texture.h"
+#include "vecmath.h"
+
+typedef enum {
+  PC_MAT_DIFFUSE,
+  PC_MAT_CONDUCTOR,
+  PC_MAT_ROUGHCONDUCTOR,
+  PC_MAT_PLASTIC,
+  PC_MAT_ROUGHPLASTIC,
+  PC_MAT_DIELECTRIC,
+} pc_mat_type;
+
+typedef enum { PC_RADIANCE = 0, PC_IMPORTANCE = 1 } pc_transport;
+
+#define PC_PLASTIC_TABLE 32
+
+typedef struct pc_material {
+  pc_mat_type type;
+  bool twosided;             /* the Mitsuba `twosided` wrapper */
+  pc_tex_slot reflectance;   /* diffuse: reflectance; plastic: diffuseReflectance */
+  pc_tex_slot specular;      /* conductor/plastic/dielectric: specularReflectance */
+  pc_tex_slot transmittance; /* dielectric: specularTransmittance */
+  vec3 eta, k;               /* conductor: complex index of refraction relative to extEta */
+  float alpha;               /* rough*: GGX roughness (isotropic) */
+  float int_ior, ext_ior;    /* dielectric and plastic */
+  bool nonlinear;            /* plastic: Mitsuba's `nonlinear` */
+  /* Derived at scene build by pc_material_prepare (plastic): diffuse Fresnel reflectance of the
+   * interface from inside, and for roughplastic the tabulated rough transmittance. */
+  float fdr_int;
+  float spec_sampling_weight;
+  float rough_trans_in[PC_PLASTIC_TABLE];  /* 1 - rough reflectance, vs cos theta (external) */
+  float rough_trans_avg_int;               /* average internal rough transmittance */
+} pc_material;
+
+/* Geometry of a shading point as the BSDF needs it. */
+typedef struct pc_shading {
+  vec3 ng;     /* geometric normal (front side = counter-clockwise winding) */
+  frame sh;    /* shading frame, sh.n the interpolated shading normal */
+  vec2 uv;     /* texture coordinates */
+} pc_shading;
+
+typedef struct pc_bsdf_sample {
+  vec3 wi;       /* sampled direction, world space */
+  vec3 f;        /* BSDF value (no cosine), for the transport mode asked */
+  float pdf;     /* solid-angle pdf, or lobe probability when is_delta */
+  float pdf_rev; /* pdf of sampling wo given wi (same units), for bidirectional MIS */
+  bool is_delta;
+} pc_bsdf_sample;
+
+/* Precomputes derived data (plastic tables). Call once per material after parsing. */
+void pc_material_prepare(pc_material *m);
+
+vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi, pc_transport mode);
+/* Solid-angle pdf that pc_bsdf_sample(wo) produces wi (0 for delta lobes). */
+float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi);
+/* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
+bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sample *out);
+/* True if every lobe is a Dirac delta (such vertices are never connection endpoints). */
+bool pc_bsdf_is_delta(const pc_material *m);
+/* Russian-roulette continuation probability in [0,1]: depends only on the material at this
+ * point (not on depth or directions) so a reverse pdf can include it. */
+float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);
+
+/* RGB complex IOR of a named conductor (Mitsuba's `material` names: Ag, Al, Au, Cu, Cr, ...,
+ * and "none" for a perfect mirror). Returns false if unknown. */
+bool pc_conductor_ior(const char *name, vec3 *eta, vec3 *k);
+
+#endif

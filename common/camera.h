@@ -1,0 +1,38 @@
+/* camera.h: Mitsuba's pinhole `perspective` sensor: ray generation, the importance function
+ * We and its pdfs, and the t=1 connection (sampling the camera from a scene point) that light
+ * tracing needs. Camera space follows Mitsuba: +z forward, +y up, +x to the LEFT of the image
+ * (so toWorld from <lookat> renders unmirrored). */
+#ifndef PC_CAMERA_H
+#define PC_CAMERA_H
+
+#include <stdbool.h>
+
+#include "vecmath.h"
+
+typedef struct pc_camera {
+  mat4 to_world;       /* camera to world, rigid (scale is refused by the parser) */
+  vec3 pos, dir, right, up; /* derived: world position, forward, image-right, image-up */
+  int width, height;
+  float fov_deg;       /* along fov_axis */
+  char fov_axis;       /* 'x', 'y', 'd' (diagonal), 's' (smaller), 'l' (larger) */
+  /* derived by pc_camera_prepare */
+  float tan_half_x, tan_half_y; /* half extents of the image plane at distance 1 */
+  float image_area;             /* area of the image plane at distance 1 */
+} pc_camera;
+
+void pc_camera_prepare(pc_camera *c);
+
+/* Primary ray through raster position (px, py) in [0,W)x[0,H), (0,0) the top-left corner. */
+vec3 pc_camera_ray_dir(const pc_camera *c, float px, float py);
+
+/* Raster position of a world direction from the camera; false if outside the image or behind. */
+bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py);
+
+/* Importance We(dir) for a world direction leaving the camera, normalised so that
+ * integrating We * cos over the image solid angle gives 1 per pixel-count unit:
+ * We = 1 / (A * cos^4) with A the image-plane area at distance 1 (0 outside the image). */
+float pc_camera_we(const pc_camera *c, vec3 dir);
+/* Solid-angle pdf of generating `dir` by uniform raster sampling: 1 / (A cos^3). */
+float pc_camera_pdf_dir(const pc_camera *c, vec3 dir);
+
+#endif

@@ -1,0 +1,58 @@
+/* film.h: the framebuffer of a render: one unnormalized RGB sum per strategy layer, each with
+ * its own sample count (DESIGN.md §4.2). Workers ship sums and counts; whoever writes an image
+ * divides each layer by its own count. Eye-side layers (pt, nee, inner, s>=0,t>=2 debug layers)
+ * count iterations, i.e. samples per pixel; light-side layers (lt, t=1 debug layers) count
+ * light paths and are scaled by W*H/count. */
+#ifndef PC_FILM_H
+#define PC_FILM_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "image.h"
+#include "vecmath.h"
+
+enum { PC_LAYER_PT = 0, PC_LAYER_NEE = 1, PC_LAYER_LT = 2, PC_LAYER_INNER = 3, PC_LAYER_STD_COUNT = 4 };
+#define PC_FILM_MAX_LAYERS 64
+
+typedef enum { PC_NORM_EYE, PC_NORM_LIGHT } pc_norm;
+
+typedef struct pc_film_layer {
+  char name[16];   /* "pt", "nee", "lt", "inner", or "s2t3" for per-strategy debug layers */
+  pc_norm norm;
+  double *sum;     /* w*h*3 */
+  uint64_t count;  /* iterations (eye) or light paths (light) accumulated */
+} pc_film_layer;
+
+typedef struct pc_film {
+  int w, h;
+  int nlayers;
+  pc_film_layer layers[PC_FILM_MAX_LAYERS];
+  uint64_t dropped_nonfinite; /* samples that would have added NaN/Inf, counted and dropped */
+} pc_film;
+
+/* Creates the four standard layers; with strategy_depth > 0 also one layer per (s,t) with
+ * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d". */
+int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
+void pc_film_free(pc_film *f);
+void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
+/* Index of the per-strategy layer (s,t), or -1 if not kept. */
+int pc_film_strategy_layer(const pc_film *f, int s, int t);
+/* Adds src into dst (same shape, same layers): sums and counts. */
+int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
+/* Normalized RGB of layer i into out (w*h*3). */
+void pc_film_layer_image(const pc_film *f, int i, float *out);
+/* Beauty = sum of the normalized standard layers. */
+void pc_film_beauty(const pc_film *f, float *out);
+/* True if every sum is finite. */
+bool pc_film_is_finite(const pc_film *f);
+
+/* Adds c to pixel (x,y) of layer i after checking it is finite (drops and counts otherwise). */
+static inline void pc_film_add_sample(pc_film *f, int i, int x, int y, vec3 c) {
+  if (!v3_is_finite(c)) { f->dropped_nonfinite++; return; }
+  double *p = f->layers[i].sum + 3 * ((size_t)y * f->w + x);
+  p[0] += c.x; p[1] += c.y; p[2] += c.z;
+}
+
+#endif

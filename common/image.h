@@ -1,0 +1,61 @@
+/* image.h: an RGB float raster and its files: PNG/JPEG/EXR read (textures, references),
+ * EXR write with named layers and header attributes, sRGB PNG preview. */
+#ifndef PC_IMAGE_H
+#define PC_IMAGE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "error.h"
+
+#define PC_IMAGE_MAX_DIM 32768
+
+typedef struct pc_image {
+  int w, h;
+  float *rgb; /* w*h*3, row-major from the top-left; linear radiance/reflectance */
+} pc_image;
+
+void pc_image_free(pc_image *img);
+
+/* Reads a PNG, JPEG or EXR (chosen by content, not extension). 8-bit formats are converted
+ * from sRGB to linear when `srgb_to_linear`; EXR is linear. For EXR the beauty R,G,B channels
+ * are read. */
+int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+
+/* One named RGB layer of a multi-layer EXR. Name "" is the beauty (channels R,G,B). */
+typedef struct pc_exr_layer {
+  const char *name;
+  const float *rgb; /* w*h*3 */
+} pc_exr_layer;
+
+/* A header attribute: a string, a double or a 64-bit count (stored as string or double). */
+typedef struct pc_exr_attr {
+  const char *name;
+  enum { PC_ATTR_STRING, PC_ATTR_DOUBLE } type;
+  const char *s;
+  double d;
+} pc_exr_attr;
+
+/* Writes a single-part EXR (32-bit float, ZIP compressed) with the layers' channels
+ * "<layer>.R" etc. (beauty as plain R,G,B). Writes to a temporary file and renames, so a
+ * reader never sees a partial file. */
+int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int nlayers,
+                 const pc_exr_attr *attrs, int nattrs, pc_err *e);
+
+/* Reads every layer of an EXR written by pc_exr_write (or any EXR with RGB channel triplets).
+ * Returns layer names (malloc'd, "" for beauty) and images; caller frees with pc_exr_layers_free. */
+typedef struct pc_exr_file {
+  int w, h, nlayers;
+  char **names;
+  pc_image *layers;
+  int nattrs;
+  char **attr_names;
+  char **attr_values; /* attribute values printed as text */
+} pc_exr_file;
+int pc_exr_read_layers(const char *path, pc_exr_file *out, pc_err *e);
+void pc_exr_file_free(pc_exr_file *f);
+
+/* 8-bit sRGB PNG of rgb * 2^exposure (clamped), atomically written. */
+int pc_png_write_preview(const char *path, int w, int h, const float *rgb, float exposure, pc_err *e);
+
+#endif

@@ -1,0 +1,37 @@
+/* mesh.h: an indexed triangle mesh in world space, as the loaders (OBJ, PLY, the built-in
+ * shapes) produce it and the Embree scene consumes it. */
+#ifndef PC_MESH_H
+#define PC_MESH_H
+
+#include <stdint.h>
+
+#include "error.h"
+#include "vecmath.h"
+
+/* Hard limits on untrusted mesh files; over them the loader fails with PC_ELIMIT. */
+#define PC_MESH_MAX_VERTICES (1u << 26)
+#define PC_MESH_MAX_TRIANGLES (1u << 26)
+
+typedef struct pc_mesh {
+  uint32_t nverts, ntris;
+  vec3 *p;       /* nverts positions */
+  vec3 *n;       /* nverts shading normals, or NULL (flat shading) */
+  vec2 *uv;      /* nverts texture coordinates, or NULL */
+  uint32_t *idx; /* 3*ntris vertex indices, counter-clockwise = front face */
+} pc_mesh;
+
+void pc_mesh_free(pc_mesh *m);
+/* Applies a transform (and its inverse transpose to normals) in place. */
+void pc_mesh_transform(pc_mesh *m, const mat4 *xf);
+/* Reverses every triangle's winding and negates shading normals (Mitsuba's flipNormals). */
+void pc_mesh_flip(pc_mesh *m);
+
+/* Loaders. `where` is the "file:line" of the referencing scene element, used in messages. */
+int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e);
+int pc_mesh_load_ply(const char *path, pc_mesh *out, pc_err *e);
+/* Built-in Mitsuba shapes in object space, before their toWorld transform. */
+int pc_mesh_rectangle(pc_mesh *out);  /* [-1,1]^2 in z=0, normal +z */
+int pc_mesh_cube(pc_mesh *out);       /* [-1,1]^3, outward normals */
+int pc_mesh_disk(pc_mesh *out, int segments); /* unit disk in z=0, normal +z */
+
+#endif

@@ -1,0 +1,72 @@
+/* render.h: what a render is asked to do (pc_render_settings) and the one entry point that
+ * renders a range of iterations of a job into a film: the same call on a standalone render,
+ * on a farm worker, and in the tests. Iteration i is seeded from (seed, i) only, so any
+ * machine rendering it produces the same sums. */
+#ifndef PC_RENDER_H
+#define PC_RENDER_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "film.h"
+#include "scene.h"
+
+typedef enum { PC_MIS_BALANCE, PC_MIS_POWER } pc_mis_heuristic;
+typedef enum { PC_MIS_UPPER_BOUND, PC_MIS_STANDARD } pc_mis_mode;   /* PCBPT correlated MIS */
+typedef enum { PC_PMF_CACHED, PC_PMF_EXACT } pc_pmf_mode;
+
+typedef struct pc_render_settings {
+  pc_method method;
+  int width, height;       /* film size (overrides the scene's hdrfilm when set) */
+  int max_depth;           /* Mitsuba convention: -1 infinite, 1 = emitters seen directly */
+  uint64_t seed;
+  uint64_t light_paths;    /* N_L: light-tracing paths per iteration (0 = W*H) */
+  pc_mis_heuristic mis_heuristic;
+  int strategy_layers;     /* >0: keep per-(s,t) layers up to this path length */
+  /* PCBPT */
+  int pcbpt_m;             /* stored light paths per iteration (default 100) */
+  int pcbpt_k;             /* connections per eye vertex */
+  float cache_fraction;    /* importance-record eye paths as a fraction of W*H (0.004) */
+  int knn;                 /* records interpolated per lookup (6) */
+  float uniform_mix;       /* weight of the uniform PMF blended into p_conn */
+  pc_mis_mode mis_mode;
+  pc_pmf_mode pmf_mode;
+} pc_render_settings;
+
+/* Defaults for every field (method pt, seed 1, 256x256, max_depth -1 ...). */
+void pc_render_settings_default(pc_render_settings *s);
+/* Validates ranges; message names the offending setting. */
+int pc_render_settings_check(const pc_render_settings *s, pc_err *e);
+
+/* Time (seconds) and work spent, summed over iterations; printed and stored in headers. */
+typedef struct pc_render_stats {
+  uint64_t iterations;
+  uint64_t eye_paths, light_paths;
+  uint64_t rays;           /* closest-hit and shadow rays */
+  double t_total;          /* wall seconds inside pc_render_iterations */
+  double t_paths;          /* eye/light sub-path generation */
+  double t_lt;             /* light tracing splats */
+  double t_pmf;            /* PCBPT importance records */
+  double t_connect;        /* connections (inner strategies) incl. shadow rays */
+} pc_render_stats;
+
+typedef struct pc_renderer pc_renderer; /* thread pool + per-thread scratch for one scene */
+
+/* Creates a renderer for a built scene; threads = 0 uses every core. The film must have been
+ * initialised with the settings' width and height. */
+int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings, int threads,
+                       pc_renderer **out, pc_err *e);
+void pc_renderer_destroy(pc_renderer *r);
+int pc_renderer_threads(const pc_renderer *r);
+
+/* Renders iterations [first, first+count) adding into film (sums and counts) and stats.
+ * `cancel`, if non-NULL, is polled between work items; when it becomes true the call returns
+ * PC_ECANCELED and the film holds only whole iterations (none of the partial one).
+ * `progress(user, done)` is called after each finished iteration (may be NULL). */
+int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film *film,
+                         pc_render_stats *stats, atomic_bool *cancel,
+                         void (*progress)(void *user, uint64_t done), void *user, pc_err *e);
+
+#endif

@@ -1,0 +1,83 @@
+/* scene.h: a loaded scene: shapes (world-space meshes or exact spheres), materials, textures,
+ * lights, camera and the integrator element's defaults; plus its Embree acceleration structure
+ * and ray queries. Loading (scene_xml.c) fills the plain data; pc_scene_build makes it
+ * renderable. */
+#ifndef PC_SCENE_H
+#define PC_SCENE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "bsdf.h"
+#include "camera.h"
+#include "error.h"
+#include "light.h"
+#include "mesh.h"
+#include "texture.h"
+#include "vecmath.h"
+
+typedef enum { PC_SHAPE_MESH, PC_SHAPE_SPHERE } pc_shape_kind;
+
+typedef struct pc_shape {
+  pc_shape_kind kind;
+  pc_mesh mesh;          /* PC_SHAPE_MESH, world space, flipNormals already applied */
+  vec3 center;           /* PC_SHAPE_SPHERE, world space */
+  float radius;
+  bool flip_normals;     /* PC_SHAPE_SPHERE: normals point inward */
+  int material;          /* index into materials */
+  int light;             /* index into lights if this shape is an area emitter, else -1 */
+} pc_shape;
+
+typedef enum { PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT } pc_method;
+
+/* Limits on what one scene may contain (untrusted input). */
+#define PC_SCENE_MAX_SHAPES 65536
+#define PC_SCENE_MAX_MATERIALS 65536
+#define PC_SCENE_MAX_TEXTURES 4096
+#define PC_SCENE_MAX_LIGHTS 65536
+#define PC_SCENE_MAX_FILM_DIM 16384
+
+typedef struct pc_scene {
+  char *path;                 /* scene file as given */
+  pc_shape *shapes; int nshapes;
+  pc_material *materials; int nmaterials;
+  pc_texture *textures; int ntextures;
+  pc_light *lights; int nlights;
+  pc_camera camera;
+  pc_method method;           /* from <integrator type=...>: path, bdpt or pcbpt */
+  int max_depth;              /* Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly */
+  /* built by pc_scene_build */
+  void *rtc_device, *rtc_scene; /* RTCDevice, RTCScene (kept opaque to users of this header) */
+  float *light_cdf;           /* nlights+1, power-proportional selection */
+  float scene_radius;         /* bounding sphere radius, for ray offsets */
+  vec3 scene_center;
+} pc_scene;
+
+/* Parses a Mitsuba 0.6 XML scene (the subset in DESIGN.md §5). Errors are "file:line: what". */
+int pc_scene_load(const char *path, pc_scene *out, pc_err *e);
+/* Builds Embree geometry, light sampling tables and derived material data. */
+int pc_scene_build(pc_scene *s, pc_err *e);
+void pc_scene_free(pc_scene *s);
+
+const char *pc_method_name(pc_method m);
+int pc_method_parse(const char *name, pc_method *out); /* "pt" or "path", "lt", "bdpt", ... */
+
+/* A ray hit with everything shading needs. */
+typedef struct pc_hit {
+  vec3 p;
+  vec3 ng;          /* geometric normal, front side */
+  vec3 ns;          /* interpolated shading normal (== ng when the mesh has none) */
+  vec2 uv;
+  float t;
+  int shape, prim;
+} pc_hit;
+
+/* Closest hit along (o, d) within (0, tmax); d need not be normalised. */
+bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit);
+/* True if the open segment from a to b is unoccluded; the endpoints are offset off their
+ * surfaces along their geometric normals (na or nb may be zero for points not on a surface). */
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb);
+/* Ray origin offset off a surface, on the side of direction d. */
+vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
+
+#endif

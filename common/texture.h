@@ -1,0 +1,33 @@
+/* texture.h: spatially varying RGB parameters (Mitsuba's spectrum/texture slots): a constant,
+ * a bitmap (bilinear, wrapping) or a checkerboard, all looked up by texture coordinates. */
+#ifndef PC_TEXTURE_H
+#define PC_TEXTURE_H
+
+#include "image.h"
+#include "vecmath.h"
+
+typedef enum { PC_TEX_CONST, PC_TEX_BITMAP, PC_TEX_CHECKER } pc_tex_type;
+
+typedef struct pc_texture {
+  pc_tex_type type;
+  vec3 value;              /* PC_TEX_CONST */
+  pc_image img;            /* PC_TEX_BITMAP: owned, linear RGB */
+  vec3 color0, color1;     /* PC_TEX_CHECKER (Mitsuba defaults 0.4 and 0.2) */
+  float uscale, vscale;    /* uv' = uv * scale + offset (Mitsuba's Texture2D) */
+  float uoffset, voffset;
+} pc_texture;
+
+/* A slot is either a constant or an index into the scene's texture array: keeps materials
+ * plain data. */
+typedef struct pc_tex_slot {
+  int tex;      /* -1: use `value` */
+  vec3 value;
+} pc_tex_slot;
+
+vec3 pc_texture_eval(const pc_texture *t, vec2 uv);
+static inline vec3 pc_slot_eval(const pc_tex_slot *s, const pc_texture *texs, vec2 uv) {
+  return s->tex < 0 ? s->value : pc_texture_eval(&texs[s->tex], uv);
+}
+void pc_texture_free(pc_texture *t);
+
+#endif
