@@ -57,6 +57,7 @@ typedef struct pc_scene {
 int pc_scene_load(const char *path, pc_scene *out, pc_err *e);
 /* Builds Embree geometry, light sampling tables and derived material data. */
 int pc_scene_build(pc_scene *s, pc_err *e);
+/* Frees everything (safe on a zeroed or partially loaded scene). */
 void pc_scene_free(pc_scene *s);
 
 const char *pc_method_name(pc_method m);
