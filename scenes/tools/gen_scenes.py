@@ -188,7 +188,7 @@ def ajar_door():
     """Room A (camera, x<0) and room B (light, x>0) share a wall x in [-0.05, 0.05] with a door
     opening z in [-0.5, 0.5], y in [0, 2]. The door (1.1 wide so that, closed, it would overlap
     the frame by 5 cm each side; 2.1 high) hangs on room A's side, hinged at z=-0.55, and is
-    opened 6 degrees into room A: light from B reaches A only through the narrow wedge between
+    opened 6 degrees into room A (rotation -6 about +y): light from B reaches A only through the narrow wedge between
     door and wall (open at the door's free edge and above the door)."""
     s = Scene("ajar-door", "pcbpt", -1,
               "Door ajar (Veach): two rooms joined by a door opened a crack; the only light is on "
@@ -204,11 +204,13 @@ def ajar_door():
     s.box((-0.05, -0.01, -2.01), (0.05, 2.51, -0.5), ref("wall"))
     s.box((-0.05, -0.01, 0.5), (0.05, 2.51, 2.01), ref("wall"))
     s.box((-0.05, 2.0, -0.51), (0.05, 2.51, 0.51), ref("wall"))
-    # the door: closed it would be [-0.09,-0.05] x [0,2.1] x [-0.55,0.55]; rotating by +6 deg
-    # about +y at the hinge (-0.05, *, -0.55) swings its free edge toward -x (into room A)
-    s.box((-0.09, 0.0, -0.55), (-0.05, 2.1, 0.55), ref("door"), rot_y=6.0, pivot=(-0.05, 0.0, -0.55))
+    # the door: closed it would be [-0.09,-0.05] x [0,2.1] x [-0.55,0.55]. Rotating by theta
+    # about +y maps (x, z) to (x cos + z sin, -x sin + z cos), so theta = -6 deg at the hinge
+    # (-0.05, *, -0.55) swings the free edge to x = -0.05 - 1.1 sin 6 = -0.165, into room A
+    # (checked in check_door below; +6 would push it through the opening and seal it)
+    s.box((-0.09, 0.0, -0.55), (-0.05, 2.1, 0.55), ref("door"), rot_y=-6.0, pivot=(-0.05, 0.0, -0.55))
     # light: ceiling panel of room B, facing down
-    s.rect((1.6, 2.49, 0.0), 0.5, 0.5, "-y", BLACK, emit=(30, 30, 30))
+    s.rect((1.6, 2.49, 0.0), 0.5, 0.5, "-y", BLACK, emit=(300, 300, 300))
     # furniture in room A
     s.box((-2.4, 0.0, -1.7), (-1.6, 0.8, -0.9), ref("wall"), rot_y=20)
     s.box((-1.2, 0.0, 1.1), (-0.6, 1.2, 1.7), '<bsdf type="plastic"><rgb name="diffuseReflectance" '
@@ -236,7 +238,7 @@ def slit_room():
     s.box((-2.1, 1.59, zl), (-1.5, 1.66, zh), ref("wall"))
     s.box((1.5, 1.59, zl), (2.1, 1.66, zh), ref("wall"))
     # the emitter outside: 6 x 2 m at z=-5, y in [2.5, 4.5], facing +z (toward the blind)
-    s.rect((0.0, 3.5, -5.0), 3.0, 1.0, "+z", BLACK, emit=(60, 60, 60))
+    s.rect((0.0, 3.5, -5.0), 3.0, 1.0, "+z", BLACK, emit=(100, 100, 100))
     # a box and a sphere inside
     s.box((-1.2, 0.0, -0.4), (-0.5, 0.7, 0.3), diffuse((0.65, 0.25, 0.2)), rot_y=30)
     s.sphere((0.9, 0.4, -0.6), 0.4, diffuse((0.25, 0.5, 0.6)))
@@ -287,6 +289,19 @@ def glossy_glass():
     return s
 
 
+def check_door(preview, path):
+    """The ajar door must stay on room A's side (x < -0.05) and leave a crack at the frame."""
+    _, shapes, _ = preview.load(path)
+    door = [s for s in shapes if s.lo[1] > -0.001 and abs(s.hi[1] - 2.1) < 0.01][0]
+    pts = [t[0] for t in door.tris] + [preview.add(t[0], t[1]) for t in door.tris]
+    xmax = max(p[0] for p in pts)
+    # inner face at the frame edge z = 0.5: x of the door's wall-side face there
+    th = math.radians(6)
+    gap = (0.5 + 0.55) * math.tan(th)
+    print("ajar-door: door x max %.4f (must be <= -0.05), crack at the frame edge %.3f m" % (xmax, gap))
+    return 0 if xmax <= -0.0499 else 1
+
+
 SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass]
 
 
@@ -303,6 +318,7 @@ def main():
         bad = 0
         for p in paths:
             bad += preview.check(p)
+        bad += check_door(preview, os.path.join(ROOT, "ajar-door", "scene.xml"))
         sys.exit(1 if bad else 0)
 
 
