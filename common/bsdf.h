@@ -68,7 +68,9 @@ typedef struct pc_bsdf_sampled {
   bool is_delta;
 } pc_bsdf_sampled;
 
-/* Precomputes derived data (plastic tables). Call once per material after parsing. */
+/* Precomputes derived data (plastic tables). Call once per material after parsing. A textured
+ * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set
+ * it to pc_texture_average() of the texture. */
 void pc_material_prepare(pc_material *m);
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
