@@ -119,18 +119,25 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
   if (!lobe_sample(&c, lo, u0, u1, u2, &s)) return false;
   vec3 wi = v3_norm(frame_to_world(&sh->sh, v3(s.wi.x, s.wi.y, s.wi.z * zsign)));
   float gi = v3_dot(wi, sh->ng);
+  /* Continue from wi as eval and pdf will see it, so that they agree with this sample to the
+   * last bit. */
+  s.wi = frame_to_local(&sh->sh, wi);
+  s.wi.z *= zsign;
   if (!sides_agree(lo.z, s.wi.z, go, gi)) return false;
-  if (!s.is_delta) {
-    s.f = lobe_eval(&c, lo, s.wi);
+  vec3 f;
+  if (s.is_delta) {
+    f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
+  } else {
+    f = lobe_eval(&c, lo, s.wi);
     s.pdf = lobe_pdf(&c, lo, s.wi);
     s.pdf_rev = lobe_pdf(&c, s.wi, lo);
   }
-  if (mode == PC_IMPORTANCE) s.f = v3_scale(s.f, adjoint_correction(lo.z, s.wi.z, go, gi));
-  if (!v3_is_finite(s.f) || v3_is_zero(s.f) || !(s.pdf > 0.f) || !isfinite(s.pdf) ||
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(lo.z, s.wi.z, go, gi));
+  if (!v3_is_finite(f) || v3_is_zero(f) || !(s.pdf > 0.f) || !isfinite(s.pdf) ||
       !isfinite(s.pdf_rev) || !v3_is_finite(wi))
     return false;
   out->wi = wi;
-  out->f = s.f;
+  out->f = f;
   out->pdf = s.pdf;
   out->pdf_rev = s.pdf_rev;
   out->is_delta = s.is_delta;

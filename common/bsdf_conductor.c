@@ -16,7 +16,7 @@ bool pc_conductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, floa
   s->wi = v3(-wo.x, -wo.y, wo.z);
   s->is_delta = true;
   s->pdf = s->pdf_rev = 1.f;
-  s->f = v3_scale(v3_mul(pc_tex(c, &m->specular), fr), 1.f / wo.z);
+  s->f_cos = v3_mul(pc_tex(c, &m->specular), fr);
   return true;
 }
 

@@ -19,7 +19,7 @@ bool pc_dielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, flo
     s->wi = v3(-wo.x, -wo.y, wo.z);
     s->pdf = fr;
     s->pdf_rev = pc_fresnel_dielectric(s->wi.z, eta, NULL);
-    s->f = v3_scale(pc_tex(c, &m->specular), fr / fabsf(wo.z));
+    s->f_cos = v3_scale(pc_tex(c, &m->specular), fr);
     return true;
   }
   if (cos_t == 0.f) return false;
@@ -28,6 +28,6 @@ bool pc_dielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, flo
   s->pdf = 1.f - fr;
   s->pdf_rev = 1.f - pc_fresnel_dielectric(cos_t, eta, NULL);
   float scale = c->mode == PC_RADIANCE ? inv * inv : 1.f;
-  s->f = v3_scale(pc_tex(c, &m->transmittance), (1.f - fr) * scale / fabsf(cos_t));
+  s->f_cos = v3_scale(pc_tex(c, &m->transmittance), (1.f - fr) * scale);
   return true;
 }

@@ -19,11 +19,12 @@ typedef struct pc_lobe_ctx {
 } pc_lobe_ctx;
 
 /* What a lobe sampler produces. For a non-delta sample only wi is meaningful (bsdf.c evaluates
- * f and both pdfs, so sample, eval and pdf agree exactly); for a delta sample f, pdf and
- * pdf_rev are set, with f * |wi.z| / pdf the sample weight, without the shading correction. */
+ * f and both pdfs, so sample, eval and pdf agree exactly); for a delta sample f_cos, pdf and
+ * pdf_rev are set, with f_cos / pdf the sample weight (f times |cos wi|, without the shading
+ * correction; bsdf.c divides by the cosine of the final world-space wi). */
 typedef struct pc_lobe_sample {
   vec3 wi;
-  vec3 f;
+  vec3 f_cos;
   float pdf, pdf_rev;
   bool is_delta;
 } pc_lobe_sample;

@@ -54,7 +54,7 @@ bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float 
     s->is_delta = true;
     s->pdf = ps;
     s->pdf_rev = spec_prob(c->m, pc_fresnel_dielectric(s->wi.z, eta, NULL));
-    s->f = v3_scale(pc_tex(c, &c->m->specular), fi / wo.z);
+    s->f_cos = v3_scale(pc_tex(c, &c->m->specular), fi);
     return true;
   }
   s->wi = pc_sample_cosine_hemisphere(u1, u2);
