@@ -49,7 +49,7 @@ typedef struct pc_material {
    * interface from inside, and for roughplastic the tabulated rough transmittance. */
   float fdr_int;
   float spec_sampling_weight;
-  float rough_trans_in[PC_PLASTIC_TABLE];  /* 1 - rough reflectance, vs cos theta (external) */
+  float rough_trans_in[PC_PLASTIC_TABLE];  /* rough transmittance, vs cos theta (external) */
   float rough_trans_avg_int;               /* average internal rough transmittance */
 } pc_material;
 

@@ -62,9 +62,16 @@ bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float 
   return s->wi.z > 0.f;
 }
 
-/* Linear interpolation in the table of rough transmittance vs cos theta (uniform nodes). */
+/* Table node i holds cos theta = (i / (N - 1))^2: denser toward grazing, where the
+ * transmittance changes fastest. */
+static float table_cos(int i) {
+  float t = (float)i / (PC_PLASTIC_TABLE - 1);
+  return t * t;
+}
+
+/* Linear interpolation in the table of rough transmittance vs cos theta. */
 static float trans_in(const pc_material *m, float cos_theta) {
-  float x = fminf(fmaxf(cos_theta, 0.f), 1.f) * (PC_PLASTIC_TABLE - 1);
+  float x = sqrtf(fminf(fmaxf(cos_theta, 0.f), 1.f)) * (PC_PLASTIC_TABLE - 1);
   int i = (int)x;
   if (i >= PC_PLASTIC_TABLE - 1) return m->rough_trans_in[PC_PLASTIC_TABLE - 1];
   float t = x - (float)i;
@@ -109,20 +116,25 @@ bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, f
   return s->wi.z > 0.f;
 }
 
-/* Directional albedo of a rough dielectric interface's reflection (GGX, separable Smith) for
- * light arriving at cos theta = mu: E[F(wo.m) G1(wi, m)] over visible normals m, by a
- * deterministic midpoint rule on the sampler's unit square. */
+/* Transmittance of a rough dielectric interface (GGX, separable Smith) for light arriving at
+ * cos theta = mu, defined as Mitsuba's precomputed tables define it: the integral of the
+ * roughdielectric transmission lobe, E[(1 - F(wo.m)) G1(wt, m)] over visible normals m with wt
+ * the refracted direction. Energy lost to masking therefore counts as neither reflected nor
+ * transmitted. Deterministic midpoint rule on the sampler's unit square. */
 #define PC_RT_GRID 24
-static float rough_reflectance(float alpha, float eta, float mu) {
+static float rough_transmittance(float alpha, float eta, float mu) {
   mu = fminf(fmaxf(mu, 1e-4f), 1.f);
   vec3 wo = v3(sqrtf(fmaxf(0.f, 1.f - mu * mu)), 0.f, mu);
   double sum = 0;
   for (int i = 0; i < PC_RT_GRID; i++)
     for (int j = 0; j < PC_RT_GRID; j++) {
       vec3 h = pc_ggx_sample_visible(alpha, wo, (i + 0.5f) / PC_RT_GRID, (j + 0.5f) / PC_RT_GRID);
-      float dot = v3_dot(wo, h);
-      vec3 wi = v3_sub(v3_scale(h, 2.f * dot), wo);
-      if (wi.z > 0.f) sum += pc_fresnel_dielectric(dot, eta, NULL) * pc_ggx_g1(alpha, wi, h);
+      float dot = v3_dot(wo, h), cos_t;
+      float fr = pc_fresnel_dielectric(dot, eta, &cos_t);
+      if (fr >= 1.f) continue;
+      float scale = cos_t < 0.f ? 1.f / eta : eta;
+      vec3 wt = v3_sub(v3_scale(h, dot * scale + cos_t), v3_scale(wo, scale));
+      if (wt.z < 0.f) sum += (1.f - fr) * pc_ggx_g1(alpha, wt, h);
     }
   return (float)(sum / (PC_RT_GRID * PC_RT_GRID));
 }
@@ -137,10 +149,10 @@ void pc_plastic_prepare(pc_material *m) {
   if (m->type != PC_MAT_ROUGHPLASTIC) return;
   float alpha = pc_ggx_alpha(m->alpha);
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)
-    m->rough_trans_in[i] = 1.f - rough_reflectance(alpha, eta, (float)i / (PC_PLASTIC_TABLE - 1));
+    m->rough_trans_in[i] = rough_transmittance(alpha, eta, table_cos(i));
   /* Cosine-weighted average from inside: mean of T(sqrt(x)) for x uniform in [0, 1]. */
   double avg = 0;
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)
-    avg += 1.0 - rough_reflectance(alpha, 1.f / eta, sqrtf((i + 0.5f) / PC_PLASTIC_TABLE));
+    avg += rough_transmittance(alpha, 1.f / eta, sqrtf((i + 0.5f) / PC_PLASTIC_TABLE));
   m->rough_trans_avg_int = (float)(avg / PC_PLASTIC_TABLE);
 }

@@ -559,8 +559,8 @@ static void test_known_values(void **state) {
 
   /* Rough plastic tables: for a nearly smooth interface they approach 1 - F and 1 - Fdr. */
   pc_material rp = mk_plastic(0.002f, false);
-  for (int i = 4; i < PC_PLASTIC_TABLE; i++) {
-    float mu = (float)i / (PC_PLASTIC_TABLE - 1);
+  for (int i = 8; i < PC_PLASTIC_TABLE; i++) {
+    float mu = (float)(i * i) / ((PC_PLASTIC_TABLE - 1) * (PC_PLASTIC_TABLE - 1)); /* table nodes */
     assert_true(fabsf(rp.rough_trans_in[i] - (1 - pc_fresnel_dielectric(mu, eta_p, NULL))) < 5e-3f);
   }
   assert_true(fabsf(rp.rough_trans_avg_int - (1 - rp.fdr_int)) < 1e-2f);
