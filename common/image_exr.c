@@ -92,8 +92,10 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
   for (int i = 0; i < nattrs; i++) {
     if (!attrs[i].name || (attrs[i].type == PC_ATTR_STRING && !attrs[i].s))
       return pc_errf(e, PC_EINVAL, "%s: attribute %d has no name or no value", path, i);
-    if (attrs[i].type == PC_ATTR_STRING) rv = exr_attr_set_string(ctx, part, attrs[i].name, attrs[i].s);
-    else rv = exr_attr_set_double(ctx, part, attrs[i].name, attrs[i].d);
+    if (attrs[i].type == PC_ATTR_STRING)
+      rv = exr_attr_set_string(ctx, part, attrs[i].name, attrs[i].s);
+    else
+      rv = exr_attr_set_double(ctx, part, attrs[i].name, attrs[i].d);
     if (rv) {
       char what[320];
       snprintf(what, sizeof what, "cannot set attribute '%.256s'", attrs[i].name);
@@ -295,7 +297,8 @@ static int collect_attrs(exr_context_t ctx, const char *path, pc_exr_file *out, 
   if (rv || n < 0) return exr_fail(e, path, "cannot list attributes", rv, m);
   out->attr_names = calloc((size_t)n + 1, sizeof(char *));
   out->attr_values = calloc((size_t)n + 1, sizeof(char *));
-  if (!out->attr_names || !out->attr_values) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  if (!out->attr_names || !out->attr_values)
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   for (int32_t i = 0; i < n; i++) {
     const exr_attribute_t *a = NULL;
     rv = exr_get_attribute_by_index(ctx, 0, EXR_ATTR_LIST_FILE_ORDER, i, &a);
@@ -403,8 +406,9 @@ static int exr_read(const char *path, int beauty_only, pc_exr_file *out, pc_err 
   exr_context_initializer_t init = exr_init(&m);
   exr_context_t ctx = NULL;
   exr_result_t rv = exr_start_read(&ctx, path, &init);
-  int rc = rv ? exr_fail(e, path, "cannot open", rv, &m)
-              : exr_read_part(ctx, path, beauty_only, out, &m, e);
+  int rc;
+  if (rv) rc = exr_fail(e, path, rv == EXR_ERR_FILE_ACCESS ? "cannot open" : "bad header", rv, &m);
+  else rc = exr_read_part(ctx, path, beauty_only, out, &m, e);
   if (ctx) exr_finish(&ctx); /* a read context has nothing left to flush */
   if (rc) pc_exr_file_free(out);
   return rc;

@@ -132,7 +132,9 @@ int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) 
     goto done;
   }
   if (setjmp(png_jmpbuf(r->png))) {
-    rc = pc_errf(e, PC_EIMAGE, "%s: bad PNG: %s", path, r->msg.text);
+    /* libpng says only "Read Error" when the file is cut short. */
+    rc = pc_errf(e, PC_EIMAGE, "%s: bad PNG: %s", path,
+                 feof(r->f) ? "file ends early" : r->msg.text);
     goto done;
   }
   rc = png_decode(r);

@@ -204,19 +204,27 @@ static void test_exr_write_errors(void **state) {
 
 /* Writes channels of one pixel type with the Core API, as other software would. data[c] is a
  * planar w*h array of that type for channel c. */
-static void write_raw_exr(const char *path, int w, int h, exr_storage_t storage,
-                          exr_pixel_type_t type, const char **names, int nch, void **data) {
+static void write_raw_exr_at(const char *path, int ox, int oy, int w, int h,
+                             exr_storage_t storage, exr_pixel_type_t type, const char **names,
+                             int nch, void **data) {
   int bpe = type == EXR_PIXEL_HALF ? 2 : 4;
   exr_context_t ctx;
   int part;
   assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, NULL), 0);
   assert_int_equal(exr_add_part(ctx, NULL, storage, &part), 0);
   assert_int_equal(exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIPS), 0);
+  exr_attr_box2i_t dw;
+  dw.min.x = ox;
+  dw.min.y = oy;
+  dw.max.x = ox + w - 1;
+  dw.max.y = oy + h - 1;
+  assert_int_equal(exr_set_data_window(ctx, part, &dw), 0);
   if (storage == EXR_STORAGE_TILED)
     assert_int_equal(
         exr_set_tile_descriptor(ctx, part, 8, 8, EXR_TILE_ONE_LEVEL, EXR_TILE_ROUND_DOWN), 0);
   for (int c = 0; c < nch; c++)
-    assert_int_equal(exr_add_channel(ctx, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1), 0);
+    assert_int_equal(
+        exr_add_channel(ctx, part, names[c], type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1), 0);
   assert_int_equal(exr_attr_set_int(ctx, part, "someint", -42), 0);
   assert_int_equal(exr_attr_set_float(ctx, part, "somefloat", 0.25f), 0);
   assert_int_equal(exr_write_header(ctx), 0);
@@ -229,7 +237,7 @@ static void write_raw_exr(const char *path, int w, int h, exr_storage_t storage,
       if (storage == EXR_STORAGE_TILED)
         assert_int_equal(exr_write_tile_chunk_info(ctx, part, tx, ty, 0, 0, &ci), 0);
       else
-        assert_int_equal(exr_write_scanline_chunk_info(ctx, part, ty, &ci), 0);
+        assert_int_equal(exr_write_scanline_chunk_info(ctx, part, oy + ty, &ci), 0);
       if (first) assert_int_equal(exr_encoding_initialize(ctx, part, &ci, &enc), 0);
       else assert_int_equal(exr_encoding_update(ctx, part, &ci, &enc), 0);
       first = 0;
@@ -248,6 +256,11 @@ static void write_raw_exr(const char *path, int w, int h, exr_storage_t storage,
     }
   assert_int_equal(exr_encoding_destroy(ctx, &enc), 0);
   assert_int_equal(exr_finish(&ctx), 0);
+}
+
+static void write_raw_exr(const char *path, int w, int h, exr_storage_t storage,
+                          exr_pixel_type_t type, const char **names, int nch, void **data) {
+  write_raw_exr_at(path, 0, 0, w, h, storage, type, names, nch, data);
 }
 
 static void test_exr_half_uint_tiled(void **state) {
@@ -307,6 +320,41 @@ static void test_exr_half_uint_tiled(void **state) {
     free(uin[c]);
     free(flt[c]);
   }
+}
+
+static void test_exr_data_window(void **state) {
+  const char *rgb[3] = {"R", "G", "B"};
+  pc_err e;
+  pc_image img;
+  /* An origin away from (0,0) is honoured: pixel (0,0) of the result is dataWindow.min. */
+  float *planes[3];
+  for (int c = 0; c < 3; c++) {
+    planes[c] = malloc(sizeof(float) * 6 * 4);
+    for (int i = 0; i < 24; i++) planes[c][i] = (float)(100 * c + i);
+  }
+  for (int storage = 0; storage < 2; storage++) {
+    const char *p = path_in(state, "dw.exr");
+    write_raw_exr_at(p, -3, 5, 6, 4, storage ? EXR_STORAGE_TILED : EXR_STORAGE_SCANLINE,
+                     EXR_PIXEL_FLOAT, rgb, 3, (void **)planes);
+    assert_int_equal(pc_image_read(p, 1, &img, &e), PC_OK);
+    assert_int_equal(img.w, 6);
+    assert_int_equal(img.h, 4);
+    for (int i = 0; i < 24; i++)
+      for (int c = 0; c < 3; c++) assert_true(img.rgb[3 * i + c] == planes[c][i]);
+    pc_image_free(&img);
+  }
+  for (int c = 0; c < 3; c++) free(planes[c]);
+
+  /* Wider than PC_IMAGE_MAX_DIM: refused, never allocated. */
+  const int w = PC_IMAGE_MAX_DIM + 100;
+  float *zero = calloc((size_t)w, sizeof(float));
+  void *zp[3] = {zero, zero, zero};
+  const char *p = path_in(state, "wide.exr");
+  write_raw_exr(p, w, 1, EXR_STORAGE_SCANLINE, EXR_PIXEL_FLOAT, rgb, 3, zp);
+  expect_read_fails(p);
+  pc_exr_file f;
+  assert_true(pc_exr_read_layers(p, &f, &e) < 0);
+  free(zero);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -423,7 +471,8 @@ static void test_png_formats(void **state) {
   }
   write_png(p, w, h, 16, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, buf, 6 * w);
   assert_int_equal(pc_image_read(p, 0, &img, &e), PC_OK);
-  for (int i = 0; i < w * h * 3; i++) assert_float_equal(img.rgb[i], (i * 1000 + 7) / 65535.0f, 1e-6);
+  for (int i = 0; i < w * h * 3; i++)
+    assert_float_equal(img.rgb[i], (i * 1000 + 7) / 65535.0f, 1e-6);
   pc_image_free(&img);
 
   /* RGBA, interlaced */
@@ -431,7 +480,8 @@ static void test_png_formats(void **state) {
   write_png(p, w, h, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_ADAM7, buf, 4 * w);
   assert_int_equal(pc_image_read(p, 0, &img, &e), PC_OK);
   for (int i = 0; i < w * h; i++)
-    for (int c = 0; c < 3; c++) assert_float_equal(img.rgb[3 * i + c], (4 * i + c) * 3 / 255.0f, 1e-6);
+    for (int c = 0; c < 3; c++)
+      assert_float_equal(img.rgb[3 * i + c], (4 * i + c) * 3 / 255.0f, 1e-6);
   pc_image_free(&img);
 
   /* 1-bit gray */
@@ -544,7 +594,10 @@ static void test_missing_and_garbage(void **state) {
   expect_read_fails(path_in(state, "empty"));
   unsigned char junk[4096];
   unsigned s = 12345;
-  for (size_t i = 0; i < sizeof junk; i++) junk[i] = (unsigned char)((s = s * 1103515245u + 12345u) >> 16);
+  for (size_t i = 0; i < sizeof junk; i++) {
+    s = s * 1103515245u + 12345u;
+    junk[i] = (unsigned char)(s >> 16);
+  }
   spit(path_in(state, "junk"), junk, sizeof junk);
   expect_read_fails(path_in(state, "junk"));
   /* right magic bytes, garbage after them */
@@ -687,6 +740,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_exr_no_beauty_gives_first_triplet, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_half_uint_tiled, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_exr_data_window, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_preview_roundtrip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_formats, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_huge_header_refused, setup, teardown),
