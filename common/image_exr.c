@@ -109,8 +109,8 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
   rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
   if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
   exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-  int inited = 0;
-  for (int y = 0; y < h && !rv; y += lines) {
+  int inited = 0, rc = PC_OK;
+  for (int y = 0; y < h && !rv && !rc; y += lines) {
     exr_chunk_info_t ci;
     rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
     if (rv) break;
@@ -123,13 +123,17 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
       const float *src = NULL;
       for (int k = 0; k < nch && !src; k++)
         if (strcmp(ec->channel_name, ch[k].name) == 0) src = ch[k].plane;
-      if (!src) return pc_errf(e, PC_EEXR, "%s: OpenEXR lost channel '%s'", path, ec->channel_name);
+      if (!src) {
+        rc = pc_errf(e, PC_EEXR, "%s: OpenEXR lost channel '%s'", path, ec->channel_name);
+        break;
+      }
       ec->encode_from_ptr = (const uint8_t *)(src + (size_t)y * w * 3);
       ec->user_pixel_stride = 3 * sizeof(float);
       ec->user_line_stride = 3 * sizeof(float) * w;
       ec->user_data_type = EXR_PIXEL_FLOAT;
       ec->user_bytes_per_element = sizeof(float);
     }
+    if (rc) break;
     rv = exr_encoding_choose_default_routines(ctx, part, &enc);
     if (!rv) rv = exr_encoding_run(ctx, part, &enc);
   }
@@ -137,6 +141,7 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
     exr_result_t drv = exr_encoding_destroy(ctx, &enc);
     if (!rv) rv = drv;
   }
+  if (rc) return rc;
   if (rv) return exr_fail(e, path, "cannot write pixels", rv, m);
   return PC_OK;
 }
