@@ -141,6 +141,7 @@ static int vertex_for(obj_state *st, obj_key k, uint32_t *out) {
   if (st->has_vn) st->n[i] = st->vn[k.vn];
   if (st->has_vt) st->uv[i] = st->vt[k.vt];
   st->table[h] = i;
+  *out = i;
   if ((uint64_t)st->nverts * 2 > st->table_size) return table_rehash(st, st->table_size * 2);
   return 0;
 }
