@@ -6,6 +6,8 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <sys/stat.h>
+
 #include "mesh.h"
 #include "scene.h"
 #include "test_helpers_fs.h"
@@ -115,6 +117,13 @@ static void test_obj_errors(void **state) {
   pc_mesh m;
   pc_err e = {0};
   assert_int_equal(pc_mesh_load_obj("/nonexistent/x.obj", &m, &e), PC_EIO);
+  /* a FIFO or a folder is not a mesh, and opening the FIFO must not block */
+  char fifo[128];
+  snprintf(fifo, sizeof fifo, "%s/fifo.obj", g_dir);
+  assert_int_equal(mkfifo(fifo, 0600), 0);
+  assert_int_equal(pc_mesh_load_obj(fifo, &m, &e), PC_EIO);
+  assert_non_null(strstr(e.msg, "not a regular file"));
+  assert_int_equal(pc_mesh_load_ply(g_dir, &m, &e), PC_EIO);
 }
 
 static const char *PLY_HEAD =
