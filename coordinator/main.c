@@ -35,7 +35,6 @@ int main(int argc, char **argv) {
   }
   for (size_t i = 0; i < sizeof verbs / sizeof verbs[0]; i++)
     if (strcmp(argv[1], verbs[i].name) == 0) return verbs[i].run(argc - 2, argv + 2);
-  fprintf(stderr, "pcbpt-coord: unknown verb '%s'\n", argv[1]);
-  usage(stderr);
+  fprintf(stderr, "pcbpt-coord: unknown verb '%s' (see pcbpt-coord --help)\n", argv[1]);
   return 2;
 }
