@@ -49,7 +49,7 @@ typedef struct pc_material {
    * interface from inside, and for roughplastic the tabulated rough transmittance. */
   float fdr_int;
   float spec_sampling_weight;
-  float rough_trans_in[PC_PLASTIC_TABLE];  /* 1 - rough reflectance, vs cos theta (external) */
+  float rough_trans_in[PC_PLASTIC_TABLE];  /* rough transmittance, vs cos theta (external) */
   float rough_trans_avg_int;               /* average internal rough transmittance */
 } pc_material;
 
@@ -60,15 +60,17 @@ typedef struct pc_shading {
   vec2 uv;     /* texture coordinates */
 } pc_shading;
 
-typedef struct pc_bsdf_sample {
+typedef struct pc_bsdf_sampled {
   vec3 wi;       /* sampled direction, world space */
   vec3 f;        /* BSDF value (no cosine), for the transport mode asked */
   float pdf;     /* solid-angle pdf, or lobe probability when is_delta */
   float pdf_rev; /* pdf of sampling wo given wi (same units), for bidirectional MIS */
   bool is_delta;
-} pc_bsdf_sample;
+} pc_bsdf_sampled;
 
-/* Precomputes derived data (plastic tables). Call once per material after parsing. */
+/* Precomputes derived data (plastic tables). Call once per material after parsing. A textured
+ * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set
+ * it to pc_texture_average() of the texture. */
 void pc_material_prepare(pc_material *m);
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
@@ -78,7 +80,7 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
                   vec3 wo, vec3 wi);
 /* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sample *out);
+                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);
 /* True if every lobe is a Dirac delta (such vertices are never connection endpoints). */
 bool pc_bsdf_is_delta(const pc_material *m);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
