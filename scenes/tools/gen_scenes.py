@@ -265,7 +265,9 @@ def open_room():
 
 def glossy_glass():
     """Closed room 4 x 3 x 4, checkerboard floor, a small bright ceiling light off to the left;
-    glass sphere (caustic on the floor to its lower right), rough gold sphere, rough plastic cube."""
+    glass sphere, rough gold sphere, rough plastic cube. The light sits in the back-left corner so
+    the glass sphere's caustic (traced: centred about (0.69, 0, -0.42), 0.1 m wide) lands on the floor
+    in front-right of the sphere where the camera sees it."""
     s = Scene("glossy-glass", "pcbpt", -1,
               "Glossy and glass: rough gold (GGX 0.15), rough plastic, glass sphere casting a "
               "caustic from a small light, checkerboard floor, closed room")
@@ -279,7 +281,7 @@ def glossy_glass():
     # the checkerboard is on a rectangle just above the floor slab so its uv are the plain
     # [0,1]^2 of the rectangle (cube uv are per face and not documented in Mitsuba 0.6)
     s.rect((0.0, 0.0005, 0.0), 2.0, 2.0, "+y", ref("floor"))
-    s.rect((-1.0, 2.99, -0.6), 0.2, 0.2, "-y", BLACK, emit=(120, 120, 120))
+    s.rect((-1.6, 2.99, -1.6), 0.2, 0.2, "-y", BLACK, emit=(120, 120, 120))
     s.sphere((0.35, 0.45, -0.6), 0.45, '<bsdf type="dielectric"><float name="intIOR" value="1.5"/>'
              '<float name="extIOR" value="1.0"/></bsdf>')
     s.sphere((-0.75, 0.4, -1.1), 0.4, '<bsdf type="roughconductor"><string name="distribution" value="ggx"/>'
