@@ -60,13 +60,13 @@ typedef struct pc_shading {
   vec2 uv;     /* texture coordinates */
 } pc_shading;
 
-typedef struct pc_bsdf_sample {
+typedef struct pc_bsdf_sampled {
   vec3 wi;       /* sampled direction, world space */
   vec3 f;        /* BSDF value (no cosine), for the transport mode asked */
   float pdf;     /* solid-angle pdf, or lobe probability when is_delta */
   float pdf_rev; /* pdf of sampling wo given wi (same units), for bidirectional MIS */
   bool is_delta;
-} pc_bsdf_sample;
+} pc_bsdf_sampled;
 
 /* Precomputes derived data (plastic tables). Call once per material after parsing. */
 void pc_material_prepare(pc_material *m);
@@ -78,7 +78,7 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
                   vec3 wo, vec3 wi);
 /* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sample *out);
+                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);
 /* True if every lobe is a Dirac delta (such vertices are never connection endpoints). */
 bool pc_bsdf_is_delta(const pc_material *m);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this

@@ -45,6 +45,9 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
 void pc_film_layer_image(const pc_film *f, int i, float *out);
 /* Beauty = sum of the normalized standard layers. */
 void pc_film_beauty(const pc_film *f, float *out);
+/* Writes the beauty and every layer (each normalized by its count) to a multi-layer EXR, with
+ * the per-layer counts and `extra` attributes in the header. */
+int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e);
 /* True if every sum is finite. */
 bool pc_film_is_finite(const pc_film *f);
 

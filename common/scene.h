@@ -48,6 +48,7 @@ typedef struct pc_scene {
   int max_depth;              /* Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly */
   /* built by pc_scene_build */
   void *rtc_device, *rtc_scene; /* RTCDevice, RTCScene (kept opaque to users of this header) */
+  void *rtc_error;            /* where Embree's error callback records the first error */
   float *light_cdf;           /* nlights+1, power-proportional selection */
   float scene_radius;         /* bounding sphere radius, for ray offsets */
   vec3 scene_center;
@@ -57,6 +58,7 @@ typedef struct pc_scene {
 int pc_scene_load(const char *path, pc_scene *out, pc_err *e);
 /* Builds Embree geometry, light sampling tables and derived material data. */
 int pc_scene_build(pc_scene *s, pc_err *e);
+/* Frees everything (safe on a zeroed or partially loaded scene). */
 void pc_scene_free(pc_scene *s);
 
 const char *pc_method_name(pc_method m);

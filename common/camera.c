@@ -1,0 +1,61 @@
+/* camera.c: the pinhole perspective sensor (Mitsuba conventions, see camera.h). */
+#include "camera.h"
+
+void pc_camera_prepare(pc_camera *c) {
+  const mat4 *m = &c->to_world;
+  vec3 left = v3_norm(v3((float)m->m[0][0], (float)m->m[1][0], (float)m->m[2][0]));
+  c->up = v3_norm(v3((float)m->m[0][1], (float)m->m[1][1], (float)m->m[2][1]));
+  c->dir = v3_norm(v3((float)m->m[0][2], (float)m->m[1][2], (float)m->m[2][2]));
+  c->pos = v3((float)m->m[0][3], (float)m->m[1][3], (float)m->m[2][3]);
+  c->right = v3_neg(left);
+  float w = (float)c->width, h = (float)c->height;
+  float t = tanf(0.5f * c->fov_deg * PC_PI / 180.f);
+  char axis = c->fov_axis;
+  if (axis == 's') axis = w <= h ? 'x' : 'y';
+  if (axis == 'l') axis = w >= h ? 'x' : 'y';
+  if (axis == 'y') {
+    c->tan_half_y = t;
+    c->tan_half_x = t * w / h;
+  } else if (axis == 'd') {
+    float diag = sqrtf(w * w + h * h);
+    c->tan_half_x = t * w / diag;
+    c->tan_half_y = t * h / diag;
+  } else {
+    c->tan_half_x = t;
+    c->tan_half_y = t * h / w;
+  }
+  c->image_area = 4.f * c->tan_half_x * c->tan_half_y;
+}
+
+vec3 pc_camera_ray_dir(const pc_camera *c, float px, float py) {
+  float x = (2.f * px / (float)c->width - 1.f) * c->tan_half_x;
+  float y = (1.f - 2.f * py / (float)c->height) * c->tan_half_y;
+  return v3_norm(v3_add(c->dir, v3_add(v3_scale(c->right, x), v3_scale(c->up, y))));
+}
+
+bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py) {
+  float cz = v3_dot(dir, c->dir);
+  if (!(cz > 0.f)) return false;
+  float x = v3_dot(dir, c->right) / cz / c->tan_half_x;
+  float y = v3_dot(dir, c->up) / cz / c->tan_half_y;
+  float rx = (x + 1.f) * 0.5f * (float)c->width;
+  float ry = (1.f - y) * 0.5f * (float)c->height;
+  if (!(rx >= 0.f && rx < (float)c->width && ry >= 0.f && ry < (float)c->height)) return false;
+  *px = rx;
+  *py = ry;
+  return true;
+}
+
+float pc_camera_we(const pc_camera *c, vec3 dir) {
+  float px, py;
+  if (!pc_camera_raster(c, dir, &px, &py)) return 0.f;
+  float cz = v3_dot(dir, c->dir);
+  return 1.f / (c->image_area * cz * cz * cz * cz);
+}
+
+float pc_camera_pdf_dir(const pc_camera *c, vec3 dir) {
+  float px, py;
+  if (!pc_camera_raster(c, dir, &px, &py)) return 0.f;
+  float cz = v3_dot(dir, c->dir);
+  return 1.f / (c->image_area * cz * cz * cz);
+}

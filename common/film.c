@@ -1,0 +1,110 @@
+/* film.c: per-strategy layers of unnormalized sums and their sample counts (DESIGN.md §4.2). */
+#include "film.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int add_layer(pc_film *f, const char *name, pc_norm norm, pc_err *e) {
+  if (f->nlayers >= PC_FILM_MAX_LAYERS)
+    return pc_errf(e, PC_ELIMIT, "film: more than %d layers", PC_FILM_MAX_LAYERS);
+  pc_film_layer *l = &f->layers[f->nlayers];
+  snprintf(l->name, sizeof l->name, "%s", name);
+  l->norm = norm;
+  l->count = 0;
+  l->sum = calloc((size_t)f->w * f->h * 3, sizeof(double));
+  if (!l->sum) return pc_errf(e, PC_ENOMEM, "film: out of memory for layer '%s' (%dx%d)", name, f->w, f->h);
+  f->nlayers++;
+  return PC_OK;
+}
+
+int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
+  memset(f, 0, sizeof *f);
+  if (w < 1 || h < 1 || w > 16384 || h > 16384)
+    return pc_errf(e, PC_EINVAL, "film: size %dx%d out of range 1..16384", w, h);
+  if (strategy_depth < 0 || strategy_depth > 8)
+    return pc_errf(e, PC_EINVAL, "film: strategy layer depth %d out of range 0..8", strategy_depth);
+  f->w = w;
+  f->h = h;
+  static const char *std_names[PC_LAYER_STD_COUNT] = {"pt", "nee", "lt", "inner"};
+  int rc = PC_OK;
+  for (int i = 0; i < PC_LAYER_STD_COUNT && rc == PC_OK; i++)
+    rc = add_layer(f, std_names[i], i == PC_LAYER_LT ? PC_NORM_LIGHT : PC_NORM_EYE, e);
+  /* Path length k (segments) has strategies s + t = k + 1, t >= 1. */
+  for (int k = 1; k <= strategy_depth && rc == PC_OK; k++)
+    for (int t = 1; t <= k + 1 && rc == PC_OK; t++) {
+      char name[16];
+      snprintf(name, sizeof name, "s%dt%d", k + 1 - t, t);
+      rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, e);
+    }
+  if (rc != PC_OK) pc_film_free(f);
+  return rc;
+}
+
+void pc_film_free(pc_film *f) {
+  for (int i = 0; i < f->nlayers; i++) free(f->layers[i].sum);
+  memset(f, 0, sizeof *f);
+}
+
+void pc_film_clear(pc_film *f) {
+  for (int i = 0; i < f->nlayers; i++) {
+    memset(f->layers[i].sum, 0, (size_t)f->w * f->h * 3 * sizeof(double));
+    f->layers[i].count = 0;
+  }
+  f->dropped_nonfinite = 0;
+}
+
+int pc_film_strategy_layer(const pc_film *f, int s, int t) {
+  char name[16];
+  snprintf(name, sizeof name, "s%dt%d", s, t);
+  for (int i = PC_LAYER_STD_COUNT; i < f->nlayers; i++)
+    if (strcmp(f->layers[i].name, name) == 0) return i;
+  return -1;
+}
+
+int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
+  if (dst->w != src->w || dst->h != src->h || dst->nlayers != src->nlayers)
+    return pc_errf(e, PC_EINVAL, "film: cannot add %dx%d/%d layers into %dx%d/%d layers", src->w, src->h,
+                   src->nlayers, dst->w, dst->h, dst->nlayers);
+  for (int i = 0; i < dst->nlayers; i++)
+    if (strcmp(dst->layers[i].name, src->layers[i].name) != 0)
+      return pc_errf(e, PC_EINVAL, "film: layer %d is '%s' here but '%s' in the addend", i, dst->layers[i].name,
+                     src->layers[i].name);
+  size_t n = (size_t)dst->w * dst->h * 3;
+  for (int i = 0; i < dst->nlayers; i++) {
+    double *d = dst->layers[i].sum;
+    const double *s = src->layers[i].sum;
+    for (size_t j = 0; j < n; j++) d[j] += s[j];
+    dst->layers[i].count += src->layers[i].count;
+  }
+  dst->dropped_nonfinite += src->dropped_nonfinite;
+  return PC_OK;
+}
+
+void pc_film_layer_image(const pc_film *f, int i, float *out) {
+  const pc_film_layer *l = &f->layers[i];
+  size_t n = (size_t)f->w * f->h * 3;
+  double scale = 0.0;
+  if (l->count > 0)
+    scale = l->norm == PC_NORM_EYE ? 1.0 / (double)l->count : (double)f->w * f->h / (double)l->count;
+  for (size_t j = 0; j < n; j++) out[j] = (float)(l->sum[j] * scale);
+}
+
+void pc_film_beauty(const pc_film *f, float *out) {
+  size_t n = (size_t)f->w * f->h * 3;
+  memset(out, 0, n * sizeof(float));
+  for (int i = 0; i < PC_LAYER_STD_COUNT && i < f->nlayers; i++) {
+    const pc_film_layer *l = &f->layers[i];
+    if (l->count == 0) continue;
+    double scale = l->norm == PC_NORM_EYE ? 1.0 / (double)l->count : (double)f->w * f->h / (double)l->count;
+    for (size_t j = 0; j < n; j++) out[j] += (float)(l->sum[j] * scale);
+  }
+}
+
+bool pc_film_is_finite(const pc_film *f) {
+  size_t n = (size_t)f->w * f->h * 3;
+  for (int i = 0; i < f->nlayers; i++)
+    for (size_t j = 0; j < n; j++)
+      if (!isfinite(f->layers[i].sum[j])) return false;
+  return true;
+}

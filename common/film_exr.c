@@ -1,0 +1,42 @@
+/* film_exr.c: writes a film as a multi-layer EXR: the beauty in R,G,B, every layer
+ * normalized by its own count as <layer>.R/G/B, and each layer's count in the header
+ * (pcbpt.count.<layer>) so a reader can recover the sums. */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "film.h"
+
+int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e) {
+  size_t n = (size_t)f->w * f->h * 3;
+  int nl = f->nlayers + 1;
+  float *pix = malloc(sizeof(float) * n * (size_t)nl);
+  pc_exr_layer *layers = calloc((size_t)nl, sizeof *layers);
+  pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 1 + nextra), sizeof *attrs);
+  char(*names)[40] = calloc((size_t)f->nlayers, sizeof *names);
+  int rc;
+  if (!pix || !layers || !attrs || !names) {
+    rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for the image", path);
+    goto done;
+  }
+  pc_film_beauty(f, pix);
+  layers[0].name = "";
+  layers[0].rgb = pix;
+  int na = 0;
+  for (int i = 0; i < f->nlayers; i++) {
+    float *dst = pix + n * (size_t)(i + 1);
+    pc_film_layer_image(f, i, dst);
+    layers[i + 1].name = f->layers[i].name;
+    layers[i + 1].rgb = dst;
+    snprintf(names[i], sizeof names[i], "pcbpt.count.%s", f->layers[i].name);
+    attrs[na++] = (pc_exr_attr){.name = names[i], .type = PC_ATTR_DOUBLE, .d = (double)f->layers[i].count};
+  }
+  attrs[na++] = (pc_exr_attr){.name = "pcbpt.dropped_nonfinite", .type = PC_ATTR_DOUBLE, .d = (double)f->dropped_nonfinite};
+  for (int i = 0; i < nextra; i++) attrs[na++] = extra[i];
+  rc = pc_exr_write(path, f->w, f->h, layers, nl, attrs, na, e);
+done:
+  free(pix);
+  free(layers);
+  free(attrs);
+  free(names);
+  return rc;
+}

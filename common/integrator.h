@@ -1,0 +1,47 @@
+/* integrator.h: what every integrator's per-sample routine sees: the scene, the settings, the
+ * iteration being rendered, and the films it adds to. Eye-side routines own their pixel for
+ * the iteration and add to `film` directly; light-side splats go to the thread's own
+ * `splat` film, merged after the iteration. */
+#ifndef PC_INTEGRATOR_H
+#define PC_INTEGRATOR_H
+
+#include <stdint.h>
+
+#include "film.h"
+#include "render.h"
+#include "rng.h"
+#include "scene.h"
+
+/* Hard cap on path length (segments) for maxDepth -1: Russian roulette ends paths long before;
+ * this only guards against a ray trapped between perfect mirrors. */
+#define PC_MAX_SEGMENTS 1024
+
+typedef struct pc_tctx {
+  const pc_scene *scene;
+  const pc_render_settings *set;
+  int max_segments;     /* maxDepth resolved: PC_MAX_SEGMENTS when infinite */
+  uint64_t iteration;
+  pc_film *film;        /* the iteration's eye-side film (shared; pixels are disjoint) */
+  pc_film *splat;       /* this thread's light-splat film */
+  uint64_t rays;
+} pc_tctx;
+
+/* MIS weight of a strategy with pdf a against the others' summed (already heuristic-mapped)
+ * terms; the heuristic maps a pdf (times its sample count) to its weight term. */
+static inline float pc_mis_term(const pc_render_settings *s, float p) {
+  return s->mis_heuristic == PC_MIS_POWER ? p * p : p;
+}
+
+/* Per-pixel shading point setup shared by integrators. */
+static inline pc_shading pc_shading_from_hit(const pc_hit *h) {
+  pc_shading sh;
+  sh.ng = h->ng;
+  sh.sh = frame_from_normal(h->ns);
+  sh.uv = h->uv;
+  return sh;
+}
+
+/* Unidirectional path tracer with next-event estimation (strategies s=0 and s=1). */
+void pc_pt_pixel(pc_tctx *c, int x, int y);
+
+#endif

@@ -1,0 +1,110 @@
+/* integrator_pt.c: the path tracer: eye paths with BSDF sampling (s=0 when they hit an
+ * emitter) and next-event estimation (s=1), combined by MIS. Russian roulette uses the local
+ * continuation probability and is part of the BSDF sampling pdf, as in the bidirectional
+ * integrators, so their s=0/s=1 weights agree with this one. */
+#include "integrator.h"
+
+static void add(pc_tctx *c, int layer, int s, int t, int x, int y, vec3 v) {
+  pc_film_add_sample(c->film, layer, x, y, v);
+  if (c->set->strategy_layers > 0) {
+    int l = pc_film_strategy_layer(c->film, s, t);
+    if (l >= 0) pc_film_add_sample(c->film, l, x, y, v);
+  }
+}
+
+/* Solid-angle pdf, as seen from `from`, with which next-event estimation picks the emitter
+ * point p (normal n) of light `li`. */
+static float nee_pdf(const pc_scene *s, int li, vec3 from, vec3 p, vec3 n) {
+  const pc_light *l = &s->lights[li];
+  vec3 d = v3_sub(from, p);
+  float d2 = v3_len2(d);
+  float cosl = v3_absdot(n, v3_scale(d, 1.f / sqrtf(d2)));
+  if (!(cosl > 0.f)) return 0.f;
+  return pc_light_choose_pdf(s, li) * (1.f / l->area) * d2 / cosl;
+}
+
+void pc_pt_pixel(pc_tctx *c, int x, int y) {
+  const pc_scene *s = c->scene;
+  const pc_render_settings *set = c->set;
+  pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, (uint64_t)y * (uint64_t)s->camera.width + (uint64_t)x);
+  float px = (float)x + pc_rng_f(&rng), py = (float)y + pc_rng_f(&rng);
+  vec3 o = s->camera.pos;
+  vec3 d = pc_camera_ray_dir(&s->camera, px, py);
+  vec3 beta = v3s(1.f);
+  float prev_pdf = 0.f; /* solid-angle pdf (with continuation) of the last BSDF sample */
+  bool prev_delta = true; /* the camera cannot be reached by NEE: full weight at depth 1 */
+  vec3 prev_p = o;
+  for (int depth = 1; depth <= c->max_segments; depth++) {
+    pc_hit h;
+    c->rays++;
+    if (!pc_scene_intersect(s, o, d, INFINITY, &h)) break;
+    const pc_shape *shape = &s->shapes[h.shape];
+    vec3 wo = v3_neg(d);
+    if (shape->light >= 0) {
+      vec3 le = pc_light_le(&s->lights[shape->light], h.ng, wo);
+      if (!v3_is_zero(le)) {
+        float w = 1.f;
+        if (!prev_delta) {
+          float pl = nee_pdf(s, shape->light, prev_p, h.p, h.ng);
+          float a = pc_mis_term(set, prev_pdf), b = pc_mis_term(set, pl);
+          w = a / (a + b);
+        }
+        add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
+      }
+    }
+    if (depth >= c->max_segments) break;
+    const pc_material *m = &s->materials[shape->material];
+    pc_shading sh = pc_shading_from_hit(&h);
+    float q = pc_bsdf_continuation(m, s->textures, &sh);
+
+    if (!pc_bsdf_is_delta(m)) {
+      float pick;
+      int li = pc_light_choose(s, pc_rng_f(&rng), &pick);
+      const pc_light *l = &s->lights[li];
+      pc_light_point lp;
+      float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng);
+      pc_light_sample_point(s, l, u0, u1, u2, &lp);
+      vec3 to = v3_sub(lp.p, h.p);
+      float d2 = v3_len2(to);
+      if (d2 > 0.f) {
+        vec3 wi = v3_scale(to, 1.f / sqrtf(d2));
+        vec3 le = pc_light_le(l, lp.n, v3_neg(wi));
+        if (!v3_is_zero(le)) {
+          vec3 f = pc_bsdf_eval(m, s->textures, &sh, wo, wi, PC_RADIANCE);
+          if (!v3_is_zero(f)) {
+            c->rays++;
+            if (pc_scene_visible(s, h.p, h.ng, lp.p, lp.n)) {
+              float cosi = v3_absdot(wi, sh.sh.n);
+              vec3 contrib;
+              float w = 1.f;
+              if (l->type == PC_LIGHT_POINT) {
+                contrib = v3_scale(v3_mul(f, le), cosi / (d2 * pick));
+              } else {
+                float cosl = v3_absdot(lp.n, wi);
+                float pl = pick * lp.pdf_area * d2 / cosl;
+                float pb = pc_bsdf_pdf(m, s->textures, &sh, wo, wi) * q;
+                float a = pc_mis_term(set, pl), b = pc_mis_term(set, pb);
+                w = a / (a + b);
+                contrib = v3_scale(v3_mul(f, le), cosi / pl);
+              }
+              add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_scale(v3_mul(beta, contrib), w));
+            }
+          }
+        }
+      }
+    }
+
+    if (!(q > 0.f) || pc_rng_f(&rng) >= q) break;
+    pc_bsdf_sampled bs;
+    float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng);
+    if (!pc_bsdf_sample(m, s->textures, &sh, wo, u0, u1, u2, PC_RADIANCE, &bs)) break;
+    if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
+    beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, sh.sh.n) / (bs.pdf * q)));
+    if (!v3_is_finite(beta)) break;
+    prev_pdf = bs.pdf * q;
+    prev_delta = bs.is_delta;
+    prev_p = h.p;
+    o = pc_offset_origin(s, h.p, h.ng, bs.wi);
+    d = bs.wi;
+  }
+}

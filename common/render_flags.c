@@ -1,0 +1,157 @@
+/* render_flags.c: parsing of the render flags (see render_flags.h). */
+#include "render_flags.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char pc_render_flags_help[] =
+    "  --method M            pt, lt, bdpt, cbdpt or pcbpt (default: the scene's integrator)\n"
+    "  --spp N               iterations to render, one sample per pixel each\n"
+    "  --time SECONDS        render for this wall time (with --spp: whichever comes first)\n"
+    "  --seed N              job seed (default 1); iteration i is seeded from (seed, i)\n"
+    "  --max-depth D         Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly\n"
+    "  --width W --height H  film size (default: the scene's hdrfilm)\n"
+    "  --light-paths N       light-tracing paths per iteration (default W*H)\n"
+    "  --mis-heuristic H     balance (default) or power\n"
+    "  --strategy-layers D   also write one layer per (s,t) up to path length D\n"
+    "  --pcbpt-m M           PCBPT stored light paths per iteration (default 100)\n"
+    "  --pcbpt-k K           PCBPT connections per eye vertex (default 1)\n"
+    "  --cache-fraction F    PCBPT importance-record paths as a fraction of W*H (0.004)\n"
+    "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
+    "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.1)\n"
+    "  --mis MODE            PCBPT correlated MIS: upper-bound (default) or standard\n"
+    "  --pmf MODE            PCBPT connection PMF: cached (default) or exact\n";
+
+void pc_render_request_default(pc_render_request *r) {
+  memset(r, 0, sizeof *r);
+  pc_render_settings_default(&r->set);
+}
+
+bool pc_parse_i64(const char *s, long long lo, long long hi, long long *out) {
+  if (!s || !*s) return false;
+  char *end;
+  errno = 0;
+  long long v = strtoll(s, &end, 10);
+  if (errno || *end || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+bool pc_parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out) {
+  if (!s || !*s || *s == '-' || *s == '+') return false;
+  char *end;
+  errno = 0;
+  unsigned long long v = strtoull(s, &end, 10);
+  if (errno || *end || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+bool pc_parse_f64(const char *s, double lo, double hi, double *out) {
+  if (!s || !*s) return false;
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (errno || *end || !isfinite(v) || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e) {
+  static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
+                                      "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
+                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", NULL};
+  const char *flag = argv[*i];
+  int which = -1;
+  for (int k = 0; flags[k]; k++)
+    if (strcmp(flag, flags[k]) == 0) which = k;
+  if (which < 0) return 0;
+  if (*i + 1 >= argc) return pc_errf(e, PC_EINVAL, "%s: missing value", flag);
+  const char *v = argv[++*i];
+  pc_render_settings *s = &r->set;
+  long long ll;
+  uint64_t u;
+  double d;
+  switch (which) {
+  case 0:
+    if (pc_method_parse(v, &s->method) != PC_OK)
+      return pc_errf(e, PC_EINVAL, "%s: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt)", flag, v);
+    r->method_set = true;
+    break;
+  case 1:
+    if (!pc_parse_u64(v, 1, UINT64_C(1) << 40, &r->spp)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a count >= 1", flag, v);
+    break;
+  case 2:
+    if (!pc_parse_f64(v, 1e-3, 1e7, &r->seconds)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a number of seconds > 0", flag, v);
+    break;
+  case 3:
+    if (!pc_parse_u64(v, 0, UINT64_MAX, &s->seed)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not an unsigned integer", flag, v);
+    break;
+  case 4:
+    if (!pc_parse_i64(v, -1, 1024, &ll) || ll == 0) return pc_errf(e, PC_EINVAL, "%s: '%s' is not -1 or 1..1024", flag, v);
+    s->max_depth = (int)ll;
+    r->depth_set = true;
+    break;
+  case 5:
+  case 6:
+    if (!pc_parse_i64(v, 1, PC_SCENE_MAX_FILM_DIM, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_SCENE_MAX_FILM_DIM);
+    if (which == 5) { s->width = (int)ll; r->width_set = true; }
+    else { s->height = (int)ll; r->height_set = true; }
+    break;
+  case 7:
+    if (!pc_parse_u64(v, 1, UINT64_C(1) << 32, &u)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..2^32", flag, v);
+    s->light_paths = u;
+    break;
+  case 8:
+    if (strcmp(v, "balance") == 0) s->mis_heuristic = PC_MIS_BALANCE;
+    else if (strcmp(v, "power") == 0) s->mis_heuristic = PC_MIS_POWER;
+    else return pc_errf(e, PC_EINVAL, "%s: '%s' is not balance or power", flag, v);
+    break;
+  case 9:
+    if (!pc_parse_i64(v, 0, 8, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 0..8", flag, v);
+    s->strategy_layers = (int)ll;
+    break;
+  case 10:
+    if (!pc_parse_i64(v, 1, 100000, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..100000", flag, v);
+    s->pcbpt_m = (int)ll;
+    break;
+  case 11:
+    if (!pc_parse_i64(v, 1, 1000000, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..1000000", flag, v);
+    s->pcbpt_k = (int)ll;
+    break;
+  case 12:
+    if (!pc_parse_f64(v, 1e-9, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
+    s->cache_fraction = (float)d;
+    break;
+  case 13:
+    if (!pc_parse_i64(v, 1, 64, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..64", flag, v);
+    s->knn = (int)ll;
+    break;
+  case 14:
+    if (!pc_parse_f64(v, 0.0, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in [0, 1]", flag, v);
+    s->uniform_mix = (float)d;
+    break;
+  case 15:
+    if (strcmp(v, "upper-bound") == 0) s->mis_mode = PC_MIS_UPPER_BOUND;
+    else if (strcmp(v, "standard") == 0) s->mis_mode = PC_MIS_STANDARD;
+    else return pc_errf(e, PC_EINVAL, "%s: '%s' is not upper-bound or standard", flag, v);
+    break;
+  case 16:
+    if (strcmp(v, "cached") == 0) s->pmf_mode = PC_PMF_CACHED;
+    else if (strcmp(v, "exact") == 0) s->pmf_mode = PC_PMF_EXACT;
+    else return pc_errf(e, PC_EINVAL, "%s: '%s' is not cached or exact", flag, v);
+    break;
+  }
+  return 1;
+}
+
+void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s) {
+  if (!r->method_set) r->set.method = s->method;
+  if (!r->depth_set) r->set.max_depth = s->max_depth;
+  if (!r->width_set) r->set.width = s->camera.width;
+  if (!r->height_set) r->set.height = s->camera.height;
+  s->camera.width = r->set.width;
+  s->camera.height = r->set.height;
+}

@@ -1,0 +1,38 @@
+/* render_flags.h: the command-line flags that describe a render (method, size, depth, seed,
+ * halting, integrator parameters), shared by `render` and `submit` so both accept exactly the
+ * same words and report bad values the same way. */
+#ifndef PC_RENDER_FLAGS_H
+#define PC_RENDER_FLAGS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "render.h"
+
+typedef struct pc_render_request {
+  pc_render_settings set;
+  bool method_set, depth_set, width_set, height_set; /* overrides of the scene's own values */
+  uint64_t spp;      /* iterations to render (0: not given) */
+  double seconds;    /* wall-time budget (0: not given) */
+} pc_render_request;
+
+void pc_render_request_default(pc_render_request *r);
+
+/* If argv[*i] is a render flag, consumes it (and its value), advancing *i, and returns 1;
+ * returns 0 if it is not one; a negative code with "--flag: what is wrong" on a bad value. */
+int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e);
+
+/* Fills in what the flags left to the scene (method, maxDepth, film size) and gives the
+ * scene's camera the final film size. Call between pc_scene_load and pc_scene_build. */
+void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s);
+
+/* Help text for the render flags (one flag per line). */
+extern const char pc_render_flags_help[];
+
+/* Strict number parsing: the whole string, in range; false otherwise. */
+bool pc_parse_i64(const char *s, long long lo, long long hi, long long *out);
+bool pc_parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out);
+bool pc_parse_f64(const char *s, double lo, double hi, double *out);
+
+#endif

@@ -1,0 +1,240 @@
+/* scene_build.c: turns a parsed scene into a renderable one: Embree geometry (one geometry per
+ * shape, geomID == shape index; triangles, exact spheres), light sampling tables, derived
+ * material data; and the ray queries (closest hit, visibility, origin offsets). */
+#include <embree3/rtcore.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene.h"
+
+typedef struct embree_error {
+  int failed;
+  char msg[256];
+} embree_error;
+
+static void on_embree_error(void *user, enum RTCError code, const char *str) {
+  embree_error *ee = user;
+  if (ee->failed) return;
+  ee->failed = 1;
+  snprintf(ee->msg, sizeof ee->msg, "Embree error %d: %s", (int)code, str ? str : "");
+}
+
+static int build_lights(pc_scene *s, pc_err *e) {
+  if (s->nlights == 0) return pc_errf(e, PC_EINVAL, "%s: the scene has no emitter", s->path);
+  s->light_cdf = malloc(sizeof(float) * (size_t)(s->nlights + 1));
+  if (!s->light_cdf) return pc_errf(e, PC_ENOMEM, "%s: out of memory for lights", s->path);
+  s->light_cdf[0] = 0.f;
+  for (int i = 0; i < s->nlights; i++) {
+    pc_light *l = &s->lights[i];
+    if (l->type == PC_LIGHT_POINT) {
+      l->power = 4.f * PC_PI * v3_luminance(l->intensity);
+    } else {
+      if (l->shape < 0 || l->shape >= s->nshapes)
+        return pc_errf(e, PC_EINVAL, "%s: area light %d has no shape", s->path, i);
+      const pc_shape *sh = &s->shapes[l->shape];
+      if (sh->kind == PC_SHAPE_SPHERE) {
+        l->area = 4.f * PC_PI * sh->radius * sh->radius;
+        l->ntris = 0;
+      } else {
+        const pc_mesh *m = &sh->mesh;
+        free(l->tri_cdf);
+        l->tri_cdf = malloc(sizeof(float) * ((size_t)m->ntris + 1));
+        if (!l->tri_cdf) return pc_errf(e, PC_ENOMEM, "%s: out of memory for light %d", s->path, i);
+        double acc = 0.0;
+        l->tri_cdf[0] = 0.f;
+        for (uint32_t t = 0; t < m->ntris; t++) {
+          const uint32_t *ix = m->idx + 3 * (size_t)t;
+          vec3 c = v3_cross(v3_sub(m->p[ix[1]], m->p[ix[0]]), v3_sub(m->p[ix[2]], m->p[ix[0]]));
+          acc += 0.5 * (double)v3_len(c);
+          l->tri_cdf[t + 1] = (float)acc;
+        }
+        l->ntris = m->ntris;
+        l->area = (float)acc;
+      }
+      if (!(l->area > 0.f) || !isfinite(l->area))
+        return pc_errf(e, PC_EINVAL, "%s: area light on shape %d has zero area", s->path, l->shape);
+      l->power = PC_PI * l->area * v3_luminance(l->radiance);
+    }
+    if (!(l->power >= 0.f) || !isfinite(l->power))
+      return pc_errf(e, PC_EINVAL, "%s: emitter %d has a negative or non-finite power", s->path, i);
+    s->light_cdf[i + 1] = s->light_cdf[i] + l->power;
+  }
+  if (!(s->light_cdf[s->nlights] > 0.f))
+    return pc_errf(e, PC_EINVAL, "%s: every emitter has zero power", s->path);
+  return PC_OK;
+}
+
+static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
+  RTCDevice dev = rtcNewDevice("verbose=0");
+  if (!dev) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
+  s->rtc_device = dev;
+  rtcSetDeviceErrorFunction(dev, on_embree_error, ee);
+  RTCScene scn = rtcNewScene(dev);
+  if (!scn) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree scene: %s", s->path, ee->msg);
+  s->rtc_scene = scn;
+  rtcSetSceneFlags(scn, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scn, RTC_BUILD_QUALITY_HIGH);
+  for (int i = 0; i < s->nshapes; i++) {
+    const pc_shape *sh = &s->shapes[i];
+    RTCGeometry g;
+    if (sh->kind == PC_SHAPE_SPHERE) {
+      if (!rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_POINT_GEOMETRY_SUPPORTED))
+        return pc_errf(e, PC_EEMBREE, "%s: this Embree build has no sphere geometry", s->path);
+      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+      float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, 1) : NULL;
+      if (!v) goto fail;
+      v[0] = sh->center.x; v[1] = sh->center.y; v[2] = sh->center.z; v[3] = sh->radius;
+    } else {
+      const pc_mesh *m = &sh->mesh;
+      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+      float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, m->nverts) : NULL;
+      uint32_t *ix = v ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, m->ntris) : NULL;
+      if (!ix) goto fail;
+      memcpy(v, m->p, sizeof(vec3) * m->nverts);
+      memcpy(ix, m->idx, sizeof(uint32_t) * 3 * (size_t)m->ntris);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scn, g, (unsigned)i);
+    rtcReleaseGeometry(g);
+    if (ee->failed) return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->msg);
+    continue;
+  fail:
+    if (g) rtcReleaseGeometry(g);
+    return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->failed ? ee->msg : "cannot create geometry");
+  }
+  rtcCommitScene(scn);
+  if (ee->failed) return pc_errf(e, PC_EEMBREE, "%s: %s", s->path, ee->msg);
+  struct RTCBounds b;
+  rtcGetSceneBounds(scn, &b);
+  vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
+  s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
+  s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
+  return PC_OK;
+}
+
+int pc_scene_build(pc_scene *s, pc_err *e) {
+  if (s->nshapes == 0) return pc_errf(e, PC_EINVAL, "%s: the scene has no shapes", s->path);
+  if (s->camera.width < 1 || s->camera.height < 1)
+    return pc_errf(e, PC_EINVAL, "%s: the scene has no sensor with a film", s->path);
+  pc_camera_prepare(&s->camera);
+  if (!(s->camera.image_area > 0.f) || !isfinite(s->camera.image_area))
+    return pc_errf(e, PC_EINVAL, "%s: camera field of view %.3g is out of range", s->path, s->camera.fov_deg);
+  for (int i = 0; i < s->nmaterials; i++) pc_material_prepare(&s->materials[i]);
+  int rc = build_lights(s, e);
+  if (rc != PC_OK) return rc;
+  /* Embree calls the error function with this address for the device's lifetime; it lives in
+   * the scene so it outlives every call. */
+  embree_error *ee = calloc(1, sizeof *ee);
+  if (!ee) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
+  s->rtc_error = ee;
+  return build_embree(s, ee, e);
+}
+
+void pc_scene_free(pc_scene *s) {
+  if (s->rtc_scene) rtcReleaseScene(s->rtc_scene);
+  if (s->rtc_device) rtcReleaseDevice(s->rtc_device);
+  free(s->rtc_error);
+  for (int i = 0; i < s->nshapes; i++) pc_mesh_free(&s->shapes[i].mesh);
+  for (int i = 0; i < s->ntextures; i++) pc_texture_free(&s->textures[i]);
+  for (int i = 0; i < s->nlights; i++) free(s->lights[i].tri_cdf);
+  free(s->shapes);
+  free(s->materials);
+  free(s->textures);
+  free(s->lights);
+  free(s->light_cdf);
+  free(s->path);
+  memset(s, 0, sizeof *s);
+}
+
+static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 o, vec3 d, pc_hit *hit) {
+  int shape = (int)rh->hit.geomID;
+  const pc_shape *sh = &s->shapes[shape];
+  hit->t = rh->ray.tfar;
+  hit->shape = shape;
+  hit->prim = (int)rh->hit.primID;
+  hit->p = v3_madd(o, d, rh->ray.tfar);
+  if (sh->kind == PC_SHAPE_SPHERE) {
+    vec3 n = v3_norm(v3_sub(hit->p, sh->center));
+    /* Re-project onto the surface: the parametric hit point drifts with distance. */
+    hit->p = v3_madd(sh->center, n, sh->radius);
+    float phi = atan2f(n.y, n.x);
+    if (phi < 0.f) phi += 2.f * PC_PI;
+    hit->uv = (vec2){phi * (0.5f * PC_INV_PI), acosf(fminf(1.f, fmaxf(-1.f, n.z))) * PC_INV_PI};
+    if (sh->flip_normals) n = v3_neg(n);
+    hit->ng = hit->ns = n;
+    return;
+  }
+  const pc_mesh *m = &sh->mesh;
+  const uint32_t *ix = m->idx + 3 * (size_t)rh->hit.primID;
+  float b1 = rh->hit.u, b2 = rh->hit.v, b0 = 1.f - b1 - b2;
+  vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];
+  hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
+  vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+  vec3 ns = ng;
+  if (m->n) {
+    ns = v3_add(v3_add(v3_scale(m->n[ix[0]], b0), v3_scale(m->n[ix[1]], b1)), v3_scale(m->n[ix[2]], b2));
+    float l = v3_len(ns);
+    if (l > 0.f && isfinite(l)) {
+      ns = v3_scale(ns, 1.f / l);
+      /* Mitsuba's front side is the shading normal's side (one-sided BSDFs and emitters test
+       * the shading frame): keep the geometric normal on that side. */
+      if (v3_dot(ns, ng) < 0.f) ng = v3_neg(ng);
+    } else {
+      ns = ng;
+    }
+  }
+  hit->ng = ng;
+  hit->ns = ns;
+  if (m->uv) {
+    vec2 t0 = m->uv[ix[0]], t1 = m->uv[ix[1]], t2 = m->uv[ix[2]];
+    hit->uv = (vec2){b0 * t0.x + b1 * t1.x + b2 * t2.x, b0 * t0.y + b1 * t1.y + b2 * t2.y};
+  } else {
+    hit->uv = (vec2){b1, b2};
+  }
+}
+
+bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit) {
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRayHit rh;
+  rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
+  rh.ray.tnear = 0.f;
+  rh.ray.tfar = tmax;
+  rh.ray.time = 0.f;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1((RTCScene)s->rtc_scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  fill_hit(s, &rh, o, d, hit);
+  return true;
+}
+
+vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
+  float eps = 1e-4f * fmaxf(1.f, fmaxf(v3_maxabs(p), s->scene_radius * 1e-2f));
+  return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
+}
+
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
+  vec3 ab = v3_sub(b, a);
+  vec3 o = v3_is_zero(na) ? a : pc_offset_origin(s, a, na, ab);
+  vec3 t = v3_is_zero(nb) ? b : pc_offset_origin(s, b, nb, v3_neg(ab));
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRay r;
+  r.org_x = o.x; r.org_y = o.y; r.org_z = o.z;
+  vec3 d = v3_sub(t, o);
+  r.dir_x = d.x; r.dir_y = d.y; r.dir_z = d.z;
+  r.tnear = 0.f;
+  r.tfar = 1.f - 1e-4f;
+  r.time = 0.f;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+  rtcOccluded1((RTCScene)s->rtc_scene, &ctx, &r);
+  return r.tfar >= 0.f;
+}

@@ -1,0 +1,21 @@
+/* thread_pool.h: a fixed set of threads that run one parallel loop at a time; the caller
+ * takes part as thread 0. Items are claimed dynamically (an atomic counter), so threads of
+ * different speed stay busy. */
+#ifndef PC_THREAD_POOL_H
+#define PC_THREAD_POOL_H
+
+#include "error.h"
+
+typedef struct pc_pool pc_pool;
+typedef void (*pc_pool_fn)(void *arg, int thread, int item);
+
+/* nthreads >= 1 (including the caller). */
+int pc_pool_create(int nthreads, pc_pool **out, pc_err *e);
+void pc_pool_destroy(pc_pool *p);
+int pc_pool_size(const pc_pool *p);
+/* Runs fn(arg, thread, item) for item in [0, nitems) and returns when all are done. */
+void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg);
+/* Number of online CPUs (at least 1). */
+int pc_cpu_count(void);
+
+#endif
