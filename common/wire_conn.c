@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render_flags.h"
 #include "wire_log.h"
 
 struct pc_conn_frame {
@@ -184,3 +185,16 @@ void pc_conn_close(pc_conn *c, const char *reason) {
   if (reason) pc_wire_log("%s: closing: %s", c->peer, reason);
   uv_close((uv_handle_t *)&c->tcp, closed_cb);
 }
+
+int pc_wire_parse_hostport(const char *s, char *host, size_t hn, int *port, int default_port) {
+  const char *colon = strrchr(s, ':');
+  size_t len = colon ? (size_t)(colon - s) : strlen(s);
+  if (len == 0 || len >= hn) return PC_EINVAL;
+  memcpy(host, s, len);
+  host[len] = 0;
+  long long p = default_port;
+  if (colon && !pc_parse_i64(colon + 1, 0, 65535, &p)) return PC_EINVAL;
+  *port = (int)p;
+  return 0;
+}
+

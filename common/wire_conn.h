@@ -40,4 +40,7 @@ int pc_conn_send_bulk(pc_conn *c, const Pcbpt__Envelope *env);
 /* Logs "peer: closing: reason" (when reason is non-NULL) and closes; idempotent. */
 void pc_conn_close(pc_conn *c, const char *reason);
 
+/* "HOST[:PORT]" into host and port (default_port when absent). */
+int pc_wire_parse_hostport(const char *s, char *host, size_t hn, int *port, int default_port);
+
 #endif

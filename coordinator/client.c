@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "auth.h"
-#include "serve.h"
+#include "wire_conn.h"
 
 int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e) {
   uint8_t *buf;
@@ -73,7 +73,7 @@ int pc_client_connect(const char *hostport, const char *token_file, pc_client *c
   uint8_t key[PC_AUTH_KEY];
   cl->fd = -1;
   pc_wire_decoder_init(&cl->dec, 0);
-  if (pc_parse_hostport(hostport, host, sizeof host, &port, 7878) != 0) return pc_errf(e, PC_EINVAL, "--host: expected HOST[:PORT], got '%s'", hostport);
+  if (pc_wire_parse_hostport(hostport, host, sizeof host, &port, 7878) != 0) return pc_errf(e, PC_EINVAL, "--host: expected HOST[:PORT], got '%s'", hostport);
   int rc = pc_auth_init(e);
   if (!rc) rc = pc_auth_load_token(token_file, key, e);
   if (rc) return rc;

@@ -665,18 +665,6 @@ static const char serve_help[] =
     "  --exr-interval S       seconds between image writes of a running job (10)\n"
     "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
 
-int pc_parse_hostport(const char *s, char *host, size_t hn, int *port, int default_port) {
-  const char *colon = strrchr(s, ':');
-  size_t len = colon ? (size_t)(colon - s) : strlen(s);
-  if (len == 0 || len >= hn) return PC_EINVAL;
-  memcpy(host, s, len);
-  host[len] = 0;
-  long long p = default_port;
-  if (colon && !pc_parse_i64(colon + 1, 0, 65535, &p)) return PC_EINVAL;
-  *port = (int)p;
-  return 0;
-}
-
 int pc_cmd_serve(int argc, char **argv) {
   const char *listen = NULL, *dir = NULL, *token = NULL, *port_file = NULL;
   pc_coord c;
@@ -700,7 +688,7 @@ int pc_cmd_serve(int argc, char **argv) {
   if (!listen || !dir || !token) { fprintf(stderr, "pcbpt-coord serve: --listen, --data-dir and --token-file are required\n"); return 2; }
   char host[256];
   int port;
-  if (pc_parse_hostport(listen, host, sizeof host, &port, 7878) != 0) { fprintf(stderr, "pcbpt-coord serve: --listen: expected HOST:PORT\n"); return 2; }
+  if (pc_wire_parse_hostport(listen, host, sizeof host, &port, 7878) != 0) { fprintf(stderr, "pcbpt-coord serve: --listen: expected HOST:PORT\n"); return 2; }
   pc_err e = {0};
   uint8_t key[PC_AUTH_KEY];
   if (pc_auth_init(&e) != 0 || pc_auth_load_token(token, key, &e) != 0) { fprintf(stderr, "pcbpt-coord serve: %s\n", e.msg); return 1; }

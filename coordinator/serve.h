@@ -8,7 +8,5 @@
 int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, const char *data_dir,
                    const uint8_t key[PC_AUTH_KEY], pc_err *e);
 void pc_coord_free(pc_coord *c);
-/* "HOST[:PORT]" into host and port. */
-int pc_parse_hostport(const char *s, char *host, size_t hn, int *port, int default_port);
 
 #endif
