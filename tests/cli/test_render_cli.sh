@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The render and compare verbs from the command line: help, flag errors that name the flag
+# (non-zero exit, one line), and a small render that writes the EXR and the PNG preview.
+set -u
+bin="$PCBPT_BINARY_DIR/pcbpt-coord"
+src="$PCBPT_SOURCE_DIR"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # check NAME EXPECTED_STATUS GREP_PATTERN -- command...
+  local name=$1 want=$2 pat=$3
+  shift 4
+  "$@" >"$tmp/out" 2>"$tmp/err"
+  local st=$?
+  if { [ "$want" = 0 ] && [ $st -ne 0 ]; } || { [ "$want" != 0 ] && [ $st -eq 0 ]; }; then
+    echo "FAIL $name: exit $st"; cat "$tmp/err"; fail=1; return
+  fi
+  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/out" "$tmp/err"; then
+    echo "FAIL $name: output lacks '$pat'"; cat "$tmp/out" "$tmp/err"; fail=1; return
+  fi
+  if [ "$want" != 0 ] && [ "$(wc -l <"$tmp/err")" -ne 1 ]; then
+    echo "FAIL $name: error is not one line"; cat "$tmp/err"; fail=1; return
+  fi
+  echo "ok   $name"
+}
+scene="$src/scenes/cornell-box/scene.xml"
+check help 0 "--spp" -- "$bin" render --help
+check verbs 0 "render" -- "$bin" --help
+check unknown-verb 2 "unknown verb" -- "$bin" frobnicate
+check unknown-flag 2 "--frob" -- "$bin" render "$scene" --frob
+check bad-spp 2 "--spp" -- "$bin" render "$scene" --spp zero
+check neg-spp 2 "--spp" -- "$bin" render "$scene" --spp -3
+check bad-method 2 "--method" -- "$bin" render "$scene" --method magic
+check bad-depth 2 "--max-depth" -- "$bin" render "$scene" --max-depth 0
+check bad-width 2 "--width" -- "$bin" render "$scene" --width 100000
+check missing-value 2 "--time" -- "$bin" render "$scene" --time
+check bad-threads 2 "--threads" -- "$bin" render "$scene" --threads -1
+check missing-scene 1 "nope.xml" -- "$bin" render "$tmp/nope.xml" --spp 1
+check no-scene 2 "SCENE" -- "$bin" render --spp 1
+check render 0 "samples/s" -- "$bin" render "$scene" --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
+[ -s "$tmp/cb.exr" ] && [ -s "$tmp/cb.png" ] || { echo "FAIL render: outputs missing"; fail=1; }
+check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
+grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }
+check compare-json 0 '"layer": "inner"' -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr" --json
+check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
+check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
+exit $fail

@@ -1,0 +1,115 @@
+/* stat_util.h: helpers of the statistical tests: load a shipped scene with render overrides,
+ * render independent iterations one by one, and reduce each to per-block means so a test can
+ * compare estimators with standard errors measured from the iterations themselves. */
+#ifndef PC_STAT_UTIL_H
+#define PC_STAT_UTIL_H
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "film.h"
+#include "render.h"
+#include "render_flags.h"
+#include "scene.h"
+
+/* Per-block statistics over iterations: block b of layer `layer` (-1 = beauty), channel mean
+ * (luminance-free: the average of R, G and B). */
+typedef struct stat_blocks {
+  int bw, bh, nblocks;
+  int n;            /* iterations accumulated */
+  double *sum, *sum2;
+} stat_blocks;
+
+static inline char *stat_scene_path(const char *name) {
+  const char *src = getenv("PCBPT_SOURCE_DIR");
+  char *p = malloc(4096);
+  snprintf(p, 4096, "%s/scenes/%s/scene.xml", src ? src : ".", name);
+  return p;
+}
+
+/* Loads and builds scenes/<name>/scene.xml with the given settings overriding film size,
+ * method and depth; returns 0 on success (prints the error otherwise). */
+static inline int stat_load(const char *name, pc_render_request *req, pc_scene *scene) {
+  char *path = stat_scene_path(name);
+  pc_err e = {0};
+  int rc = pc_scene_load(path, scene, &e);
+  if (rc == 0) {
+    pc_render_request_apply_scene(req, scene);
+    rc = pc_scene_build(scene, &e);
+  }
+  if (rc != 0) fprintf(stderr, "stat_load %s: %s\n", path, e.msg);
+  free(path);
+  return rc;
+}
+
+/* Renders iterations [first, first+n) one at a time and accumulates block means of `layer`
+ * (-1 = beauty) into st (block size bs x bs pixels). */
+static inline int stat_render_blocks(const pc_scene *scene, const pc_render_settings *set, int threads, uint64_t first,
+                                     int n, int layer, int bs, stat_blocks *st) {
+  pc_err e = {0};
+  pc_renderer *r = NULL;
+  pc_film film;
+  int rc = pc_film_init(&film, set->width, set->height, set->strategy_layers, &e);
+  if (rc == 0) rc = pc_renderer_create(scene, set, threads, &r, &e);
+  if (rc != 0) {
+    fprintf(stderr, "stat_render_blocks: %s\n", e.msg);
+    pc_film_free(&film);
+    return rc;
+  }
+  st->bw = (set->width + bs - 1) / bs;
+  st->bh = (set->height + bs - 1) / bs;
+  st->nblocks = st->bw * st->bh;
+  st->n = 0;
+  st->sum = calloc((size_t)st->nblocks, sizeof(double));
+  st->sum2 = calloc((size_t)st->nblocks, sizeof(double));
+  float *img = malloc(sizeof(float) * 3 * (size_t)set->width * set->height);
+  double *blk = malloc(sizeof(double) * (size_t)st->nblocks);
+  int *cnt = malloc(sizeof(int) * (size_t)st->nblocks);
+  for (int it = 0; it < n && rc == 0; it++) {
+    pc_film_clear(&film);
+    rc = pc_render_iterations(r, first + (uint64_t)it, 1, &film, NULL, NULL, NULL, NULL, &e);
+    if (rc != 0) {
+      fprintf(stderr, "stat_render_blocks: %s\n", e.msg);
+      break;
+    }
+    if (layer < 0) pc_film_beauty(&film, img);
+    else pc_film_layer_image(&film, layer, img);
+    memset(blk, 0, sizeof(double) * (size_t)st->nblocks);
+    memset(cnt, 0, sizeof(int) * (size_t)st->nblocks);
+    for (int y = 0; y < set->height; y++)
+      for (int x = 0; x < set->width; x++) {
+        int b = (y / bs) * st->bw + x / bs;
+        const float *p = img + 3 * ((size_t)y * set->width + x);
+        blk[b] += (p[0] + p[1] + p[2]) / 3.0;
+        cnt[b]++;
+      }
+    for (int b = 0; b < st->nblocks; b++) {
+      double v = blk[b] / cnt[b];
+      st->sum[b] += v;
+      st->sum2[b] += v * v;
+    }
+    st->n++;
+  }
+  free(img);
+  free(blk);
+  free(cnt);
+  pc_renderer_destroy(r);
+  pc_film_free(&film);
+  return rc;
+}
+
+static inline double stat_mean(const stat_blocks *st, int b) { return st->sum[b] / st->n; }
+/* Standard error of the block mean, from the spread of the independent iterations. */
+static inline double stat_se(const stat_blocks *st, int b) {
+  double m = stat_mean(st, b);
+  double var = (st->sum2[b] / st->n - m * m) * st->n / (st->n - 1);
+  return sqrt(var > 0 ? var / st->n : 0);
+}
+static inline void stat_free(stat_blocks *st) {
+  free(st->sum);
+  free(st->sum2);
+  memset(st, 0, sizeof *st);
+}
+
+#endif
