@@ -132,16 +132,14 @@ static void ckpt_work(uv_work_t *w) {
   if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
   if (dfd >= 0) close(dfd);
   if (op->rc || !op->write_exr) return;
-  char img[600], idbuf[32], iters[32], drop[32];
+  char img[600], idbuf[32], iters[32];
   snprintf(img, sizeof img, "%s/image.exr", dir);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
   snprintf(iters, sizeof iters, "%llu", (unsigned long long)j->film.layers[0].count);
-  snprintf(drop, sizeof drop, "%llu", (unsigned long long)j->film.dropped_nonfinite);
   pc_exr_attr attrs[] = {
     {.name = "pcbpt.job", .type = PC_ATTR_STRING, .s = idbuf},
     {.name = "pcbpt.method", .type = PC_ATTR_STRING, .s = pc_method_name(j->set.method)},
     {.name = "pcbpt.iterations", .type = PC_ATTR_STRING, .s = iters},
-    {.name = "pcbpt.dropped_nonfinite", .type = PC_ATTR_STRING, .s = drop},
     {.name = "pcbpt.seed", .type = PC_ATTR_DOUBLE, .d = (double)j->set.seed},
     {.name = "pcbpt.elapsed", .type = PC_ATTR_DOUBLE, .d = j->elapsed},
   };

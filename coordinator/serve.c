@@ -328,7 +328,7 @@ static void on_bundle_chunk(pc_peer *p, const Pcbpt__BundleChunk *b) {
     snprintf(dir, sizeof dir, "%s/bundles", c->data_dir);
     if (mkdir(dir, 0700) != 0 && errno != EEXIST) { drop(p, "%s: %s", dir, strerror(errno)); return; }
     snprintf(p->bun_tmp, sizeof p->bun_tmp, "%s/.upload.%08x%08x", dir, randombytes_random(), randombytes_random());
-    p->bun_fd = open(p->bun_tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    p->bun_fd = open(p->bun_tmp, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (p->bun_fd < 0) { drop(p, "%s: %s", p->bun_tmp, strerror(errno)); return; }
     p->bun_total = b->total;
     memcpy(p->bun_hash, b->hash.data, PC_BUNDLE_HASH);
