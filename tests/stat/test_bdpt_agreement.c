@@ -205,6 +205,40 @@ static void test_strategies(void **state) {
   pc_film_free(&probe);
 }
 
+/* The furnace (exact radiance Le * sum_{k<d} a^k, see test_furnace.c) with the power heuristic
+ * and with N_L != W*H: fewer light paths than pixels (pairing modulo N_L) and more (a light
+ * pass of unpaired light paths), 64 iterations as in the acceptance criterion. */
+static void test_furnace_counts(void **state) {
+  (void)state;
+  static const struct {
+    pc_method method;
+    pc_mis_heuristic h;
+    uint64_t light_paths;
+    int depth;
+  } cases[] = {
+      {PC_METHOD_BDPT, PC_MIS_POWER, 341, -1},  {PC_METHOD_BDPT, PC_MIS_BALANCE, 2560, 3},
+      {PC_METHOD_BDPT, PC_MIS_POWER, 3000, 4},  {PC_METHOD_LT, PC_MIS_POWER, 2048, -1},
+      {PC_METHOD_LT, PC_MIS_BALANCE, 300, 2},
+  };
+  int beauty = -1;
+  multi *m = malloc(sizeof *m);
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    pc_render_settings set = settings(cases[i].method, 32, cases[i].depth, 51 + i);
+    set.mis_heuristic = cases[i].h;
+    set.light_paths = cases[i].light_paths;
+    render_multi("furnace", set, 64, &beauty, 1, 32, NULL, m);
+    double exact = 0, ak = 1;
+    for (int k = 0; k < (cases[i].depth < 0 ? 200 : cases[i].depth); k++, ak *= 0.5) exact += ak;
+    double mu = mean_of(m, 0, 0), se = se_of(m, 0, 0);
+    printf("furnace %-4s %-7s N_L %5llu maxDepth %2d: %.5f exact %.5f se %.5f (%.2f%%)\n",
+           pc_method_name(cases[i].method), cases[i].h == PC_MIS_POWER ? "power" : "balance",
+           (unsigned long long)cases[i].light_paths, cases[i].depth, mu, exact, se, 100 * fabs(mu - exact) / exact);
+    assert_true(fabs(mu - exact) < 4 * se);
+    assert_true(fabs(mu - exact) < 0.015 * exact);
+  }
+  free(m);
+}
+
 /* The Cornell box camera moved to the height of the light: its plane is seen exactly edge-on. */
 static void edge_on(pc_scene *s) {
   const pc_shape *sh = &s->shapes[s->lights[0].shape];
@@ -236,7 +270,8 @@ static void test_finite(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_finite),         cmocka_unit_test(test_strategies),
+      cmocka_unit_test(test_finite),         cmocka_unit_test(test_furnace_counts),
+      cmocka_unit_test(test_strategies),
       cmocka_unit_test(test_agree_cornell),  cmocka_unit_test(test_agree_glossy_glass),
       cmocka_unit_test(test_agree_open_room), cmocka_unit_test(test_agree_ajar_door),
       cmocka_unit_test(test_agree_slit_room),
