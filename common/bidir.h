@@ -21,9 +21,9 @@ int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path
 typedef void (*pc_emitter_hit_fn)(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le);
 
 /* Traces the eye sub-path of pixel (x,y) with the pixel's stream `rng` (PC_STREAM_EYE): v[0] is
- * the camera (depth 1), at most c->max_segments + 1 vertices, sampling at most `max_depth`
- * vertices (t <= max_depth). Emitter hits are reported to `hit`. Returns the count. */
-int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_depth, pc_path_vertex *v,
+ * the camera (depth 1), at most max_vertices (<= c->max_segments + 1) vertices. Emitter hits are
+ * reported to `hit` (may be NULL). Returns the count. */
+int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_vertices, pc_path_vertex *v,
                    pc_emitter_hit_fn hit, void *user);
 
 /* MIS weight of the s=0 strategy for eye vertex v on light `light`. */

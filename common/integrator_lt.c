@@ -20,10 +20,7 @@ void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl) {
     bool weighted = c->weighted && (!lt_method || lv[i].depth == 1);
     pc_connection k;
     if (!pc_connect(c, &c->counts, &lv[i], &eye, weighted, &k)) continue;
-    int px = (int)k.px, py = (int)k.py;
-    if (px >= c->splat->w) px = c->splat->w - 1;
-    if (py >= c->splat->h) py = c->splat->h - 1;
-    pc_film_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, px, py,
+    pc_film_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
                          v3_scale(k.f, k.weight));
   }
 }

@@ -125,7 +125,7 @@ int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path
   return walk(c, n, &rng, v, 1, c->max_segments, true, dir, beta, pdf_dir, 0.f, false, cos_out, NULL, NULL);
 }
 
-int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_depth, pc_path_vertex *v,
+int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_vertices, pc_path_vertex *v,
                    pc_emitter_hit_fn hit, void *user) {
   const pc_camera *cam = &c->scene->camera;
   float px = (float)x + pc_rng_f(rng), py = (float)y + pc_rng_f(rng);
@@ -146,5 +146,5 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
   float pdf = 1.f / (cam->image_area * cz * cz * cz);
   if (!(pdf > 0.f) || !isfinite(pdf)) return 1;
   /* The pinhole cannot be hit: cos_out 0. */
-  return walk(c, n, rng, v, 1, max_depth, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);
+  return walk(c, n, rng, v, 1, max_vertices, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);
 }
