@@ -251,29 +251,28 @@ static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int 
 }
 
 typedef struct hits {
+  const pc_mis_counts *counts;
   int n;
   int t[MAXV];
   float w[MAXV];
 } hits;
 
-static const pc_mis_counts *g_counts;
 static void record_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le) {
   (void)le;
   hits *h = user;
   h->t[h->n] = v->depth;
-  h->w[h->n++] = pc_mis_weight_hit(c->scene, g_counts, v, light);
+  h->w[h->n++] = pc_mis_weight_hit(c->scene, h->counts, v, light);
 }
 
 static void run(fixture *f, pc_mis_counts n, int npaths) {
   f->c.counts = n;
-  g_counts = &f->c.counts;
   f->checked = f->strategies_checked = 0;
   for (int it = 0; it < npaths; it++) {
     f->c.iteration = (uint64_t)it;
     int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
     pc_rng rng = pc_rng_make(99, (uint64_t)it, PC_STREAM_EYE, 7);
     int x = (int)(pc_rng_f(&rng) * 32), y = (int)(pc_rng_f(&rng) * 32);
-    hits h = {0};
+    hits h = {.counts = &n};
     int ne = pc_eye_subpath(&f->c, &n, &rng, x, y, MAX_SEGMENTS + 1, f->ebuf, record_hit, &h);
     assert_true(nl >= 1 && nl <= MAX_SEGMENTS && ne >= 1 && ne <= MAX_SEGMENTS + 1);
     fpath fp;
