@@ -1,6 +1,6 @@
 /* image_internal.h: what the image codecs (image.c, image_png.c, image_jpeg.c, image_exr.c)
  * share with each other and nobody else: per-format readers, the sRGB transfer functions and
- * the temporary-file-then-rename discipline of every image writer. */
+ * the temporary-file-then-rename discipline of every image writer (chart.c included). */
 #ifndef PC_IMAGE_INTERNAL_H
 #define PC_IMAGE_INTERNAL_H
 
