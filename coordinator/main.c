@@ -13,6 +13,7 @@ typedef struct verb {
 static const verb verbs[] = {
     {"render", pc_cmd_render, "render a scene on this machine"},
     {"compare", pc_cmd_compare, "RMSE, relMSE and L1 between two EXR images, per layer"},
+    {"study", pc_cmd_study, "equal-time study: error against time for several methods"},
     {"serve", pc_cmd_serve, "run the farm coordinator"},
     {"submit", pc_cmd_submit, "submit a scene as a farm job (prints the job id)"},
     {"status", pc_cmd_status, "progress of one job or all"},

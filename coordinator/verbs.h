@@ -5,6 +5,7 @@
 
 int pc_cmd_render(int argc, char **argv);
 int pc_cmd_compare(int argc, char **argv);
+int pc_cmd_study(int argc, char **argv);
 /* The farm (coordinator/serve.c, coordinator/cmd_client.c). */
 int pc_cmd_serve(int argc, char **argv);
 int pc_cmd_submit(int argc, char **argv);

@@ -1,0 +1,198 @@
+/* study_files.c: what an equal-time study leaves on disk besides the images: study.csv (one row
+ * per method, snapshot and layer), study.json (settings, curves and the summary table) and the
+ * relMSE-against-time charts. Text files are written to a temporary name and renamed, so a
+ * reader never sees half a file. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "chart.h"
+#include "study.h"
+
+typedef struct out_file {
+  FILE *f;
+  char tmp[4096];
+  const char *path;
+} out_file;
+
+static int out_open(out_file *o, const char *path, pc_err *e) {
+  o->path = path;
+  int n = snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%ld", path, (long)getpid());
+  if (n < 0 || (size_t)n >= sizeof o->tmp) return pc_errf(e, PC_EINVAL, "%s: path too long", path);
+  if (!(o->f = fopen(o->tmp, "w"))) return pc_errf(e, PC_EIO, "%s: cannot create: %s", o->tmp, strerror(errno));
+  return PC_OK;
+}
+
+static int out_commit(out_file *o, pc_err *e) {
+  bool bad = ferror(o->f) != 0;
+  if (fclose(o->f) != 0) bad = true;
+  if (bad) {
+    unlink(o->tmp);
+    return pc_errf(e, PC_EIO, "%s: write error", o->path);
+  }
+  if (rename(o->tmp, o->path) != 0) {
+    int err = errno;
+    unlink(o->tmp);
+    return pc_errf(e, PC_EIO, "%s: cannot rename into place: %s", o->path, strerror(err));
+  }
+  return PC_OK;
+}
+
+int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, const pc_study_ref *ref, pc_err *e) {
+  out_file o;
+  int rc = out_open(&o, path, e);
+  if (rc != PC_OK) return rc;
+  fprintf(o.f, "method,snapshot,seconds,iterations,layer,relmse,rmse,l1\n");
+  for (int r = 0; r < nruns; r++)
+    for (int s = 0; s < runs[r].nsnaps; s++)
+      for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
+        if (!ref->rgb[slot]) continue;
+        const pc_study_snap *sn = &runs[r].snaps[s];
+        fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g\n", pc_method_name(runs[r].method), s, sn->seconds,
+                (unsigned long long)sn->iterations, pc_study_layer_name(slot), sn->m[slot].relmse, sn->m[slot].rmse,
+                sn->m[slot].l1);
+      }
+  return out_commit(&o, e);
+}
+
+static void json_string(FILE *f, const char *s) {
+  fputc('"', f);
+  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+    if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
+    else if (*p < 0x20) fprintf(f, "\\u%04x", *p);
+    else fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
+/* JSON has no NaN: unknown numbers are null. */
+static void json_number(FILE *f, double v) {
+  if (isfinite(v)) fprintf(f, "%.9g", v);
+  else fputs("null", f);
+}
+
+static const char *reach_name(pc_reach r) {
+  switch (r) {
+  case PC_REACH_INTERPOLATED: return "interpolated";
+  case PC_REACH_BY_FIRST: return "by_first_snapshot";
+  case PC_REACH_NEVER: return "not_reached";
+  case PC_REACH_EXCLUDED: return "layer_empty";
+  }
+  return "?";
+}
+
+static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_study_ref *ref) {
+  fputs("  \"methods\": [\n", f);
+  for (int r = 0; r < nruns; r++) {
+    const pc_study_run *run = &runs[r];
+    const pc_study_snap *last = run->nsnaps ? &run->snaps[run->nsnaps - 1] : NULL;
+    fprintf(f, "    {\"method\": \"%s\", \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
+            pc_method_name(run->method), run->threads, last ? (unsigned long long)last->iterations : 0ULL);
+    json_number(f, last ? last->seconds : NAN);
+    fprintf(f, ", \"rays\": %llu, \"exr\": \"%s.exr\", \"png\": \"%s.png\", \"empty_layers\": [",
+            (unsigned long long)run->stats.rays, pc_method_name(run->method), pc_method_name(run->method));
+    for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
+      if (run->layer_empty[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
+    fputs("],\n     \"snapshots\": [\n", f);
+    for (int s = 0; s < run->nsnaps; s++) {
+      const pc_study_snap *sn = &run->snaps[s];
+      fprintf(f, "       {\"seconds\": %.6f, \"iterations\": %llu, \"layers\": {", sn->seconds,
+              (unsigned long long)sn->iterations);
+      for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++) {
+        if (!ref->rgb[slot]) continue;
+        fprintf(f, "%s\"%s\": {\"relmse\": ", k++ ? ", " : "", pc_study_layer_name(slot));
+        json_number(f, sn->m[slot].relmse);
+        fputs(", \"rmse\": ", f);
+        json_number(f, sn->m[slot].rmse);
+        fputs(", \"l1\": ", f);
+        json_number(f, sn->m[slot].l1);
+        fputc('}', f);
+      }
+      fprintf(f, "}}%s\n", s + 1 < run->nsnaps ? "," : "");
+    }
+    fprintf(f, "     ]}%s\n", r + 1 < nruns ? "," : "");
+  }
+  fputs("  ],\n", f);
+}
+
+static void json_table(FILE *f, const pc_study_table *t) {
+  fputs("  \"table\": [\n", f);
+  for (int row = 0; row < t->nlayers; row++) {
+    fprintf(f, "    {\"layer\": \"%s\", \"target_relmse\": ", pc_study_layer_name(t->slot[row]));
+    json_number(f, t->target[row]);
+    fprintf(f, ", \"target_from\": \"%s\", \"rows\": [\n", t->target_given[row] ? "--target-error" : "worst final relmse");
+    for (int m = 0; m < t->nmethods; m++) {
+      const pc_study_cell *c = &t->cell[row][m];
+      fprintf(f, "      {\"method\": \"%s\", \"final_relmse\": ", pc_method_name(t->method[m]));
+      json_number(f, c->final_relmse);
+      fprintf(f, ", \"relmse_ratio_to_%s\": ", pc_method_name(t->method[0]));
+      json_number(f, c->relmse_ratio);
+      fputs(", \"time_to_target\": ", f);
+      json_number(f, c->time);
+      fprintf(f, ", \"reached\": \"%s\", \"time_ratio_to_%s\": ", reach_name(c->reach), pc_method_name(t->method[0]));
+      json_number(f, c->time_ratio);
+      fprintf(f, "}%s\n", m + 1 < t->nmethods ? "," : "");
+    }
+    fprintf(f, "    ]}%s\n", row + 1 < t->nlayers ? "," : "");
+  }
+  fputs("  ],\n  \"headline\": [", f);
+  for (int m = 1; m < t->nmethods; m++) {
+    char line[512];
+    pc_study_headline(t, m, line, sizeof line);
+    if (m > 1) fputs(", ", f);
+    json_string(f, line);
+  }
+  fputs("]\n", f);
+}
+
+int pc_study_write_json(const char *path, const pc_study_info *info, const pc_study_run *runs, int nruns,
+                        const pc_study_ref *ref, const pc_study_table *t, pc_err *e) {
+  out_file o;
+  int rc = out_open(&o, path, e);
+  if (rc != PC_OK) return rc;
+  FILE *f = o.f;
+  fputs("{\n  \"scene\": ", f);
+  json_string(f, info->scene_path);
+  fputs(", \"scene_name\": ", f);
+  json_string(f, info->scene_name);
+  fputs(", \"reference\": ", f);
+  json_string(f, info->reference_path);
+  fprintf(f, ",\n  \"seconds\": %.6g, \"width\": %d, \"height\": %d, \"seed\": %llu, \"max_snapshots\": %d,\n",
+          info->seconds, info->width, info->height, (unsigned long long)info->seed, info->max_snaps);
+  json_runs(f, runs, nruns, ref);
+  json_table(f, t);
+  fputs("}\n", f);
+  return out_commit(&o, e);
+}
+
+int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nruns, int slot,
+                         pc_err *e) {
+  pc_chart_series series[PC_STUDY_MAX_METHODS];
+  double *xy = calloc((size_t)nruns * 2 * PC_STUDY_MAX_SNAPSHOTS, sizeof *xy);
+  if (!xy) return pc_errf(e, PC_ENOMEM, "out of memory for the chart");
+  int ns = 0;
+  for (int r = 0; r < nruns; r++) {
+    if (runs[r].layer_empty[slot]) continue;
+    double *x = xy + (size_t)ns * 2 * PC_STUDY_MAX_SNAPSHOTS, *y = x + PC_STUDY_MAX_SNAPSHOTS;
+    for (int s = 0; s < runs[r].nsnaps; s++) {
+      x[s] = runs[r].snaps[s].seconds;
+      y[s] = runs[r].snaps[s].m[slot].relmse;
+    }
+    series[ns++] = (pc_chart_series){.name = pc_method_name(runs[r].method), .x = x, .y = y, .n = runs[r].nsnaps};
+  }
+  char title[512], path[4096];
+  snprintf(title, sizeof title, "%s: %s relMSE against render time", info->scene_name, pc_study_layer_name(slot));
+  pc_chart c = {.title = title, .x_label = "render time (s)", .y_label = "relMSE", .width = 800, .height = 560,
+                .series = series, .nseries = ns};
+  int rc = PC_OK;
+  for (int k = 0; k < 2 && rc == PC_OK; k++) {
+    int n = snprintf(path, sizeof path, "%s/study_%s.%s", dir, pc_study_layer_name(slot), k ? "svg" : "png");
+    if (n < 0 || (size_t)n >= sizeof path) rc = pc_errf(e, PC_EINVAL, "%s: path too long", dir);
+    else rc = k ? pc_chart_write_svg(&c, path, e) : pc_chart_write_png(&c, path, e);
+  }
+  free(xy);
+  return rc;
+}
