@@ -164,6 +164,17 @@ static int reference_slots(const pc_exr_file *ref, const char *path, pc_study_re
   return PC_OK;
 }
 
+/* A reference rendered with the study's seed shares its first iterations' samples with every
+ * method of the same kind, so their early errors would be biased low: say so. */
+static void warn_same_seed(const pc_exr_file *ref, const char *path, uint64_t seed) {
+  char mine[32];
+  snprintf(mine, sizeof mine, "%llu", (unsigned long long)seed);
+  for (int i = 0; i < ref->nattrs; i++)
+    if (strcmp(ref->attr_names[i], "pcbpt.seed") == 0 && strcmp(ref->attr_values[i], mine) == 0)
+      fprintf(stderr, "pcbpt-coord study: warning: %s was rendered with seed %s too; use another --seed for one of them\n",
+              path, mine);
+}
+
 /* Writes <dir>/<method>.exr and its PNG preview. */
 static int write_images(const study_args *a, const pc_film *film, const pc_study_run *run, pc_err *e) {
   const char *name = pc_method_name(run->method);
@@ -229,6 +240,7 @@ static int run_study(study_args *a, pc_err *e) {
   if (rc == PC_OK && (req->set.width != ref.w || req->set.height != ref.h))
     rc = pc_errf(e, PC_EINVAL, "--reference: %s is %dx%d but the study renders %dx%d (set --width/--height to match)",
                  a->reference, ref.w, ref.h, req->set.width, req->set.height);
+  if (rc == PC_OK) warn_same_seed(&ref_file, a->reference, req->set.seed);
   if (rc == PC_OK) rc = pc_scene_build(&scene, e);
   if (rc == PC_OK) rc = check_methods(a, &scene, e);
   if (rc == PC_OK) rc = make_dir(a->out, e);

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# The study verb from the command line: help, flag errors that name the flag (one line, non-zero
+# exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) against a reference
+# rendered here: every output file exists and study.csv has one row per method, snapshot and
+# layer, with the last snapshot at the end of the budget.
+set -u
+bin="$PCBPT_BINARY_DIR/pcbpt-coord"
+src="$PCBPT_SOURCE_DIR"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # check NAME EXPECTED_STATUS GREP_PATTERN -- command...
+  local name=$1 want=$2 pat=$3
+  shift 4
+  "$@" >"$tmp/out" 2>"$tmp/err"
+  local st=$?
+  if { [ "$want" = 0 ] && [ $st -ne 0 ]; } || { [ "$want" != 0 ] && [ $st -ne "$want" ]; }; then
+    echo "FAIL $name: exit $st"; cat "$tmp/err"; fail=1; return
+  fi
+  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/out" "$tmp/err"; then
+    echo "FAIL $name: output lacks '$pat'"; cat "$tmp/out" "$tmp/err"; fail=1; return
+  fi
+  if [ "$want" != 0 ] && [ "$(wc -l <"$tmp/err")" -ne 1 ]; then
+    echo "FAIL $name: error is not one line"; cat "$tmp/err"; fail=1; return
+  fi
+  echo "ok   $name"
+}
+scene="$src/scenes/cornell-box/scene.xml"
+size=(--width 32 --height 32)
+# Another seed than the study's, so the reference shares no samples with the methods.
+check reference 0 "" -- "$bin" render "$scene" --method bdpt --spp 64 "${size[@]}" --seed 977 --threads 2 --quiet --out "$tmp/ref.exr"
+ok=(--methods pt,bdpt --seconds 2 --reference "$tmp/ref.exr" --out "$tmp/s" "${size[@]}" --threads 2)
+
+check help 0 "--target-error" -- "$bin" study --help
+check verbs 0 "study" -- "$bin" --help
+check unknown-flag 2 "--frob" -- "$bin" study "$scene" "${ok[@]}" --frob
+check method-refused 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --method pt
+check spp-refused 2 "--spp" -- "$bin" study "$scene" "${ok[@]}" --spp 4
+check bad-methods 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --methods pt,magic
+check twice-methods 2 "twice" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pt
+check bad-seconds 2 "--seconds" -- "$bin" study "$scene" "${ok[@]}" --seconds 0
+check missing-value 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots
+check bad-snapshots 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots 0
+check bad-target 2 "--target-error" -- "$bin" study "$scene" "${ok[@]}" --target-error -1
+check bad-layer 2 "--layer" -- "$bin" study "$scene" "${ok[@]}" --layer s2t2
+check bad-render-flag 2 "--max-depth" -- "$bin" study "$scene" "${ok[@]}" --max-depth 0
+check no-reference 2 "--reference" -- "$bin" study "$scene" --methods pt --seconds 1 --out "$tmp/s"
+check no-scene 2 "SCENE" -- "$bin" study "${ok[@]}"
+check missing-reference 1 "nope.exr" -- "$bin" study "$scene" "${ok[@]}" --reference "$tmp/nope.exr"
+check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scene" "${ok[@]}" --width 16
+[ -e "$tmp/s" ] && { echo "FAIL: a refused study created its output folder"; fail=1; }
+# A method the renderer does not implement yet is an error naming it, before any render.
+if ! "$bin" render "$scene" --method pcbpt --spp 1 "${size[@]}" --quiet --out "$tmp/p.exr" >/dev/null 2>&1; then
+  check unimplemented 1 "pcbpt" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pcbpt
+  [ -e "$tmp/s/pt.exr" ] && { echo "FAIL unimplemented: pt rendered before the error"; fail=1; }
+fi
+
+check study 0 "needs .*x .* time than pt to reach beauty relMSE" -- "$bin" study "$scene" "${ok[@]}"
+grep -q "^inner *bdpt" "$tmp/out" || { echo "FAIL study: table lacks the inner row of bdpt"; cat "$tmp/out"; fail=1; }
+for f in pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg; do
+  [ -s "$tmp/s/$f" ] || { echo "FAIL study: $f missing"; fail=1; }
+done
+csv="$tmp/s/study.csv"
+[ "$(head -1 "$csv")" = "method,snapshot,seconds,iterations,layer,relmse,rmse,l1" ] || { echo "FAIL csv: header"; fail=1; }
+for m in pt bdpt; do
+  # Every snapshot has the five layers of the reference; 2..12 snapshots; the last one at >= 2 s.
+  awk -F, -v m="$m" '
+    NR > 1 && $1 == m { rows++; snaps[$2]++; layers[$2] = layers[$2] " " $5; last = $2; t = $3;
+                        if ($6 !~ /^[0-9.e+-]+$/) bad = "relmse " $6 }
+    END {
+      n = 0; for (s in snaps) { n++; if (snaps[s] != 5 || layers[s] != " beauty pt nee lt inner") bad = "snapshot " s ": " layers[s] }
+      if (n < 2 || n > 12) bad = n " snapshots"
+      if (rows != 5 * n) bad = rows " rows"
+      if (t + 0 < 2) bad = "last snapshot at " t " s"
+      if (bad != "") { print "FAIL csv " m ": " bad; exit 1 }
+    }' "$csv" || fail=1
+done
+if command -v python3 >/dev/null; then
+  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert [m["method"] for m in d["methods"]]==["pt","bdpt"]; assert len(d["headline"])==1' \
+    "$tmp/s/study.json" || { echo "FAIL json"; fail=1; }
+fi
+[ $fail = 0 ] && echo "ok   study outputs"
+exit $fail
