@@ -489,8 +489,12 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_iterations = j->halt_iterations;
     s->halt_seconds = j->halt_seconds;
     s->elapsed = j->elapsed;
-    for (pc_range *r = j->ranges; r; r = r->next)
-      if (r->owner) { s->workers++; s->iterations_per_second += r->owner->rate; }
+    for (pc_range *r = j->ranges; r; r = r->next) {
+      /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
+      bool seen = false;
+      for (pc_range *q = j->ranges; q != r && !seen; q = q->next) seen = q->owner == r->owner;
+      if (r->owner && !seen) { s->workers++; s->iterations_per_second += r->owner->rate; }
+    }
     if (j->state == PC_JOB_RUNNING) {
       double eta_i = j->halt_iterations && s->iterations_per_second > 0
                          ? (double)(j->halt_iterations - (j->done < j->halt_iterations ? j->done : j->halt_iterations)) / s->iterations_per_second

@@ -1,6 +1,7 @@
 /* main.c: pcbpt-worker: parses the command line and runs one worker (worker.c) until a signal. */
 #include <errno.h>
 #include <sodium.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +17,8 @@ static const char help[] =
     "Renders iteration ranges for a pcbpt coordinator (default port 7878). --threads 0 uses every core.\n";
 
 int main(int argc, char **argv) {
+  /* a peer that goes away mid-write must be an error return, not a fatal signal */
+  if (signal(SIGPIPE, SIG_IGN) == SIG_ERR) perror("signal");
   const char *connect = NULL, *token = NULL, *cache = NULL, *name = NULL;
   long long threads = 0;
   for (int i = 1; i < argc; i++) {

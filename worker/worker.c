@@ -446,7 +446,8 @@ static void close_handle(uv_handle_t *h) {
   if (!uv_is_closing(h)) uv_close(h, NULL);
 }
 
-/* Closes every handle but `notify` (the render thread may still signal it) so the loop ends. */
+/* Closes every handle but `notify` (the render thread may still signal it; unreferenced, it
+ * does not keep the loop alive) so the loop ends. */
 static void shut_down(worker *w) {
   if (w->shutting_down) return;
   w->shutting_down = true;
@@ -455,6 +456,7 @@ static void shut_down(worker *w) {
   close_handle((uv_handle_t *)&w->beat);
   close_handle((uv_handle_t *)&w->pump);
   close_handle((uv_handle_t *)&w->stop);
+  uv_unref((uv_handle_t *)&w->notify);
   if (w->handle_signals) {
     close_handle((uv_handle_t *)&w->sigint);
     close_handle((uv_handle_t *)&w->sigterm);
