@@ -4,13 +4,16 @@
  *       identical counts, relative 1e-9 on per-layer totals and on every pixel value
  *   farm_tool mean CKPT EXPECT TOL              |mean(beauty) - EXPECT| <= TOL * EXPECT
  *   farm_tool upload HOST:PORT TOKEN nan|size   speaks as a worker: takes a range and uploads
- *       a delta with a NaN sum or of the wrong size; exits 0 if the coordinator refuses it */
+ *       a delta with a NaN sum or of the wrong size; exits 0 if the coordinator refuses it
+ *   farm_tool bundle HOST:PORT TOKEN            sends a scene bundle whose content does not
+ *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
+#include "bundle.h"
 #include "client.h"
 #include "render.h"
 #include "render_flags.h"
@@ -184,10 +187,50 @@ fail:
   return 1;
 }
 
+static int cmd_bundle(int argc, char **argv) {
+  if (argc != 3) { fprintf(stderr, "bundle HOST:PORT TOKEN\n"); return 2; }
+  pc_client cl;
+  pc_err e = {0};
+  if (pc_client_connect(argv[1], argv[2], &cl, &e)) { fprintf(stderr, "bundle: %s\n", e.msg); return 1; }
+  uint8_t blob[100], hash[PC_BUNDLE_HASH];
+  memset(blob, 'x', sizeof blob);
+  memset(hash, 0x5a, sizeof hash);
+  Pcbpt__Envelope *in = NULL;
+  int rc = pc_client_send_bundle(&cl, blob, sizeof blob, hash, &e);
+  if (!rc) rc = pc_client_recv(&cl, 10, &in, &e);
+  pc_client_close(&cl);
+  if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  printf("bundle: %s\n", rc ? e.msg : "accepted");
+  if (!rc || !strstr(e.msg, "hash does not match")) return 1;
+  /* and a job naming it is refused */
+  if (pc_client_connect(argv[1], argv[2], &cl, &e)) return 1;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  Pcbpt__Settings ps;
+  pc_render_settings s;
+  pc_render_settings_default(&s);
+  pc_wire_settings_to_proto(&s, &ps);
+  sub.name = "bad-bundle";
+  sub.bundle_hash.data = hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = 1;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = &sub;
+  in = NULL;
+  rc = pc_client_send(&cl, &env, &e);
+  if (!rc) rc = pc_client_recv(&cl, 10, &in, &e);
+  pc_client_close(&cl);
+  if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  printf("submit: %s\n", rc ? e.msg : "accepted");
+  return rc && strstr(e.msg, "was not uploaded") ? 0 : 1;
+}
+
 int main(int argc, char **argv) {
   if (argc >= 4 && strcmp(argv[1], "exact") == 0) return cmd_exact(argc - 2, argv + 2);
   if (argc >= 2 && strcmp(argv[1], "mean") == 0) return cmd_mean(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "upload") == 0) return cmd_upload(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size\n");
+  if (argc >= 2 && strcmp(argv[1], "bundle") == 0) return cmd_bundle(argc - 1, argv + 1);
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size | bundle HOST:PORT TOKEN\n");
   return 2;
 }
