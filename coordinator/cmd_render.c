@@ -274,6 +274,12 @@ int pc_cmd_render(int argc, char **argv) {
   pc_render_request_apply_scene(&req, &scene);
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
+  {
+    /* settings the renderer refuses (e.g. a method not built in) are refused here too */
+    pc_renderer *probe = NULL;
+    if (pc_renderer_create(&scene, &req.set, 1, &probe, &err) != PC_OK) goto fail;
+    pc_renderer_destroy(probe);
+  }
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);
   if (!out) out = out_owned = default_out(scene_path);

@@ -180,6 +180,27 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_peer_send_cancel(p, h->job_id, h->range_id, false);
 }
 
+#define MAX_RANGE_FAILURES 3
+
+static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
+  pc_coord *c = p->coord;
+  pc_job *j = pc_coord_job(c, f->job_id);
+  pc_range *r = j ? pc_sched_find_range(j, f->range_id) : NULL;
+  if (!r || r->owner != p) return;
+  char why[300];
+  snprintf(why, sizeof why, "%s", f->reason ? f->reason : "");
+  for (char *s = why; *s; s++)
+    if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
+  r->owner = NULL;
+  r->orphan_since = 1; /* to another worker at once */
+  pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
+  if (++j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
+    char msg[400];
+    snprintf(msg, sizeof msg, "render failed on worker %s: %s", p->name, why);
+    pc_job_fail(c, j, msg);
+  }
+}
+
 static void stream_next(pc_peer *p) {
   pc_stream_out *o = &p->out;
   if (o->fd < 0) return;
@@ -567,6 +588,7 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
       return;
     }
     case PCBPT__ENVELOPE__MSG_HEARTBEAT: on_heartbeat(p, env->heartbeat); return;
+    case PCBPT__ENVELOPE__MSG_RANGE_FAILED: on_range_failed(p, env->range_failed); return;
     case PCBPT__ENVELOPE__MSG_BUNDLE_REQUEST: on_bundle_request(p, env->bundle_request); return;
     case PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK: on_upload(p, env->upload_chunk); return;
     default: break;

@@ -135,9 +135,19 @@ static void pump(worker *w) {
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
   uv_mutex_unlock(&w->r.mu);
   if (done && failed) {
-    pc_wire_log("job %llu: render failed: %s; dropping the range", (unsigned long long)w->job, w->r.error);
-    if (w->conn && w->connected) pc_conn_close(w->conn, "render failed; reconnecting so the range is reassigned");
-    finish_range(w);
+    pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
+    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+    Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
+    f.job_id = w->job;
+    f.range_id = w->range;
+    f.reason = w->r.error;
+    env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
+    env.range_failed = &f;
+    send_env(w, &env);
+    /* ask again after a pause, so a failing worker does not spin */
+    w->next_request = now_s() + 0.5;
+    w->busy = false;
+    w->drop = w->stopping = false;
     return;
   }
   if (w->drop) {
