@@ -33,7 +33,7 @@ static const char render_help[] =
     "  --quiet               no progress bar\n"
     "Without --spp or --time, renders 64 iterations.\n";
 
-static atomic_bool g_interrupted; /* set by SIGINT: the render stops and writes what it has */
+static atomic_bool g_interrupted; /* set by SIGINT/SIGTERM: the render stops and writes what it has */
 /* Asynchronous-signal state must be global; this flag is the only such state. */
 
 static void on_sigint(int sig) {
@@ -292,7 +292,8 @@ int pc_cmd_render(int argc, char **argv) {
   struct sigaction sa = {0};
   sa.sa_handler = on_sigint;
   sigemptyset(&sa.sa_mask);
-  if (sigaction(SIGINT, &sa, NULL) != 0) perror("pcbpt-coord render: sigaction");
+  /* SIGTERM too: the render finishes with what it has and removes its temporary farm */
+  if (sigaction(SIGINT, &sa, NULL) != 0 || sigaction(SIGTERM, &sa, NULL) != 0) perror("pcbpt-coord render: sigaction");
 
   progress_state prog = {.show = !quiet && isatty(STDERR_FILENO), .target = req.spp, .seconds = req.seconds, .t0 = now_s()};
   if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
