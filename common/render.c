@@ -38,6 +38,11 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_k = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
+  /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
+   * every light vertex, so where the cached PMF is wrong (a vertex it thinks is dark is not)
+   * a sample's weight 1/(M p_conn) is at most V/(u M), 1/u = 10 times the uniform (CBDPT-like)
+   * weight: variance there is bounded by about 1/u times CBDPT's, while the interpolated PMF
+   * keeps 90% of the samples where it is right. */
   s->uniform_mix = 0.1f;
   s->mis_mode = PC_MIS_UPPER_BOUND;
   s->pmf_mode = PC_PMF_CACHED;
