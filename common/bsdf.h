@@ -49,7 +49,7 @@ typedef struct pc_material {
    * interface from inside, and for roughplastic the tabulated rough transmittance. */
   float fdr_int;
   float spec_sampling_weight;
-  float rough_trans_in[PC_PLASTIC_TABLE];  /* 1 - rough reflectance, vs cos theta (external) */
+  float rough_trans_in[PC_PLASTIC_TABLE];  /* rough transmittance, vs cos theta (external) */
   float rough_trans_avg_int;               /* average internal rough transmittance */
 } pc_material;
 
@@ -68,7 +68,9 @@ typedef struct pc_bsdf_sampled {
   bool is_delta;
 } pc_bsdf_sampled;
 
-/* Precomputes derived data (plastic tables). Call once per material after parsing. */
+/* Precomputes derived data (plastic tables). Call once per material after parsing. A textured
+ * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set
+ * it to pc_texture_average() of the texture. */
 void pc_material_prepare(pc_material *m);
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,

@@ -43,7 +43,7 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
                  const pc_exr_attr *attrs, int nattrs, pc_err *e);
 
 /* Reads every layer of an EXR written by pc_exr_write (or any EXR with RGB channel triplets).
- * Returns layer names (malloc'd, "" for beauty) and images; caller frees with pc_exr_layers_free. */
+ * Returns layer names (malloc'd, "" for beauty) and images; caller frees with pc_exr_file_free. */
 typedef struct pc_exr_file {
   int w, h, nlayers;
   char **names;

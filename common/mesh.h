@@ -34,4 +34,11 @@ int pc_mesh_rectangle(pc_mesh *out);  /* [-1,1]^2 in z=0, normal +z */
 int pc_mesh_cube(pc_mesh *out);       /* [-1,1]^3, outward normals */
 int pc_mesh_disk(pc_mesh *out, int segments); /* unit disk in z=0, normal +z */
 
+/* Mitsuba's smooth vertex normals (TriMesh::computeNormals: angle-weighted face normals);
+ * replaces m->n. */
+int pc_mesh_compute_normals(pc_mesh *m);
+/* Fails unless every index is in range, every value is finite, normals have unit length and
+ * some triangle has nonzero area. `where` prefixes the message ("scene.xml:12: shape obj"). */
+int pc_mesh_validate(const pc_mesh *m, const char *where, pc_err *e);
+
 #endif

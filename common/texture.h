@@ -28,6 +28,9 @@ vec3 pc_texture_eval(const pc_texture *t, vec2 uv);
 static inline vec3 pc_slot_eval(const pc_tex_slot *s, const pc_texture *texs, vec2 uv) {
   return s->tex < 0 ? s->value : pc_texture_eval(&texs[s->tex], uv);
 }
+/* Mitsuba's getAverage(): the mean over the texture (for plastic's sampling weight, see
+ * pc_material_prepare). */
+vec3 pc_texture_average(const pc_texture *t);
 void pc_texture_free(pc_texture *t);
 
 #endif

@@ -39,4 +39,9 @@ check missing-scene 1 "nope.xml" -- "$bin" render "$tmp/nope.xml" --spp 1
 check no-scene 2 "SCENE" -- "$bin" render --spp 1
 check render 0 "samples/s" -- "$bin" render "$scene" --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
 [ -s "$tmp/cb.exr" ] && [ -s "$tmp/cb.png" ] || { echo "FAIL render: outputs missing"; fail=1; }
+check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
+grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }
+check compare-json 0 '"layer": "inner"' -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr" --json
+check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
+check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 exit $fail

@@ -1,0 +1,169 @@
+/* bsdf.c: the material-independent half of every BSDF query: world <-> shading frame, the
+ * `twosided` flip, Veach's light-leak rule, the adjoint shading-normal correction for
+ * importance transport, dispatch to the lobes (bsdf_*.c), Russian-roulette probabilities and
+ * a last guard so that no NaN or Inf ever leaves. */
+#include "bsdf.h"
+
+#include "bsdf_lobes.h"
+
+void pc_material_prepare(pc_material *m) {
+  if (m->type == PC_MAT_PLASTIC || m->type == PC_MAT_ROUGHPLASTIC) pc_plastic_prepare(m);
+}
+
+bool pc_bsdf_is_delta(const pc_material *m) {
+  return m->type == PC_MAT_CONDUCTOR || m->type == PC_MAT_DIELECTRIC;
+}
+
+/* Both the geometric and the shading normal must agree on reflection vs transmission, else
+ * light would leak through the surface (Veach 1997, 5.3). NaN directions fail here too. */
+static bool sides_agree(float so, float si, float go, float gi) {
+  float s = so * si, g = go * gi;
+  return (s > 0.f && g > 0.f) || (s < 0.f && g < 0.f);
+}
+
+/* Mitsuba's twosided wrapper turns the frame over when wo is behind it; the dielectric has its
+ * own notion of both sides. */
+static bool flips(const pc_material *m, float so) {
+  return m->twosided && m->type != PC_MAT_DIELECTRIC && so < 0.f;
+}
+
+/* |wo.ns||wi.ng| / (|wo.ng||wi.ns|): makes importance transport the adjoint of radiance
+ * transport with shading normals. sides_agree has already excluded zero denominators. */
+static float adjoint_correction(float so, float si, float go, float gi) {
+  return (fabsf(so) * fabsf(gi)) / (fabsf(go) * fabsf(si));
+}
+
+static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
+  switch (c->m->type) {
+  case PC_MAT_DIFFUSE: return pc_diffuse_eval(c, wo, wi);
+  case PC_MAT_ROUGHCONDUCTOR: return pc_roughconductor_eval(c, wo, wi);
+  case PC_MAT_PLASTIC: return pc_plastic_eval(c, wo, wi);
+  case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_eval(c, wo, wi);
+  case PC_MAT_CONDUCTOR:
+  case PC_MAT_DIELECTRIC: break;
+  }
+  return v3s(0.f);
+}
+
+static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
+  switch (c->m->type) {
+  case PC_MAT_DIFFUSE: return pc_diffuse_pdf(c, wo, wi);
+  case PC_MAT_ROUGHCONDUCTOR: return pc_roughconductor_pdf(c, wo, wi);
+  case PC_MAT_PLASTIC: return pc_plastic_pdf(c, wo, wi);
+  case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_pdf(c, wo, wi);
+  case PC_MAT_CONDUCTOR:
+  case PC_MAT_DIELECTRIC: break;
+  }
+  return 0.f;
+}
+
+static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
+  switch (c->m->type) {
+  case PC_MAT_DIFFUSE: return pc_diffuse_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_CONDUCTOR: return pc_conductor_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHCONDUCTOR: return pc_roughconductor_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_PLASTIC: return pc_plastic_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_DIELECTRIC: return pc_dielectric_sample(c, wo, u0, u1, u2, s);
+  }
+  return false;
+}
+
+/* Local directions of a query, in the frame turned over if twosided says so. */
+typedef struct local_pair {
+  vec3 wo, wi;
+  float go, gi; /* cosines with the geometric normal (sign irrelevant: only products used) */
+} local_pair;
+
+static bool localize(const pc_material *m, const pc_shading *sh, vec3 wo, vec3 wi, local_pair *p) {
+  p->wo = frame_to_local(&sh->sh, wo);
+  p->wi = frame_to_local(&sh->sh, wi);
+  p->go = v3_dot(wo, sh->ng);
+  p->gi = v3_dot(wi, sh->ng);
+  if (!sides_agree(p->wo.z, p->wi.z, p->go, p->gi)) return false;
+  if (flips(m, p->wo.z)) {
+    p->wo.z = -p->wo.z;
+    p->wi.z = -p->wi.z;
+  }
+  return true;
+}
+
+vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi, pc_transport mode) {
+  local_pair p;
+  if (pc_bsdf_is_delta(m) || !localize(m, sh, wo, wi, &p)) return v3s(0.f);
+  pc_lobe_ctx c = {m, texs, sh->uv, mode};
+  vec3 f = lobe_eval(&c, p.wo, p.wi);
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(p.wo.z, p.wi.z, p.go, p.gi));
+  return v3_is_finite(f) ? f : v3s(0.f);
+}
+
+float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi) {
+  local_pair p;
+  if (pc_bsdf_is_delta(m) || !localize(m, sh, wo, wi, &p)) return 0.f;
+  pc_lobe_ctx c = {m, texs, sh->uv, PC_RADIANCE};
+  float pdf = lobe_pdf(&c, p.wo, p.wi);
+  return (isfinite(pdf) && pdf > 0.f) ? pdf : 0.f;
+}
+
+bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                    vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
+  *out = (pc_bsdf_sampled){0};
+  vec3 lo = frame_to_local(&sh->sh, wo);
+  float go = v3_dot(wo, sh->ng);
+  float zsign = flips(m, lo.z) ? -1.f : 1.f;
+  lo.z *= zsign;
+  pc_lobe_ctx c = {m, texs, sh->uv, mode};
+  pc_lobe_sample s = {0};
+  if (!lobe_sample(&c, lo, u0, u1, u2, &s)) return false;
+  vec3 wi = v3_norm(frame_to_world(&sh->sh, v3(s.wi.x, s.wi.y, s.wi.z * zsign)));
+  float gi = v3_dot(wi, sh->ng);
+  /* Continue from wi as eval and pdf will see it, so that they agree with this sample to the
+   * last bit. */
+  s.wi = frame_to_local(&sh->sh, wi);
+  s.wi.z *= zsign;
+  if (!sides_agree(lo.z, s.wi.z, go, gi)) return false;
+  vec3 f;
+  if (s.is_delta) {
+    f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
+  } else {
+    f = lobe_eval(&c, lo, s.wi);
+    s.pdf = lobe_pdf(&c, lo, s.wi);
+    s.pdf_rev = lobe_pdf(&c, s.wi, lo);
+  }
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(lo.z, s.wi.z, go, gi));
+  if (!v3_is_finite(f) || v3_is_zero(f) || !(s.pdf > 0.f) || !isfinite(s.pdf) ||
+      !isfinite(s.pdf_rev) || !v3_is_finite(wi))
+    return false;
+  out->wi = wi;
+  out->f = f;
+  out->pdf = s.pdf;
+  out->pdf_rev = s.pdf_rev;
+  out->is_delta = s.is_delta;
+  return true;
+}
+
+/* Russian roulette: the largest channel of the material's reflectance-like parameters at uv,
+ * capped at 1. It bounds what one bounce can return (Fresnel and the plastic base never exceed
+ * their multipliers), so surviving paths never gain throughput from the division, and it is 0
+ * only for an exactly black material. */
+float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh) {
+  vec2 uv = sh->uv;
+  float q = 0.f;
+  switch (m->type) {
+  case PC_MAT_DIFFUSE: q = v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)); break;
+  case PC_MAT_CONDUCTOR:
+  case PC_MAT_ROUGHCONDUCTOR: q = v3_maxc(pc_slot_eval(&m->specular, texs, uv)); break;
+  case PC_MAT_PLASTIC:
+  case PC_MAT_ROUGHPLASTIC:
+    q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)),
+              v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)));
+    break;
+  case PC_MAT_DIELECTRIC:
+    q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)),
+              v3_maxc(pc_slot_eval(&m->transmittance, texs, uv)));
+    break;
+  }
+  return (q > 0.f) ? fminf(q, 1.f) : 0.f;
+}

@@ -1,0 +1,58 @@
+/* bsdf_lobes.h (private to the bsdf_*.c files): the per-material BSDF lobes in the local
+ * shading frame (normal = +z). bsdf.c does everything that is common to all of them: the world
+ * to local transform, the twosided flip, the light-leak test, the adjoint shading-normal
+ * correction and the final finiteness guard.
+ *
+ * Lobe functions see local unit directions; opaque lobes return zeros unless both are above
+ * the surface. eval and pdf cover non-delta lobes only, in radiance transport (every non-delta
+ * lobe here is a reflection, so it is reciprocal and the same in both modes). */
+#ifndef PC_BSDF_LOBES_H
+#define PC_BSDF_LOBES_H
+
+#include "bsdf.h"
+
+typedef struct pc_lobe_ctx {
+  const pc_material *m;
+  const pc_texture *texs;
+  vec2 uv;
+  pc_transport mode;
+} pc_lobe_ctx;
+
+/* What a lobe sampler produces. For a non-delta sample only wi is meaningful (bsdf.c evaluates
+ * f and both pdfs, so sample, eval and pdf agree exactly); for a delta sample f_cos, pdf and
+ * pdf_rev are set, with f_cos / pdf the sample weight (f times |cos wi|, without the shading
+ * correction; bsdf.c divides by the cosine of the final world-space wi). */
+typedef struct pc_lobe_sample {
+  vec3 wi;
+  vec3 f_cos;
+  float pdf, pdf_rev;
+  bool is_delta;
+} pc_lobe_sample;
+
+static inline vec3 pc_tex(const pc_lobe_ctx *c, const pc_tex_slot *s) {
+  return pc_slot_eval(s, c->texs, c->uv);
+}
+
+/* Cosine-weighted hemisphere (Shirley-Chiu concentric map, as Mitsuba). */
+vec3 pc_sample_cosine_hemisphere(float u1, float u2);
+
+vec3 pc_diffuse_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_diffuse_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_diffuse_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+bool pc_conductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_roughconductor_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_roughconductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_plastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_plastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+void pc_plastic_prepare(pc_material *m);
+
+bool pc_dielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+#endif

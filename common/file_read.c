@@ -1,0 +1,46 @@
+/* file_read.c: whole-file reads with a size bound, for the scene and mesh parsers. */
+#include "file_read.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err *e) {
+  *data = NULL;
+  *len = 0;
+  FILE *f = fopen(path, "rb");
+  if (!f) return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+  struct stat st;
+  if (fstat(fileno(f), &st) != 0) {
+    int err = errno;
+    fclose(f);
+    return pc_errf(e, PC_EIO, "%s: cannot stat: %s", path, strerror(err));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    fclose(f);
+    return pc_errf(e, PC_EIO, "%s: not a regular file", path);
+  }
+  if (st.st_size < 0 || (unsigned long long)st.st_size > max) {
+    fclose(f);
+    return pc_errf(e, PC_ELIMIT, "%s: file is larger than the limit of %zu bytes", path, max);
+  }
+  size_t n = (size_t)st.st_size;
+  char *buf = malloc(n + 1);
+  if (!buf) {
+    fclose(f);
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory reading %zu bytes", path, n);
+  }
+  size_t got = fread(buf, 1, n, f);
+  int rerr = ferror(f);
+  fclose(f);
+  if (got != n || rerr) {
+    free(buf);
+    return pc_errf(e, PC_EIO, "%s: read error", path);
+  }
+  buf[n] = 0;
+  *data = buf;
+  *len = n;
+  return 0;
+}

@@ -1,0 +1,452 @@
+/* image_exr.c: OpenEXR files through the OpenEXR Core C API: writing a render's layers and
+ * metadata as one single-part FLOAT scanline file, and reading any scanline or tiled EXR's
+ * RGB channel triplets (HALF, FLOAT or UINT) and simple header attributes. */
+#include "image_internal.h"
+
+#include <OpenEXR/openexr.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Where the library's error callback leaves the first (most specific) message. */
+typedef struct exr_msg {
+  int have;
+  char text[256];
+} exr_msg;
+
+static void on_exr_error(exr_const_context_t ctxt, exr_result_t code, const char *msg) {
+  (void)code;
+  void *ud = NULL;
+  if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud) return;
+  exr_msg *m = ud;
+  if (!m->have) {
+    snprintf(m->text, sizeof m->text, "%s", msg ? msg : "");
+    m->have = 1;
+  }
+}
+
+static int exr_fail(pc_err *e, const char *path, const char *what, exr_result_t rv,
+                    const exr_msg *m) {
+  return pc_errf(e, rv == EXR_ERR_FILE_ACCESS ? PC_EIO : PC_EEXR, "%s: %s: %s", path, what,
+                 m->have ? m->text : exr_get_default_error_message(rv));
+}
+
+static exr_context_initializer_t exr_init(exr_msg *m) {
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.error_handler_fn = on_exr_error;
+  init.user_data = m;
+  init.max_image_width = PC_IMAGE_MAX_DIM;
+  init.max_image_height = PC_IMAGE_MAX_DIM;
+  return init;
+}
+
+static char *dup_n(const char *s, size_t n) {
+  char *d = malloc(n + 1);
+  if (d) {
+    memcpy(d, s, n);
+    d[n] = '\0';
+  }
+  return d;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Writing */
+
+typedef struct out_channel {
+  char name[272]; /* "<layer>.R": layer names up to 255 bytes plus the suffix */
+  const float *plane; /* first sample of this channel in the layer's interleaved rgb */
+} out_channel;
+
+static int cmp_channel(const void *a, const void *b) {
+  return strcmp(((const out_channel *)a)->name, ((const out_channel *)b)->name);
+}
+
+static int check_layers(const char *path, const pc_exr_layer *layers, int nlayers, pc_err *e) {
+  for (int i = 0; i < nlayers; i++) {
+    if (!layers[i].name || !layers[i].rgb)
+      return pc_errf(e, PC_EINVAL, "%s: layer %d has no name or no pixels", path, i);
+    if (strlen(layers[i].name) > 250)
+      return pc_errf(e, PC_EINVAL, "%s: layer name '%.40s...' too long", path, layers[i].name);
+    for (int j = 0; j < i; j++)
+      if (strcmp(layers[i].name, layers[j].name) == 0)
+        return pc_errf(e, PC_EINVAL, "%s: layer '%s' given twice", path, layers[i].name);
+  }
+  return PC_OK;
+}
+
+/* Header and pixels into an open write context; the caller finishes it. */
+static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_channel *ch,
+                      int nch, const pc_exr_attr *attrs, int nattrs, exr_msg *m, pc_err *e) {
+  int part = 0;
+  exr_result_t rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
+  if (!rv) rv = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
+  if (rv) return exr_fail(e, path, "cannot set up the header", rv, m);
+  for (int c = 0; c < nch; c++) {
+    if (strlen(ch[c].name) > 31 && (rv = exr_set_longname_support(ctx, 1)))
+      return exr_fail(e, path, "cannot enable long channel names", rv, m);
+    rv = exr_add_channel(ctx, part, ch[c].name, EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1,
+                         1);
+    if (rv) return exr_fail(e, path, "cannot add a channel", rv, m);
+  }
+  for (int i = 0; i < nattrs; i++) {
+    if (!attrs[i].name || (attrs[i].type == PC_ATTR_STRING && !attrs[i].s))
+      return pc_errf(e, PC_EINVAL, "%s: attribute %d has no name or no value", path, i);
+    if (attrs[i].type == PC_ATTR_STRING)
+      rv = exr_attr_set_string(ctx, part, attrs[i].name, attrs[i].s);
+    else
+      rv = exr_attr_set_double(ctx, part, attrs[i].name, attrs[i].d);
+    if (rv) {
+      char what[320];
+      snprintf(what, sizeof what, "cannot set attribute '%.256s'", attrs[i].name);
+      return exr_fail(e, path, what, rv, m);
+    }
+  }
+  rv = exr_write_header(ctx);
+  if (rv) return exr_fail(e, path, "cannot write the header", rv, m);
+
+  int32_t lines = 1;
+  rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
+  if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
+  exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+  int inited = 0, rc = PC_OK;
+  for (int y = 0; y < h && !rv && !rc; y += lines) {
+    exr_chunk_info_t ci;
+    rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
+    if (rv) break;
+    rv = inited ? exr_encoding_update(ctx, part, &ci, &enc)
+                : exr_encoding_initialize(ctx, part, &ci, &enc);
+    if (rv) break;
+    inited = 1;
+    for (int c = 0; c < enc.channel_count; c++) {
+      exr_coding_channel_info_t *ec = &enc.channels[c];
+      const float *src = NULL;
+      for (int k = 0; k < nch && !src; k++)
+        if (strcmp(ec->channel_name, ch[k].name) == 0) src = ch[k].plane;
+      if (!src) {
+        rc = pc_errf(e, PC_EEXR, "%s: OpenEXR lost channel '%s'", path, ec->channel_name);
+        break;
+      }
+      ec->encode_from_ptr = (const uint8_t *)(src + (size_t)y * w * 3);
+      ec->user_pixel_stride = 3 * sizeof(float);
+      ec->user_line_stride = 3 * sizeof(float) * w;
+      ec->user_data_type = EXR_PIXEL_FLOAT;
+      ec->user_bytes_per_element = sizeof(float);
+    }
+    if (rc) break;
+    rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+    if (!rv) rv = exr_encoding_run(ctx, part, &enc);
+  }
+  if (inited) {
+    exr_result_t drv = exr_encoding_destroy(ctx, &enc);
+    if (!rv) rv = drv;
+  }
+  if (rc) return rc;
+  if (rv) return exr_fail(e, path, "cannot write pixels", rv, m);
+  return PC_OK;
+}
+
+int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int nlayers,
+                 const pc_exr_attr *attrs, int nattrs, pc_err *e) {
+  if (!path || (!layers && nlayers) || (!attrs && nattrs) || nlayers < 1 || nattrs < 0)
+    return pc_errf(e, PC_EINVAL, "pc_exr_write: bad arguments");
+  if (w <= 0 || h <= 0 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
+    return pc_errf(e, PC_ELIMIT, "%s: EXR size %dx%d outside 1..%d", path, w, h, PC_IMAGE_MAX_DIM);
+  int rc = check_layers(path, layers, nlayers, e);
+  if (rc) return rc;
+  char tmp[4096];
+  if ((rc = pc_image_tmp_path(path, tmp, sizeof tmp, e))) return rc;
+
+  int nch = 3 * nlayers;
+  out_channel *ch = calloc((size_t)nch, sizeof *ch);
+  if (!ch) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  static const char comp[3] = {'R', 'G', 'B'};
+  for (int i = 0; i < nlayers; i++) {
+    for (int c = 0; c < 3; c++) {
+      out_channel *o = &ch[3 * i + c];
+      if (layers[i].name[0]) snprintf(o->name, sizeof o->name, "%s.%c", layers[i].name, comp[c]);
+      else snprintf(o->name, sizeof o->name, "%c", comp[c]);
+      o->plane = layers[i].rgb + c;
+    }
+  }
+  /* EXR stores channel lists sorted by name. */
+  qsort(ch, (size_t)nch, sizeof *ch, cmp_channel);
+
+  exr_msg m = {0};
+  exr_context_initializer_t init = exr_init(&m);
+  exr_context_t ctx = NULL;
+  exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+  if (rv) rc = exr_fail(e, tmp, "cannot create", rv, &m);
+  else rc = exr_encode(ctx, path, w, h, ch, nch, attrs, nattrs, &m, e);
+  if (ctx) {
+    /* exr_finish writes the chunk offset table, so its failure is a failed write. */
+    rv = exr_finish(&ctx);
+    if (rv && rc == PC_OK) rc = exr_fail(e, tmp, "cannot finish", rv, &m);
+  }
+  free(ch);
+  if (rc == PC_OK) return pc_image_commit(tmp, path, e);
+  unlink(tmp);
+  return rc;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Reading */
+
+/* One candidate layer while scanning the channel list: its name is the channel name up to the
+ * last '.', and chan[c] is the channel index of its R, G or B (-1 if absent). */
+typedef struct in_layer {
+  const char *name;
+  int len;
+  int chan[3];
+} in_layer;
+
+static int component_of(const char *suffix) {
+  if (strcmp(suffix, "R") == 0) return 0;
+  if (strcmp(suffix, "G") == 0) return 1;
+  if (strcmp(suffix, "B") == 0) return 2;
+  return -1;
+}
+
+/* Groups channels into complete R,G,B triplets: beauty first, then channel-list order. */
+static int group_layers(const exr_attr_chlist_t *chl, in_layer *lay) {
+  int n = 0;
+  for (int i = 0; i < chl->num_channels; i++) {
+    const exr_attr_chlist_entry_t *ce = &chl->entries[i];
+    if (ce->x_sampling != 1 || ce->y_sampling != 1) continue;
+    const char *name = ce->name.str;
+    const char *dot = strrchr(name, '.');
+    int len = dot ? (int)(dot - name) : 0;
+    int c = component_of(dot ? dot + 1 : name);
+    if (c < 0) continue;
+    int k = 0;
+    while (k < n && !(lay[k].len == len && strncmp(lay[k].name, name, (size_t)len) == 0)) k++;
+    if (k == n) lay[n++] = (in_layer){name, len, {-1, -1, -1}};
+    lay[k].chan[c] = i;
+  }
+  int kept = 0;
+  for (int k = 0; k < n; k++)
+    if (lay[k].chan[0] >= 0 && lay[k].chan[1] >= 0 && lay[k].chan[2] >= 0) lay[kept++] = lay[k];
+  for (int k = 1; k < kept; k++)
+    if (lay[k].len == 0) {
+      in_layer beauty = lay[k];
+      memmove(lay + 1, lay, sizeof *lay * (size_t)k);
+      lay[0] = beauty;
+    }
+  return kept;
+}
+
+/* Decodes every chunk of part 0, channel i into dst[i] (interleaved RGB, NULL = skip). */
+static int exr_decode(exr_context_t ctx, const char *path, exr_storage_t storage,
+                      exr_attr_box2i_t dw, float **dst, int nchan, exr_msg *m, pc_err *e) {
+  int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+  int32_t step_x = w, step_y = 1;
+  exr_result_t rv;
+  if (storage == EXR_STORAGE_TILED) rv = exr_get_tile_sizes(ctx, 0, 0, 0, &step_x, &step_y);
+  else rv = exr_get_scanlines_per_chunk(ctx, 0, &step_y);
+  if (rv || step_x < 1 || step_y < 1) return exr_fail(e, path, "bad chunk layout", rv, m);
+
+  const exr_attr_chlist_t *chl = NULL;
+  if ((rv = exr_get_channels(ctx, 0, &chl))) return exr_fail(e, path, "no channel list", rv, m);
+  exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+  int inited = 0, rc = PC_OK;
+  for (int ty = 0; ty * (int64_t)step_y < h && !rv && !rc; ty++) {
+    for (int tx = 0; tx * (int64_t)step_x < w && !rv && !rc; tx++) {
+      exr_chunk_info_t ci;
+      if (storage == EXR_STORAGE_TILED) rv = exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0, &ci);
+      else rv = exr_read_scanline_chunk_info(ctx, 0, dw.min.y + ty * step_y, &ci);
+      if (rv) break;
+      rv = inited ? exr_decoding_update(ctx, 0, &ci, &dec)
+                  : exr_decoding_initialize(ctx, 0, &ci, &dec);
+      if (rv) break;
+      inited = 1;
+      /* For tiles the library reports tile indices in start_x/start_y, not pixels. */
+      int64_t x0 = (int64_t)tx * step_x, y0 = (int64_t)ty * step_y;
+      if (storage != EXR_STORAGE_TILED) {
+        x0 = (int64_t)ci.start_x - dw.min.x;
+        y0 = (int64_t)ci.start_y - dw.min.y;
+      }
+      if (x0 < 0 || y0 < 0 || x0 + ci.width > w || y0 + ci.height > h) {
+        rc = pc_errf(e, PC_EEXR, "%s: chunk at (%lld,%lld) outside the data window", path,
+                     (long long)x0, (long long)y0);
+        break;
+      }
+      for (int c = 0; c < dec.channel_count; c++) {
+        exr_coding_channel_info_t *dc = &dec.channels[c];
+        float *base = NULL;
+        for (int i = 0; i < nchan && !base; i++)
+          if (dst[i] && strcmp(dc->channel_name, chl->entries[i].name.str) == 0) base = dst[i];
+        dc->decode_to_ptr = base ? (uint8_t *)(base + ((size_t)y0 * w + (size_t)x0) * 3) : NULL;
+        dc->user_pixel_stride = 3 * sizeof(float);
+        dc->user_line_stride = 3 * sizeof(float) * w;
+        dc->user_data_type = EXR_PIXEL_FLOAT;
+        dc->user_bytes_per_element = sizeof(float);
+      }
+      rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
+      if (!rv) rv = exr_decoding_run(ctx, 0, &dec);
+    }
+  }
+  if (inited) {
+    exr_result_t drv = exr_decoding_destroy(ctx, &dec);
+    if (!rv) rv = drv;
+  }
+  if (rc) return rc;
+  if (rv) return exr_fail(e, path, "cannot read pixels", rv, m);
+  return PC_OK;
+}
+
+/* string/double/int/float attributes as text; other types are skipped. */
+static int collect_attrs(exr_context_t ctx, const char *path, pc_exr_file *out, exr_msg *m,
+                         pc_err *e) {
+  int32_t n = 0;
+  exr_result_t rv = exr_get_attribute_count(ctx, 0, &n);
+  if (rv || n < 0) return exr_fail(e, path, "cannot list attributes", rv, m);
+  out->attr_names = calloc((size_t)n + 1, sizeof(char *));
+  out->attr_values = calloc((size_t)n + 1, sizeof(char *));
+  if (!out->attr_names || !out->attr_values)
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  for (int32_t i = 0; i < n; i++) {
+    const exr_attribute_t *a = NULL;
+    rv = exr_get_attribute_by_index(ctx, 0, EXR_ATTR_LIST_FILE_ORDER, i, &a);
+    if (rv) return exr_fail(e, path, "cannot read an attribute", rv, m);
+    char num[64];
+    const char *text = num;
+    size_t len;
+    switch (a->type) {
+    case EXR_ATTR_STRING:
+      text = a->string->str ? a->string->str : "";
+      len = a->string->str && a->string->length > 0 ? (size_t)a->string->length : 0;
+      break;
+    case EXR_ATTR_DOUBLE:
+      /* The shortest text that reads back as the same double. */
+      snprintf(num, sizeof num, "%.15g", a->d);
+      if (strtod(num, NULL) != a->d) snprintf(num, sizeof num, "%.17g", a->d);
+      len = strlen(num);
+      break;
+    case EXR_ATTR_FLOAT:
+      snprintf(num, sizeof num, "%.9g", (double)a->f);
+      len = strlen(num);
+      break;
+    case EXR_ATTR_INT:
+      snprintf(num, sizeof num, "%d", (int)a->i);
+      len = strlen(num);
+      break;
+    default:
+      continue;
+    }
+    int k = out->nattrs;
+    out->attr_names[k] = dup_n(a->name, strlen(a->name));
+    out->attr_values[k] = dup_n(text, len);
+    out->nattrs++;
+    if (!out->attr_names[k] || !out->attr_values[k])
+      return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  }
+  return PC_OK;
+}
+
+static int exr_read_part(exr_context_t ctx, const char *path, int beauty_only, pc_exr_file *out,
+                         exr_msg *m, pc_err *e) {
+  int nparts = 0;
+  exr_storage_t storage;
+  exr_attr_box2i_t dw;
+  const exr_attr_chlist_t *chl = NULL;
+  exr_result_t rv = exr_get_count(ctx, &nparts);
+  if (!rv && nparts < 1) rv = EXR_ERR_FILE_BAD_HEADER;
+  if (!rv) rv = exr_get_storage(ctx, 0, &storage);
+  if (!rv) rv = exr_get_data_window(ctx, 0, &dw);
+  if (!rv) rv = exr_get_channels(ctx, 0, &chl);
+  if (rv || !chl) return exr_fail(e, path, "bad header", rv, m);
+  if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
+    return pc_errf(e, PC_EUNSUPPORTED, "%s: deep EXR images are not supported", path);
+  int64_t w = (int64_t)dw.max.x - dw.min.x + 1, h = (int64_t)dw.max.y - dw.min.y + 1;
+  if (w < 1 || h < 1 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
+    return pc_errf(e, PC_ELIMIT, "%s: EXR data window %lldx%lld outside 1..%d", path,
+                   (long long)w, (long long)h, PC_IMAGE_MAX_DIM);
+  out->w = (int)w;
+  out->h = (int)h;
+
+  int nchan = chl->num_channels;
+  in_layer *lay = calloc((size_t)nchan + 1, sizeof *lay);
+  float **dst = calloc((size_t)nchan + 1, sizeof *dst);
+  int rc = PC_OK;
+  if (!lay || !dst) {
+    rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+    goto done;
+  }
+  int nl = group_layers(chl, lay);
+  if (nl == 0) {
+    rc = pc_errf(e, PC_EUNSUPPORTED, "%s: no R,G,B channel triplet", path);
+    goto done;
+  }
+  if (beauty_only) nl = 1;
+  out->names = calloc((size_t)nl, sizeof *out->names);
+  out->layers = calloc((size_t)nl, sizeof *out->layers);
+  if (!out->names || !out->layers) {
+    rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+    goto done;
+  }
+  for (int k = 0; k < nl; k++) {
+    out->nlayers++;
+    out->names[k] = dup_n(lay[k].name, (size_t)lay[k].len);
+    out->layers[k].rgb = malloc(sizeof(float) * 3 * (size_t)w * (size_t)h);
+    if (!out->names[k] || !out->layers[k].rgb) {
+      rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for %d layers of %lldx%lld", path, nl,
+                   (long long)w, (long long)h);
+      goto done;
+    }
+    out->layers[k].w = (int)w;
+    out->layers[k].h = (int)h;
+    for (int c = 0; c < 3; c++) dst[lay[k].chan[c]] = out->layers[k].rgb + c;
+  }
+  rc = exr_decode(ctx, path, storage, dw, dst, nchan, m, e);
+  if (!rc && !beauty_only) rc = collect_attrs(ctx, path, out, m, e);
+done:
+  free(lay);
+  free(dst);
+  return rc;
+}
+
+static int exr_read(const char *path, int beauty_only, pc_exr_file *out, pc_err *e) {
+  memset(out, 0, sizeof *out);
+  exr_msg m = {0};
+  exr_context_initializer_t init = exr_init(&m);
+  exr_context_t ctx = NULL;
+  exr_result_t rv = exr_start_read(&ctx, path, &init);
+  int rc;
+  if (rv) rc = exr_fail(e, path, rv == EXR_ERR_FILE_ACCESS ? "cannot open" : "bad header", rv, &m);
+  else rc = exr_read_part(ctx, path, beauty_only, out, &m, e);
+  if (ctx) exr_finish(&ctx); /* a read context has nothing left to flush */
+  if (rc) pc_exr_file_free(out);
+  return rc;
+}
+
+int pc_exr_read_layers(const char *path, pc_exr_file *out, pc_err *e) {
+  if (!path || !out) return pc_errf(e, PC_EINVAL, "pc_exr_read_layers: NULL argument");
+  return exr_read(path, 0, out, e);
+}
+
+int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e) {
+  pc_exr_file f;
+  int rc = exr_read(path, 1, &f, e);
+  if (rc) return rc;
+  *out = f.layers[0];
+  f.layers[0].rgb = NULL;
+  pc_exr_file_free(&f);
+  return PC_OK;
+}
+
+void pc_exr_file_free(pc_exr_file *f) {
+  if (!f) return;
+  for (int i = 0; i < f->nlayers; i++) {
+    if (f->names) free(f->names[i]);
+    if (f->layers) pc_image_free(&f->layers[i]);
+  }
+  for (int i = 0; i < f->nattrs; i++) {
+    free(f->attr_names[i]);
+    free(f->attr_values[i]);
+  }
+  free(f->names);
+  free(f->layers);
+  free(f->attr_names);
+  free(f->attr_values);
+  memset(f, 0, sizeof *f);
+}

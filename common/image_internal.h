@@ -1,0 +1,31 @@
+/* image_internal.h: what the image codecs (image.c, image_png.c, image_jpeg.c, image_exr.c)
+ * share with each other and nobody else: per-format readers, the sRGB transfer functions and
+ * the temporary-file-then-rename discipline of every image writer. */
+#ifndef PC_IMAGE_INTERNAL_H
+#define PC_IMAGE_INTERNAL_H
+
+#include <math.h>
+#include <stdio.h>
+
+#include "image.h"
+
+int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+int pc_jpeg_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+/* The beauty R,G,B, or the first RGB triplet when the file has no plain R,G,B. */
+int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e);
+
+/* Exact piecewise sRGB EOTF / OETF (IEC 61966-2-1) on [0,1]. */
+static inline float pc_srgb_to_linear(float c) {
+  return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+static inline float pc_linear_to_srgb(float v) {
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
+}
+
+/* "<path>.tmp.<pid>": writers fill this and rename() it over path, so a reader of path sees
+ * either the old file or the complete new one. */
+int pc_image_tmp_path(const char *path, char *buf, size_t size, pc_err *e);
+/* rename(tmp, path), removing tmp when that fails. */
+int pc_image_commit(const char *tmp, const char *path, pc_err *e);
+
+#endif

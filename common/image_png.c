@@ -1,0 +1,231 @@
+/* image_png.c: PNG through libpng: reading any PNG (8/16-bit gray, gray+alpha, RGB, RGBA,
+ * palette) into a linear float raster, and writing the 8-bit sRGB preview of a render.
+ * libpng reports errors by longjmp; the jumping functions keep every resource they own in a
+ * struct reached through a pointer, so nothing they change is lost across the jump. */
+#include "image_internal.h"
+
+#include <errno.h>
+#include <png.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+typedef struct png_msg {
+  char text[256];
+} png_msg;
+
+static void on_png_error(png_structp png, png_const_charp msg) {
+  png_msg *m = png_get_error_ptr(png);
+  snprintf(m->text, sizeof m->text, "%s", msg);
+  png_longjmp(png, 1);
+}
+
+/* Warnings (bad ancillary chunks, ignored gamma, ...) do not make an image unusable. */
+static void on_png_warning(png_structp png, png_const_charp msg) {
+  (void)png;
+  (void)msg;
+}
+
+typedef struct png_reader {
+  const char *path;
+  int srgb_to_linear;
+  pc_err *e;
+  png_msg msg;
+  FILE *f;
+  png_structp png;
+  png_infop info;
+  png_bytep pixels;
+  png_bytepp rows;
+  pc_image img;
+} png_reader;
+
+/* Runs under the caller's setjmp: returns a code for errors found here, longjmps for
+ * errors libpng finds. */
+static int png_decode(png_reader *r) {
+  png_init_io(r->png, r->f);
+  png_read_info(r->png, r->info);
+  png_uint_32 w, h;
+  int depth, ctype;
+  png_get_IHDR(r->png, r->info, &w, &h, &depth, &ctype, NULL, NULL, NULL);
+  if (w == 0 || h == 0 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
+    return pc_errf(r->e, PC_ELIMIT, "%s: PNG size %lux%lu outside 1..%d", r->path,
+                   (unsigned long)w, (unsigned long)h, PC_IMAGE_MAX_DIM);
+
+  if (ctype == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(r->png);
+  if (ctype == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(r->png);
+  if (!(ctype & PNG_COLOR_MASK_COLOR)) png_set_gray_to_rgb(r->png);
+  png_set_interlace_handling(r->png);
+  png_read_update_info(r->png, r->info);
+
+  int channels = png_get_channels(r->png, r->info);
+  int bytes = png_get_bit_depth(r->png, r->info) == 16 ? 2 : 1;
+  size_t rowbytes = png_get_rowbytes(r->png, r->info);
+  if ((channels != 3 && channels != 4) || rowbytes != (size_t)w * channels * bytes)
+    return pc_errf(r->e, PC_EIMAGE, "%s: unexpected PNG pixel layout", r->path);
+
+  r->pixels = malloc(rowbytes * h);
+  r->rows = malloc(sizeof *r->rows * h);
+  r->img.rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
+  if (!r->pixels || !r->rows || !r->img.rgb)
+    return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %lux%lu PNG", r->path,
+                   (unsigned long)w, (unsigned long)h);
+  for (png_uint_32 y = 0; y < h; y++) r->rows[y] = r->pixels + rowbytes * y;
+  png_read_image(r->png, r->rows);
+  png_read_end(r->png, NULL);
+
+  r->img.w = (int)w;
+  r->img.h = (int)h;
+  float lut[256];
+  for (int i = 0; i < 256; i++)
+    lut[i] = r->srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
+  for (png_uint_32 y = 0; y < h; y++) {
+    const png_byte *src = r->rows[y];
+    float *dst = r->img.rgb + (size_t)y * w * 3;
+    for (png_uint_32 x = 0; x < w; x++, src += channels * bytes, dst += 3) {
+      for (int c = 0; c < 3; c++) {
+        if (bytes == 1) {
+          dst[c] = lut[src[c]];
+        } else {
+          /* PNG samples are big-endian on disk and libpng keeps them so. */
+          float v = (float)((src[2 * c] << 8) | src[2 * c + 1]) / 65535.0f;
+          dst[c] = r->srgb_to_linear ? pc_srgb_to_linear(v) : v;
+        }
+      }
+    }
+  }
+  return PC_OK;
+}
+
+/* libpng's png_read_info parses every chunk up to the first IDAT before returning the size,
+ * so the size limit is first checked here on the IHDR, which PNG requires at a fixed place. */
+static int png_precheck_size(FILE *f, const char *path, pc_err *e) {
+  unsigned char b[24];
+  if (fread(b, 1, sizeof b, f) == sizeof b && memcmp(b + 12, "IHDR", 4) == 0) {
+    uint32_t w = (uint32_t)b[16] << 24 | (uint32_t)b[17] << 16 | (uint32_t)b[18] << 8 | b[19];
+    uint32_t h = (uint32_t)b[20] << 24 | (uint32_t)b[21] << 16 | (uint32_t)b[22] << 8 | b[23];
+    if (w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
+      return pc_errf(e, PC_ELIMIT, "%s: PNG size %lux%lu exceeds %d", path, (unsigned long)w,
+                     (unsigned long)h, PC_IMAGE_MAX_DIM);
+  }
+  if (fseek(f, 0, SEEK_SET) != 0) return pc_errf(e, PC_EIO, "%s: cannot seek", path);
+  return PC_OK;
+}
+
+int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+  png_reader *r = calloc(1, sizeof *r);
+  if (!r) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  r->path = path;
+  r->srgb_to_linear = srgb_to_linear;
+  r->e = e;
+  int rc;
+  r->f = fopen(path, "rb");
+  if (!r->f) {
+    rc = pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+    goto done;
+  }
+  if ((rc = png_precheck_size(r->f, path, e))) goto done;
+  r->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &r->msg, on_png_error, on_png_warning);
+  r->info = r->png ? png_create_info_struct(r->png) : NULL;
+  if (!r->info) {
+    rc = pc_errf(e, PC_ENOMEM, "%s: cannot create a libpng reader", path);
+    goto done;
+  }
+  if (setjmp(png_jmpbuf(r->png))) {
+    /* libpng says only "Read Error" when the file is cut short. */
+    rc = pc_errf(e, PC_EIMAGE, "%s: bad PNG: %s", path,
+                 feof(r->f) ? "file ends early" : r->msg.text);
+    goto done;
+  }
+  rc = png_decode(r);
+done:
+  if (r->png) png_destroy_read_struct(&r->png, r->info ? &r->info : NULL, NULL);
+  if (r->f) fclose(r->f);
+  free(r->pixels);
+  free(r->rows);
+  if (rc == PC_OK) *out = r->img;
+  else pc_image_free(&r->img);
+  free(r);
+  return rc;
+}
+
+typedef struct png_writer {
+  png_msg msg;
+  FILE *f;
+  png_structp png;
+  png_infop info;
+  const uint8_t *pixels;
+  int w, h;
+} png_writer;
+
+static void png_encode(png_writer *wr) {
+  png_init_io(wr->png, wr->f);
+  png_set_IHDR(wr->png, wr->info, (png_uint_32)wr->w, (png_uint_32)wr->h, 8, PNG_COLOR_TYPE_RGB,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_sRGB_gAMA_and_cHRM(wr->png, wr->info, PNG_sRGB_INTENT_PERCEPTUAL);
+  png_write_info(wr->png, wr->info);
+  for (int y = 0; y < wr->h; y++) png_write_row(wr->png, wr->pixels + (size_t)y * wr->w * 3);
+  png_write_end(wr->png, NULL);
+}
+
+static uint8_t to_srgb8(float v) {
+  if (!(v > 0.0f)) v = 0.0f; /* also NaN */
+  if (v > 1.0f) v = 1.0f;
+  return (uint8_t)(pc_linear_to_srgb(v) * 255.0f + 0.5f);
+}
+
+int pc_png_write_preview(const char *path, int w, int h, const float *rgb, float exposure,
+                         pc_err *e) {
+  if (!path || !rgb) return pc_errf(e, PC_EINVAL, "pc_png_write_preview: NULL argument");
+  if (w <= 0 || h <= 0 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
+    return pc_errf(e, PC_ELIMIT, "%s: preview size %dx%d outside 1..%d", path, w, h,
+                   PC_IMAGE_MAX_DIM);
+  float scale = exp2f(exposure);
+  if (!isfinite(scale) || scale <= 0.0f)
+    return pc_errf(e, PC_EINVAL, "%s: exposure %g out of range", path, (double)exposure);
+  char tmp[4096];
+  int rc = pc_image_tmp_path(path, tmp, sizeof tmp, e);
+  if (rc) return rc;
+
+  size_t n = (size_t)w * h * 3;
+  uint8_t *pixels = malloc(n);
+  png_writer *wr = calloc(1, sizeof *wr);
+  if (!pixels || !wr) {
+    free(pixels);
+    free(wr);
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory for a %dx%d preview", path, w, h);
+  }
+  for (size_t i = 0; i < n; i++) pixels[i] = to_srgb8(rgb[i] * scale);
+  wr->pixels = pixels;
+  wr->w = w;
+  wr->h = h;
+
+  wr->f = fopen(tmp, "wb");
+  if (!wr->f) {
+    rc = pc_errf(e, PC_EIO, "%s: cannot create: %s", tmp, strerror(errno));
+    goto done;
+  }
+  wr->png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &wr->msg, on_png_error, on_png_warning);
+  wr->info = wr->png ? png_create_info_struct(wr->png) : NULL;
+  if (!wr->info) {
+    rc = pc_errf(e, PC_ENOMEM, "%s: cannot create a libpng writer", path);
+    goto done;
+  }
+  if (setjmp(png_jmpbuf(wr->png))) {
+    rc = pc_errf(e, PC_EIMAGE, "%s: PNG write failed: %s", path, wr->msg.text);
+    goto done;
+  }
+  png_encode(wr);
+  rc = PC_OK;
+done:
+  if (wr->png) png_destroy_write_struct(&wr->png, wr->info ? &wr->info : NULL);
+  if (wr->f && fclose(wr->f) != 0 && rc == PC_OK)
+    rc = pc_errf(e, PC_EIO, "%s: write error: %s", tmp, strerror(errno));
+  if (wr->f) {
+    if (rc == PC_OK) rc = pc_image_commit(tmp, path, e);
+    else unlink(tmp);
+  }
+  free(pixels);
+  free(wr);
+  return rc;
+}

@@ -1,0 +1,29 @@
+/* method.c: names of the rendering methods, for the CLI, the integrator element and headers. */
+#include <string.h>
+
+#include "scene.h"
+
+const char *pc_method_name(pc_method m) {
+  switch (m) {
+  case PC_METHOD_PT: return "pt";
+  case PC_METHOD_LT: return "lt";
+  case PC_METHOD_BDPT: return "bdpt";
+  case PC_METHOD_CBDPT: return "cbdpt";
+  case PC_METHOD_PCBPT: return "pcbpt";
+  }
+  return "unknown";
+}
+
+int pc_method_parse(const char *name, pc_method *out) {
+  static const struct { const char *name; pc_method m; } tab[] = {
+      {"pt", PC_METHOD_PT},       {"path", PC_METHOD_PT},     {"lt", PC_METHOD_LT},
+      {"bdpt", PC_METHOD_BDPT},   {"cbdpt", PC_METHOD_CBDPT}, {"pcbpt", PC_METHOD_PCBPT},
+  };
+  if (!name) return PC_EINVAL;
+  for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
+    if (strcmp(name, tab[i].name) == 0) {
+      *out = tab[i].m;
+      return 0;
+    }
+  return PC_EINVAL;
+}

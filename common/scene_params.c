@@ -1,0 +1,388 @@
+/* scene_params.c: the generic parts of the Mitsuba scene loader: typed plugin parameters,
+ * ids and references, <default> parameters with $name substitution, and file references
+ * confined to the scene's folder. */
+#include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene_xml_ctx.h"
+#include "xml_values.h"
+
+#define SUBST_MAX (64 << 10)
+#define MAX_PARAMS 4096
+#define MAX_IDS (1 << 20)
+
+static const char *const param_elems[] = {"integer", "float", "boolean", "string", "rgb", "srgb",
+                                          "spectrum", "blackbody", "point", "vector", "transform", NULL};
+
+static bool is_param_elem(const char *name) {
+  for (const char *const *p = param_elems; *p; p++)
+    if (strcmp(*p, name) == 0) return true;
+  return false;
+}
+
+static pc_param *find_param(pc_param *params, int np, const char *name) {
+  for (int i = 0; i < np; i++)
+    if (strcmp(params[i].name, name) == 0) return &params[i];
+  return NULL;
+}
+
+bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np) {
+  if (is_param_elem(ch->name)) return true;
+  if (strcmp(ch->name, "texture") != 0 && strcmp(ch->name, "ref") != 0) return false;
+  const char *name = pc_xml_attr(ch, "name");
+  if (!name) return false;
+  const pc_param *p = find_param((pc_param *)params, np, name);
+  return p && p->kind == PC_P_SLOT;
+}
+
+int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
+  const char *type = pc_xml_attr(ch, "type");
+  if (type)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s type=\"%s\">", c->file, ch->line, what, ch->name, type);
+  return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s>", c->file, ch->line, what, ch->name);
+}
+
+static int parse_int(pc_sx *c, const pc_xml_node *ch, const char *what, int *out) {
+  const char *v = pc_xml_attr(ch, "value");
+  if (!v) return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <integer> lacks a value", c->file, ch->line, what);
+  char *end;
+  errno = 0;
+  long x = strtol(v, &end, 10);
+  while (*end == ' ') end++;
+  if (end == v || *end || errno == ERANGE || x < INT_MIN || x > INT_MAX)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: '%.40s' is not an integer", c->file, ch->line, what, v);
+  *out = (int)x;
+  return 0;
+}
+
+static int parse_slot(pc_sx *c, const pc_xml_node *ch, const char *what, pc_tex_slot *slot) {
+  if (strcmp(ch->name, "texture") == 0) {
+    int idx, rc = pc_sx_texture(c, ch, &idx);
+    if (rc) return rc;
+    slot->tex = idx;
+    return 0;
+  }
+  if (strcmp(ch->name, "ref") == 0) {
+    static const char *const allowed[] = {"name", "id", NULL};
+    int rc = pc_xml_check_attrs(c->file, ch, allowed, c->e);
+    if (rc) return rc;
+    const char *id = pc_xml_attr(ch, "id");
+    if (!id) return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <ref> lacks an id", c->file, ch->line, what);
+    const pc_sx_id *r = pc_sx_id_find(c, id);
+    if (!r) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: reference to unknown id '%s'", c->file, ch->line, what, id);
+    if (r->kind != PC_ID_TEXTURE)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: id '%s' is not a texture", c->file, ch->line, what, id);
+    slot->tex = r->index;
+    return 0;
+  }
+  slot->tex = -1;
+  return pc_xv_color(c->file, ch, &slot->value, c->e);
+}
+
+static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param *p) {
+  static const char *const nv[] = {"name", "value", NULL};
+  static const char *const nxyz[] = {"name", "x", "y", "z", NULL};
+  const char *el = ch->name;
+  int rc = 0;
+  bool ok = false;
+  double d;
+  if (strcmp(el, "transform") != 0 && strcmp(el, "texture") != 0 && ch->first)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <%s> must be empty", c->file, ch->line, what, el);
+  switch (p->kind) {
+  case PC_P_INT:
+    if ((ok = strcmp(el, "integer") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nv, c->e)))
+      rc = parse_int(c, ch, what, p->out);
+    break;
+  case PC_P_FLOAT:
+  case PC_P_IOR:
+    if ((ok = strcmp(el, "float") == 0 || strcmp(el, "integer") == 0) &&
+        !(rc = pc_xml_check_attrs(c->file, ch, nv, c->e)) && !(rc = pc_xv_number(c->file, ch, "value", &d, c->e))) {
+      if (!(fabs(d) <= 3.4e38)) rc = pc_errf(c->e, PC_ENUMERIC, "%s:%d: %s: '%s' out of range", c->file, ch->line, what, p->name);
+      *(float *)p->out = (float)d;
+    } else if (!ok && p->kind == PC_P_IOR && (ok = strcmp(el, "string") == 0) &&
+               !(rc = pc_xml_check_attrs(c->file, ch, nv, c->e))) {
+      const char *v = pc_xml_attr(ch, "value");
+      if (!v || !pc_xv_ior_name(v, p->out))
+        rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: unknown index of refraction '%s' for '%s'", c->file, ch->line, what,
+                     v ? v : "", p->name);
+    }
+    break;
+  case PC_P_BOOL:
+    if ((ok = strcmp(el, "boolean") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nv, c->e))) {
+      const char *v = pc_xml_attr(ch, "value");
+      if (v && strcmp(v, "true") == 0) *(bool *)p->out = true;
+      else if (v && strcmp(v, "false") == 0) *(bool *)p->out = false;
+      else rc = pc_errf(c->e, PC_EPARSE, "%s:%d: %s: boolean '%s' must be true or false", c->file, ch->line, what, p->name);
+    }
+    break;
+  case PC_P_STRING:
+    if ((ok = strcmp(el, "string") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nv, c->e))) {
+      const char *v = pc_xml_attr(ch, "value");
+      if (!v) rc = pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <string> lacks a value", c->file, ch->line, what);
+      *(const char **)p->out = v;
+    }
+    break;
+  case PC_P_COLOR:
+    if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
+              strcmp(el, "blackbody") == 0))
+      rc = pc_xv_color(c->file, ch, p->out, c->e);
+    break;
+  case PC_P_SLOT:
+    if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
+              strcmp(el, "blackbody") == 0 || strcmp(el, "texture") == 0 || strcmp(el, "ref") == 0))
+      rc = parse_slot(c, ch, what, p->out);
+    break;
+  case PC_P_POINT:
+    if ((ok = strcmp(el, "point") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nxyz, c->e))) {
+      static const char *const xyz[3] = {"x", "y", "z"};
+      double v[3] = {0, 0, 0};
+      for (int i = 0; i < 3 && !rc; i++)
+        if (pc_xml_attr(ch, xyz[i])) rc = pc_xv_number(c->file, ch, xyz[i], &v[i], c->e);
+      *(vec3 *)p->out = v3((float)v[0], (float)v[1], (float)v[2]);
+    }
+    break;
+  case PC_P_TRANSFORM:
+    if ((ok = strcmp(el, "transform") == 0)) {
+      static const char *const n[] = {"name", NULL};
+      if (!(rc = pc_xml_check_attrs(c->file, ch, n, c->e))) rc = pc_xv_transform(c->file, ch, p->out, c->e);
+    }
+    break;
+  }
+  if (!ok)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: parameter '%s' cannot be given as <%s>", c->file, ch->line, what, p->name, el);
+  return rc;
+}
+
+int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np) {
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    if (!pc_sx_is_param(ch, params, np)) continue;
+    const char *name = pc_xml_attr(ch, "name");
+    if (!name) return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <%s> lacks a name", c->file, ch->line, what, ch->name);
+    pc_param *p = find_param(params, np, name);
+    if (!p)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unknown or unsupported parameter '%s'", c->file, ch->line, what, name);
+    if (p->set)
+      return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: parameter '%s' given twice (first on line %d)", c->file, ch->line, what,
+                     name, p->line);
+    int rc = read_one(c, ch, what, p);
+    if (rc) return rc;
+    p->set = true;
+    p->line = ch->line;
+  }
+  return 0;
+}
+
+static unsigned hash_str(const char *s) {
+  unsigned h = 2166136261u;
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 16777619u;
+  return h;
+}
+
+static int id_rehash(pc_sx *c, int size) {
+  int *t = malloc((size_t)size * sizeof *t);
+  if (!t) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  for (int i = 0; i < size; i++) t[i] = -1;
+  for (int i = 0; i < c->nids; i++) {
+    unsigned h = hash_str(c->ids[i].id) & (unsigned)(size - 1);
+    while (t[h] >= 0) h = (h + 1) & (unsigned)(size - 1);
+    t[h] = i;
+  }
+  free(c->id_table);
+  c->id_table = t;
+  c->id_table_size = size;
+  return 0;
+}
+
+const pc_sx_id *pc_sx_id_find(const pc_sx *c, const char *id) {
+  if (!c->id_table) return NULL;
+  unsigned h = hash_str(id) & (unsigned)(c->id_table_size - 1);
+  while (c->id_table[h] >= 0) {
+    if (strcmp(c->ids[c->id_table[h]].id, id) == 0) return &c->ids[c->id_table[h]];
+    h = (h + 1) & (unsigned)(c->id_table_size - 1);
+  }
+  return NULL;
+}
+
+int pc_sx_id_add(pc_sx *c, const char *id, pc_id_kind kind, int index, int line) {
+  if (!*id) return pc_errf(c->e, PC_EPARSE, "%s:%d: empty id", c->file, line);
+  const pc_sx_id *old = pc_sx_id_find(c, id);
+  if (old) return pc_errf(c->e, PC_EINVAL, "%s:%d: duplicate id '%s' (first on line %d)", c->file, line, id, old->line);
+  if (c->nids >= MAX_IDS) return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d ids", c->file, line, MAX_IDS);
+  if (c->nids == c->cap_ids) {
+    int cap = c->cap_ids ? 2 * c->cap_ids : 64;
+    pc_sx_id *q = realloc(c->ids, (size_t)cap * sizeof *q);
+    if (!q) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+    c->ids = q;
+    c->cap_ids = cap;
+  }
+  char *dup = strdup(id);
+  if (!dup) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  c->ids[c->nids++] = (pc_sx_id){dup, kind, index, line};
+  if (2 * c->nids > c->id_table_size) return id_rehash(c, c->id_table_size ? 2 * c->id_table_size : 128);
+  unsigned h = hash_str(id) & (unsigned)(c->id_table_size - 1);
+  while (c->id_table[h] >= 0) h = (h + 1) & (unsigned)(c->id_table_size - 1);
+  c->id_table[h] = c->nids - 1;
+  return 0;
+}
+
+/* Mitsuba replaces $name by the parameter's value; at each '$' the longest defined name
+ * wins, and a '$' that matches no parameter is an error. */
+static int substitute(pc_sx *c, const pc_xml_node *n, char **value) {
+  const char *v = *value;
+  if (!strchr(v, '$')) return 0;
+  size_t cap = 256, len = 0;
+  char *out = malloc(cap);
+  if (!out) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  for (const char *p = v; *p;) {
+    const char *piece = p;
+    size_t plen = 1;
+    if (*p == '$') {
+      int best = -1;
+      size_t blen = 0;
+      for (int i = 0; i < c->nparams; i++) {
+        size_t l = strlen(c->pnames[i]);
+        if (l > blen && strncmp(p + 1, c->pnames[i], l) == 0) best = i, blen = l;
+      }
+      if (best < 0) {
+        free(out);
+        return pc_errf(c->e, PC_EINVAL, "%s:%d: <%s> refers to an undefined parameter in '%.60s'", c->file, n->line, n->name, v);
+      }
+      piece = c->pvalues[best];
+      plen = strlen(piece);
+      p += 1 + blen;
+    } else {
+      p++;
+    }
+    if (len + plen + 1 > SUBST_MAX) {
+      free(out);
+      return pc_errf(c->e, PC_ELIMIT, "%s:%d: <%s>: attribute longer than %d bytes after substitution", c->file, n->line,
+                     n->name, SUBST_MAX);
+    }
+    while (len + plen + 1 > cap) cap *= 2;
+    char *q = realloc(out, cap);
+    if (!q) {
+      free(out);
+      return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+    }
+    out = q;
+    memcpy(out + len, piece, plen);
+    len += plen;
+  }
+  out[len] = 0;
+  free(*value);
+  *value = out;
+  return 0;
+}
+
+static int add_default(pc_sx *c, const pc_xml_node *n) {
+  static const char *const allowed[] = {"name", "value", NULL};
+  int rc = pc_xml_check_attrs(c->file, n, allowed, c->e);
+  if (rc) return rc;
+  const char *name = pc_xml_attr(n, "name"), *value = pc_xml_attr(n, "value");
+  if (!name || !value || !*name)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> needs a name and a value", c->file, n->line);
+  if (n->first) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be empty", c->file, n->line);
+  for (const char *p = name; *p; p++)
+    if (!(*p == '_' || (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9')))
+      return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> name '%s' must be letters, digits and _", c->file, n->line, name);
+  for (int i = 0; i < c->nparams; i++)
+    if (strcmp(c->pnames[i], name) == 0) return 0; /* the first definition wins, as in Mitsuba */
+  if (c->nparams >= MAX_PARAMS) return pc_errf(c->e, PC_ELIMIT, "%s:%d: too many <default> parameters", c->file, n->line);
+  if (c->nparams == c->cap_params) {
+    int cap = c->cap_params ? 2 * c->cap_params : 16;
+    char **a = realloc(c->pnames, (size_t)cap * sizeof *a);
+    if (!a) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+    c->pnames = a;
+    char **b = realloc(c->pvalues, (size_t)cap * sizeof *b);
+    if (!b) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+    c->pvalues = b;
+    c->cap_params = cap;
+  }
+  c->pnames[c->nparams] = strdup(name);
+  c->pvalues[c->nparams] = strdup(value);
+  c->nparams++;
+  if (!c->pnames[c->nparams - 1] || !c->pvalues[c->nparams - 1])
+    return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  return 0;
+}
+
+static int subst_rec(pc_sx *c, pc_xml_node *n, int depth) {
+  for (int i = 0; i < n->nattrs; i++) {
+    int rc = substitute(c, n, &n->attrs[2 * i + 1]);
+    if (rc) return rc;
+  }
+  if (strcmp(n->name, "default") == 0) {
+    if (depth != 1) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be a child of <scene>", c->file, n->line);
+    int rc = add_default(c, n);
+    if (rc) return rc;
+  }
+  for (pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    int rc = subst_rec(c, ch, depth + 1);
+    if (rc) return rc;
+  }
+  return 0;
+}
+
+int pc_sx_substitute(pc_sx *c, pc_xml_node *root) { return subst_rec(c, root, 0); }
+
+int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *rel, char **out) {
+  *out = NULL;
+  if (!*rel) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: empty filename", c->file, n->line, what);
+  if (rel[0] == '/')
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: absolute path '%s' (paths must be relative to the scene folder)", c->file,
+                   n->line, what, rel);
+  size_t dl = strlen(c->dir), rl = strlen(rel);
+  if (dl + rl + 2 > PATH_MAX) return pc_errf(c->e, PC_ELIMIT, "%s:%d: %s: path too long", c->file, n->line, what);
+  char joined[PATH_MAX], real[PATH_MAX];
+  memcpy(joined, c->dir, dl);
+  joined[dl] = '/';
+  memcpy(joined + dl + 1, rel, rl + 1);
+  if (!realpath(joined, real))
+    return pc_errf(c->e, PC_EIO, "%s:%d: %s: cannot find '%s': %s", c->file, n->line, what, rel, strerror(errno));
+  bool inside = strcmp(c->dir, "/") == 0 || (strncmp(real, c->dir, dl) == 0 && real[dl] == '/');
+  if (!inside)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: '%s' lies outside the scene folder", c->file, n->line, what, rel);
+  *out = strdup(real);
+  if (!*out) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  return 0;
+}
+
+static int grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
+  if (need <= *cap) return 0;
+  int nc = *cap ? 2 * *cap : 16;
+  while (nc < need) nc *= 2;
+  void *q = realloc(*arr, (size_t)nc * elem);
+  if (!q) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  *arr = q;
+  *cap = nc;
+  return 0;
+}
+
+int pc_sx_add_material(pc_sx *c, const pc_xml_node *n, const pc_material *m, int *index) {
+  if (c->s->nmaterials >= PC_SCENE_MAX_MATERIALS)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d BSDFs", c->file, n->line, PC_SCENE_MAX_MATERIALS);
+  int rc = grow(c, (void **)&c->s->materials, &c->cap_materials, c->s->nmaterials + 1, sizeof *m);
+  if (rc) return rc;
+  *index = c->s->nmaterials;
+  c->s->materials[c->s->nmaterials++] = *m;
+  return 0;
+}
+
+int pc_sx_add_texture(pc_sx *c, const pc_xml_node *n, const pc_texture *t, int *index) {
+  if (c->s->ntextures >= PC_SCENE_MAX_TEXTURES)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d textures", c->file, n->line, PC_SCENE_MAX_TEXTURES);
+  int rc = grow(c, (void **)&c->s->textures, &c->cap_textures, c->s->ntextures + 1, sizeof *t);
+  if (rc) return rc;
+  *index = c->s->ntextures;
+  c->s->textures[c->s->ntextures++] = *t;
+  return 0;
+}
+
+int pc_sx_wrap(pc_sx *c, const pc_xml_node *n, const char *what, int rc) {
+  if (!c->e) return rc;
+  char inner[sizeof c->e->msg];
+  memcpy(inner, c->e->msg, sizeof inner);
+  return pc_errf(c->e, rc, "%s:%d: %s: %s", c->file, n->line, what, inner);
+}

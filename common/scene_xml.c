@@ -1,0 +1,444 @@
+/* scene_xml.c: pc_scene_load, the Mitsuba 0.6 XML scene reader (the subset of DESIGN.md §5):
+ * the scene element, integrator, perspective sensor with hdrfilm, shapes (meshes in world
+ * space, exact spheres) with their BSDFs and area emitters, and point emitters. Anything else
+ * is refused with "file:line: what". BSDFs and textures are in scene_materials_xml.c. */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene_xml_ctx.h"
+#include "xml_values.h"
+
+#define DISK_SEGMENTS 256
+
+static int grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
+  if (need <= *cap) return 0;
+  int nc = *cap ? 2 * *cap : 16;
+  while (nc < need) nc *= 2;
+  void *q = realloc(*arr, (size_t)nc * elem);
+  if (!q) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  *arr = q;
+  *cap = nc;
+  return 0;
+}
+
+static int object_type(pc_sx *c, const pc_xml_node *n, bool id_ok, const char **type) {
+  static const char *const with_id[] = {"type", "id", NULL};
+  static const char *const no_id[] = {"type", NULL};
+  int rc = pc_xml_check_attrs(c->file, n, id_ok ? with_id : no_id, c->e);
+  if (rc) return rc;
+  *type = pc_xml_attr(n, "type");
+  if (!*type) return pc_errf(c->e, PC_EPARSE, "%s:%d: <%s> lacks a type", c->file, n->line, n->name);
+  return 0;
+}
+
+/* Refuses every child that is not a parameter of `p`. */
+static int only_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np) {
+  int rc = pc_sx_params(c, n, what, p, np);
+  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next)
+    if (!pc_sx_is_param(ch, p, np)) rc = pc_sx_unexpected(c, ch, what);
+  return rc;
+}
+
+static int integrator(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, false, &type);
+  if (rc) return rc;
+  if (strcmp(type, "path") == 0) c->s->method = PC_METHOD_PT;
+  else if (strcmp(type, "bdpt") == 0) c->s->method = PC_METHOD_BDPT;
+  else if (strcmp(type, "pcbpt") == 0) c->s->method = PC_METHOD_PCBPT;
+  else return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported integrator plugin '%s' (path, bdpt or pcbpt)", c->file, n->line, type);
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "integrator '%s'", type);
+  int depth = -1;
+  /* Any other parameter (rrDepth, lightImage, ...) is refused: pcbpt's Russian roulette is
+   * local by design and the rest changes what is rendered. */
+  pc_param p[] = {{"maxDepth", PC_P_INT, &depth, 0, 0}};
+  if ((rc = only_params(c, n, what, p, 1))) return rc;
+  if (depth == 0 || depth < -1)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
+  c->s->max_depth = depth;
+  return 0;
+}
+
+static int film(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, false, &type);
+  if (rc) return rc;
+  if (strcmp(type, "hdrfilm") != 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported film plugin '%s' (hdrfilm)", c->file, n->line, type);
+  int w = 768, h = 576;
+  pc_param p[] = {{"width", PC_P_INT, &w, 0, 0}, {"height", PC_P_INT, &h, 0, 0}};
+  if ((rc = pc_sx_params(c, n, "film 'hdrfilm'", p, 2))) return rc;
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    if (pc_sx_is_param(ch, p, 2)) continue;
+    if (strcmp(ch->name, "rfilter") != 0) return pc_sx_unexpected(c, ch, "film 'hdrfilm'");
+    const char *ft;
+    if ((rc = object_type(c, ch, false, &ft))) return rc;
+    if (strcmp(ft, "box") != 0)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported rfilter plugin '%s' (only box)", c->file, ch->line, ft);
+    if (ch->first) return pc_sx_unexpected(c, ch->first, "rfilter 'box'");
+  }
+  if (w < 1 || w > PC_SCENE_MAX_FILM_DIM || h < 1 || h > PC_SCENE_MAX_FILM_DIM)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: film 'hdrfilm': width and height must lie in 1..%d", c->file, n->line,
+                   PC_SCENE_MAX_FILM_DIM);
+  c->s->camera.width = w;
+  c->s->camera.height = h;
+  return 0;
+}
+
+/* The 3x3 part's columns are orthonormal (rotations and mirror flips only). */
+static bool is_rigid(const mat4 *m) {
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double d = 0;
+      for (int k = 0; k < 3; k++) d += m->m[k][i] * m->m[k][j];
+      if (fabs(d - (i == j)) > 1e-4) return false;
+    }
+  return true;
+}
+
+static int sensor(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, true, &type);
+  if (rc) return rc;
+  if (strcmp(type, "perspective") != 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported sensor plugin '%s' (perspective)", c->file, n->line, type);
+  const char *what = "sensor 'perspective'";
+  pc_camera *cam = &c->s->camera;
+  float fov = 0, near_clip = 1e-2f, far_clip = 1e4f;
+  const char *axis = "x";
+  mat4 xf = mat4_identity();
+  /* nearClip/farClip are accepted and ignored: pcbpt does not clip, which only differs for
+   * geometry closer than nearClip or beyond farClip. */
+  pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
+                  {"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"nearClip", PC_P_FLOAT, &near_clip, 0, 0},
+                  {"farClip", PC_P_FLOAT, &far_clip, 0, 0}};
+  if ((rc = pc_sx_params(c, n, what, p, 5))) return rc;
+  bool have_film = false;
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    if (pc_sx_is_param(ch, p, 5)) continue;
+    if (strcmp(ch->name, "film") == 0) {
+      if (have_film) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one film", c->file, ch->line, what);
+      have_film = true;
+      if ((rc = film(c, ch))) return rc;
+    } else if (strcmp(ch->name, "sampler") == 0) {
+      return pc_errf(c->e, PC_EUNSUPPORTED,
+                     "%s:%d: %s: <sampler> is not supported (samples per pixel and time are command-line settings)",
+                     c->file, ch->line, what);
+    } else {
+      return pc_sx_unexpected(c, ch, what);
+    }
+  }
+  if (!have_film) cam->width = 768, cam->height = 576; /* Mitsuba's hdrfilm default */
+  if (!p[0].set)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'fov' is required (focalLength is not supported)", c->file, n->line, what);
+  if (!(fov > 0.f && fov < 180.f))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: fov must lie in (0, 180) degrees", c->file, p[0].line, what);
+  if (!(near_clip > 0.f && near_clip < far_clip))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs 0 < nearClip < farClip", c->file, n->line, what);
+  static const struct { const char *name; char c; } axes[] = {
+      {"x", 'x'}, {"y", 'y'}, {"diagonal", 'd'}, {"smaller", 's'}, {"larger", 'l'}};
+  cam->fov_axis = 0;
+  for (size_t i = 0; i < sizeof axes / sizeof axes[0]; i++)
+    if (strcmp(axis, axes[i].name) == 0) cam->fov_axis = axes[i].c;
+  if (!cam->fov_axis)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: unknown fovAxis '%s' (x, y, diagonal, smaller, larger)", c->file, p[1].line,
+                   what, axis);
+  if (!is_rigid(&xf))
+    return pc_errf(c->e, PC_EUNSUPPORTED,
+                   "%s:%d: %s: toWorld must be rigid (rotations, translations, mirror flips); it scales or shears",
+                   c->file, p[2].line, what);
+  cam->fov_deg = fov;
+  cam->to_world = xf;
+  return 0;
+}
+
+static int add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
+  if (c->s->nshapes >= PC_SCENE_MAX_SHAPES)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d shapes", c->file, n->line, PC_SCENE_MAX_SHAPES);
+  int rc = grow(c, (void **)&c->s->shapes, &c->cap_shapes, c->s->nshapes + 1, sizeof *sh);
+  if (rc) return rc;
+  c->s->shapes[c->s->nshapes++] = *sh;
+  return 0;
+}
+
+static int add_light(pc_sx *c, const pc_xml_node *n, const pc_light *l, int *index) {
+  if (c->s->nlights >= PC_SCENE_MAX_LIGHTS)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d emitters", c->file, n->line, PC_SCENE_MAX_LIGHTS);
+  int rc = grow(c, (void **)&c->s->lights, &c->cap_lights, c->s->nlights + 1, sizeof *l);
+  if (rc) return rc;
+  *index = c->s->nlights;
+  c->s->lights[c->s->nlights++] = *l;
+  return 0;
+}
+
+static int positive_color(pc_sx *c, const pc_param *p, vec3 v, const char *what) {
+  if (v3_maxc(v) > 0.f) return 0;
+  return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: '%s' must be positive in some channel", c->file, p->line, what, p->name);
+}
+
+static int area_emitter(pc_sx *c, const pc_xml_node *n, vec3 *radiance) {
+  const char *type;
+  int rc = object_type(c, n, true, &type);
+  if (rc) return rc;
+  if (strcmp(type, "area") != 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s' cannot be attached to a shape (only area)", c->file, n->line, type);
+  pc_param p[] = {{"radiance", PC_P_COLOR, radiance, 0, 0}};
+  if ((rc = only_params(c, n, "emitter 'area'", p, 1))) return rc;
+  if (!p[0].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area': 'radiance' is required", c->file, n->line);
+  return positive_color(c, &p[0], *radiance, "emitter 'area'");
+}
+
+/* A similarity transform (rotation, translation, uniform scale, possibly mirrored): sets s. */
+static bool is_similarity(const mat4 *m, double *s) {
+  double s2 = 0;
+  for (int k = 0; k < 3; k++) s2 += m->m[k][0] * m->m[k][0];
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double d = 0;
+      for (int k = 0; k < 3; k++) d += m->m[k][i] * m->m[k][j];
+      if (fabs(d - (i == j ? s2 : 0)) > 1e-4 * s2) return false;
+    }
+  *s = sqrt(s2);
+  return *s > 0;
+}
+
+static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, const char *filename,
+                     pc_mesh *m) {
+  int rc;
+  if (strcmp(type, "rectangle") == 0) rc = pc_mesh_rectangle(m);
+  else if (strcmp(type, "cube") == 0) rc = pc_mesh_cube(m);
+  else if (strcmp(type, "disk") == 0) rc = pc_mesh_disk(m, DISK_SEGMENTS);
+  else {
+    if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
+    char *path;
+    if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
+    rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
+    free(path);
+    return rc ? pc_sx_wrap(c, n, what, rc) : 0;
+  }
+  return rc ? pc_errf(c->e, rc, "%s:%d: %s: out of memory", c->file, n->line, what) : 0;
+}
+
+static int shape(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, true, &type);
+  if (rc) return rc;
+  bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0;
+  bool is_sphere = strcmp(type, "sphere") == 0;
+  if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported shape plugin '%s'", c->file, n->line, type);
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "shape '%s'", type);
+  const char *filename = NULL;
+  bool face_normals = false, flip_normals = false, flip_tex = true;
+  mat4 xf = mat4_identity();
+  vec3 center = v3s(0);
+  float radius = 1.f;
+  pc_param p[8] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"flipNormals", PC_P_BOOL, &flip_normals, 0, 0}};
+  int np = 2;
+  if (is_file) {
+    p[np++] = (pc_param){"filename", PC_P_STRING, &filename, 0, 0};
+    p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
+    if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
+  } else if (is_sphere) {
+    p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
+    p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
+  }
+  if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
+  int material = -1;
+  bool emits = false;
+  vec3 radiance = v3s(0);
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    if (pc_sx_is_param(ch, p, np)) continue;
+    if (strcmp(ch->name, "bsdf") == 0 || strcmp(ch->name, "ref") == 0) {
+      if (material >= 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one BSDF", c->file, ch->line, what);
+      if (ch->name[0] == 'b') {
+        if ((rc = pc_sx_bsdf(c, ch, &material))) return rc;
+        continue;
+      }
+      static const char *const allowed[] = {"id", "name", NULL};
+      if ((rc = pc_xml_check_attrs(c->file, ch, allowed, c->e))) return rc;
+      const char *id = pc_xml_attr(ch, "id");
+      const pc_sx_id *r = id ? pc_sx_id_find(c, id) : NULL;
+      if (!r) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: reference to unknown id '%s'", c->file, ch->line, what, id ? id : "");
+      if (r->kind != PC_ID_BSDF) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: id '%s' is not a BSDF", c->file, ch->line, what, id);
+      material = r->index;
+    } else if (strcmp(ch->name, "emitter") == 0) {
+      if (emits) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one emitter", c->file, ch->line, what);
+      if ((rc = area_emitter(c, ch, &radiance))) return rc;
+      emits = true;
+    } else {
+      return pc_sx_unexpected(c, ch, what);
+    }
+  }
+  if (material < 0 && (rc = pc_sx_default_material(c, n, &material))) return rc;
+
+  pc_shape sh;
+  memset(&sh, 0, sizeof sh);
+  sh.material = material;
+  sh.light = -1;
+  if (is_sphere) {
+    double s;
+    if (!is_similarity(&xf, &s))
+      return pc_errf(c->e, PC_EUNSUPPORTED,
+                     "%s:%d: %s: toWorld may only translate, rotate and scale uniformly (a sphere must stay a sphere)",
+                     c->file, n->line, what);
+    sh.kind = PC_SHAPE_SPHERE;
+    sh.center = mat4_point(&xf, center);
+    sh.radius = (float)(s * radius);
+    sh.flip_normals = flip_normals;
+    if (!(radius > 0.f) || !(sh.radius > 0.f) || !isfinite(sh.radius) || !v3_is_finite(sh.center))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius must be positive and finite", c->file, n->line, what);
+  } else {
+    sh.kind = PC_SHAPE_MESH;
+    if ((rc = load_mesh(c, n, type, what, filename, &sh.mesh))) return rc;
+    if (type[0] == 'o' && flip_tex && sh.mesh.uv)
+      for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
+    pc_mesh_transform(&sh.mesh, &xf);
+    if (face_normals) {
+      free(sh.mesh.n);
+      sh.mesh.n = NULL;
+    } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {
+      pc_mesh_free(&sh.mesh);
+      return pc_errf(c->e, PC_ENOMEM, "%s:%d: %s: out of memory", c->file, n->line, what);
+    }
+    if (flip_normals) pc_mesh_flip(&sh.mesh);
+    char where[PC_SX_WHAT_MAX + 64];
+    snprintf(where, sizeof where, "%s:%d: %s", c->file, n->line, what);
+    if ((rc = pc_mesh_validate(&sh.mesh, where, c->e))) {
+      pc_mesh_free(&sh.mesh);
+      return rc;
+    }
+  }
+  if ((rc = add_shape(c, n, &sh))) {
+    pc_mesh_free(&sh.mesh);
+    return rc;
+  }
+  if (emits) {
+    pc_light l;
+    memset(&l, 0, sizeof l);
+    l.type = PC_LIGHT_AREA;
+    l.radiance = radiance;
+    l.shape = c->s->nshapes - 1;
+    if ((rc = add_light(c, n, &l, &c->s->shapes[c->s->nshapes - 1].light))) return rc;
+  }
+  const char *id = pc_xml_attr(n, "id");
+  return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
+}
+
+static int emitter(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, true, &type);
+  if (rc) return rc;
+  if (strcmp(type, "area") == 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area' must be nested in a <shape>", c->file, n->line);
+  if (strcmp(type, "point") != 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported emitter plugin '%s' (area in a shape, or point)", c->file, n->line, type);
+  pc_light l;
+  memset(&l, 0, sizeof l);
+  l.type = PC_LIGHT_POINT;
+  l.intensity = v3s(1.f);
+  l.shape = -1;
+  mat4 xf = mat4_identity();
+  pc_param p[] = {{"position", PC_P_POINT, &l.position, 0, 0}, {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
+                  {"intensity", PC_P_COLOR, &l.intensity, 0, 0}};
+  if ((rc = only_params(c, n, "emitter 'point'", p, 3))) return rc;
+  if (p[0].set && p[1].set)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'point': give position or toWorld, not both", c->file, n->line);
+  if (p[1].set) l.position = mat4_point(&xf, v3s(0));
+  if (!v3_is_finite(l.position))
+    return pc_errf(c->e, PC_ENUMERIC, "%s:%d: emitter 'point': position is not finite", c->file, n->line);
+  if ((rc = positive_color(c, &p[2], l.intensity, "emitter 'point'"))) return rc;
+  int idx;
+  if ((rc = add_light(c, n, &l, &idx))) return rc;
+  const char *id = pc_xml_attr(n, "id");
+  return id ? pc_sx_id_add(c, id, PC_ID_OTHER, idx, n->line) : 0;
+}
+
+static int scene_root(pc_sx *c, const pc_xml_node *root) {
+  static const char *const allowed[] = {"version", NULL};
+  if (strcmp(root->name, "scene") != 0)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: the root element must be <scene>, not <%s>", c->file, root->line, root->name);
+  int rc = pc_xml_check_attrs(c->file, root, allowed, c->e);
+  if (rc) return rc;
+  const char *v = pc_xml_attr(root, "version");
+  if (!v) return pc_errf(c->e, PC_EPARSE, "%s:%d: <scene> lacks a version", c->file, root->line);
+  int major, minor, patch, end = 0;
+  if (sscanf(v, "%d.%d.%d%n", &major, &minor, &patch, &end) != 3 || v[end] || major != 0 || minor < 4 || minor > 6)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: scene version '%s' unsupported (0.4.0 to 0.6.x)", c->file, root->line, v);
+  bool have_integrator = false, have_sensor = false;
+  for (const pc_xml_node *ch = root->first; ch; ch = ch->next) {
+    const char *el = ch->name;
+    int idx;
+    if (strcmp(el, "default") == 0) continue; /* applied by pc_sx_substitute */
+    if (strcmp(el, "integrator") == 0) {
+      if (have_integrator) return pc_errf(c->e, PC_EINVAL, "%s:%d: more than one <integrator>", c->file, ch->line);
+      have_integrator = true;
+      rc = integrator(c, ch);
+    } else if (strcmp(el, "sensor") == 0) {
+      if (have_sensor) return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: more than one <sensor>", c->file, ch->line);
+      have_sensor = true;
+      rc = sensor(c, ch);
+    } else if (strcmp(el, "shape") == 0) {
+      rc = shape(c, ch);
+    } else if (strcmp(el, "bsdf") == 0) {
+      rc = pc_sx_bsdf(c, ch, &idx);
+    } else if (strcmp(el, "texture") == 0) {
+      if (!pc_xml_attr(ch, "id"))
+        return pc_errf(c->e, PC_EINVAL, "%s:%d: a <texture> at scene level needs an id", c->file, ch->line);
+      if (pc_xml_attr(ch, "name"))
+        return pc_errf(c->e, PC_EPARSE, "%s:%d: a <texture> at scene level takes no name", c->file, ch->line);
+      rc = pc_sx_texture(c, ch, &idx);
+    } else if (strcmp(el, "emitter") == 0) {
+      rc = emitter(c, ch);
+    } else if (strcmp(el, "include") == 0) {
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: <include> is not supported (a scene is one file plus meshes and images)",
+                     c->file, ch->line);
+    } else {
+      return pc_sx_unexpected(c, ch, "scene");
+    }
+    if (rc) return rc;
+  }
+  if (!have_sensor) return pc_errf(c->e, PC_EINVAL, "%s:%d: the scene has no <sensor>", c->file, root->line);
+  return 0;
+}
+
+int pc_scene_load(const char *path, pc_scene *out, pc_err *e) {
+  memset(out, 0, sizeof *out);
+  out->method = PC_METHOD_PT;
+  out->max_depth = -1;
+  pc_sx c = {.file = path, .s = out, .e = e, .default_material = -1};
+  pc_xml_node *root = NULL;
+  char real[PATH_MAX];
+  int rc = 0;
+  out->path = strdup(path);
+  if (!out->path) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  else if (!realpath(path, real)) rc = pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+  if (!rc) {
+    char *slash = strrchr(real, '/');
+    if (slash == real) slash[1] = 0;
+    else *slash = 0;
+    c.dir = strdup(real);
+    if (!c.dir) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  }
+  if (!rc) rc = pc_xml_parse(path, path, &root, e);
+  if (!rc) rc = pc_sx_substitute(&c, root);
+  if (!rc) rc = scene_root(&c, root);
+  pc_xml_free(root);
+  free(c.dir);
+  for (int i = 0; i < c.nids; i++) free(c.ids[i].id);
+  free(c.ids);
+  free(c.id_table);
+  for (int i = 0; i < c.nparams; i++) {
+    free(c.pnames[i]);
+    free(c.pvalues[i]);
+  }
+  free(c.pnames);
+  free(c.pvalues);
+  if (rc) pc_scene_free(out);
+  return rc;
+}

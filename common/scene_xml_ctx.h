@@ -1,0 +1,94 @@
+/* scene_xml_ctx.h: state and helpers shared by the files of the Mitsuba scene loader
+ * (scene_xml.c: scene, integrator, sensor, shapes, emitters; scene_materials_xml.c: BSDFs and
+ * textures; scene_params.c: parameters, ids, $-substitution, paths). Private to them. */
+#ifndef PC_SCENE_XML_CTX_H
+#define PC_SCENE_XML_CTX_H
+
+#include <stdbool.h>
+
+#include "scene.h"
+#include "xml_tree.h"
+
+typedef enum { PC_ID_BSDF, PC_ID_TEXTURE, PC_ID_OTHER } pc_id_kind;
+
+typedef struct pc_sx_id {
+  char *id;
+  pc_id_kind kind;
+  int index;
+  int line;
+} pc_sx_id;
+
+typedef struct pc_sx {
+  const char *file;  /* the scene path as given, for messages */
+  char *dir;         /* realpath of the scene's folder */
+  pc_scene *s;
+  pc_err *e;
+  pc_sx_id *ids;
+  int nids, cap_ids;
+  int *id_table;     /* open addressing over ids, -1 empty */
+  int id_table_size;
+  char **pnames, **pvalues; /* <default> parameters */
+  int nparams, cap_params;
+  int default_material;     /* Mitsuba's diffuse 0.5 for shapes without a BSDF, -1 until needed */
+  int cap_shapes, cap_materials, cap_textures, cap_lights;
+} pc_sx;
+
+/* Parameter kinds a plugin declares. */
+typedef enum {
+  PC_P_INT,       /* <integer> */
+  PC_P_FLOAT,     /* <float> (or <integer>) */
+  PC_P_BOOL,      /* <boolean> */
+  PC_P_STRING,    /* <string> */
+  PC_P_COLOR,     /* <rgb>, <srgb>, <spectrum> -> vec3 */
+  PC_P_SLOT,      /* a colour or a texture (nested, or <ref name=.. id=..>) -> pc_tex_slot */
+  PC_P_POINT,     /* <point> -> vec3 */
+  PC_P_TRANSFORM, /* <transform> -> mat4 */
+  PC_P_IOR,       /* <float> or <string> with a Mitsuba IOR name -> float */
+} pc_param_kind;
+
+typedef struct pc_param {
+  const char *name;
+  pc_param_kind kind;
+  void *out;   /* int*, float*, bool*, const char**, vec3*, pc_tex_slot*, vec3*, mat4*, float* */
+  bool set;    /* filled by pc_sx_params */
+  int line;
+} pc_param;
+
+/* "what" strings for messages: e.g. "bsdf 'diffuse'". */
+#define PC_SX_WHAT_MAX 96
+
+/* Reads the parameter children of n into params; fails on unknown or repeated names, on the
+ * wrong element for a parameter, and on malformed values. Non-parameter children (nested
+ * objects other than named textures/refs in slots) are left to the caller. */
+int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np);
+/* True if pc_sx_params consumed this child. */
+bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np);
+/* Error for a child element the caller does not accept. */
+int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what);
+
+/* Registers an id (duplicates are errors). */
+int pc_sx_id_add(pc_sx *c, const char *id, pc_id_kind kind, int index, int line);
+/* Looks an id up; NULL if unknown. */
+const pc_sx_id *pc_sx_id_find(const pc_sx *c, const char *id);
+
+/* The $name substitution and <default> pass over the whole tree, in document order. */
+int pc_sx_substitute(pc_sx *c, pc_xml_node *root);
+
+/* Resolves a file name relative to the scene folder; refuses absolute paths, missing files and
+ * paths that leave the folder. *out is malloc'd. */
+int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *rel, char **out);
+
+/* Appends to the scene arrays (bounded by PC_SCENE_MAX_*). */
+int pc_sx_add_material(pc_sx *c, const pc_xml_node *n, const pc_material *m, int *index);
+int pc_sx_add_texture(pc_sx *c, const pc_xml_node *n, const pc_texture *t, int *index);
+
+/* Prefixes the message in c->e with "file:line: what: " (for errors from mesh and image
+ * readers) and returns rc. */
+int pc_sx_wrap(pc_sx *c, const pc_xml_node *n, const char *what, int rc);
+
+/* BSDF and texture elements (scene_materials_xml.c). */
+int pc_sx_bsdf(pc_sx *c, const pc_xml_node *n, int *index);
+int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index);
+int pc_sx_default_material(pc_sx *c, const pc_xml_node *n, int *index);
+
+#endif

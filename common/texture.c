@@ -1,0 +1,64 @@
+/* texture.c: texture lookups as Mitsuba 0.6 does them: constants, bitmaps (bilinear, repeat
+ * wrap, uv (0,0) at the image's bottom-left) and the checkerboard, all after Mitsuba's
+ * Texture2D mapping uv' = uv * scale + offset. */
+#include "texture.h"
+
+static vec3 texel(const pc_image *img, int x, int y) {
+  const float *p = img->rgb + 3 * ((size_t)y * (size_t)img->w + (size_t)x);
+  return v3(p[0], p[1], p[2]);
+}
+
+static int wrap(int i, int n) {
+  int r = i % n;
+  return r < 0 ? r + n : r;
+}
+
+static vec3 bitmap_eval(const pc_image *img, float u, float v) {
+  if (!img->rgb || img->w <= 0 || img->h <= 0) return v3s(0.f);
+  /* Repeat wrap first, so huge coordinates cannot overflow the integer conversion. */
+  u -= floorf(u);
+  v -= floorf(v);
+  /* Texel centres sit at half-integer coordinates; image row 0 is the top (v = 1). */
+  float x = u * (float)img->w - 0.5f, y = (1.f - v) * (float)img->h - 0.5f;
+  float fx = floorf(x), fy = floorf(y);
+  float dx = x - fx, dy = y - fy;
+  int x0 = wrap((int)fx, img->w), y0 = wrap((int)fy, img->h);
+  int x1 = wrap(x0 + 1, img->w), y1 = wrap(y0 + 1, img->h);
+  vec3 a = v3_add(v3_scale(texel(img, x0, y0), 1.f - dx), v3_scale(texel(img, x1, y0), dx));
+  vec3 b = v3_add(v3_scale(texel(img, x0, y1), 1.f - dx), v3_scale(texel(img, x1, y1), dx));
+  return v3_add(v3_scale(a, 1.f - dy), v3_scale(b, dy));
+}
+
+/* Parity of Mitsuba's (int)(c * 2): C++ truncates toward zero, so the cell around 0 is twice
+ * as wide for negative coordinates; reproduced with truncf (no integer overflow). */
+static int checker_parity(float c) {
+  float t = truncf(c * 2.f);
+  if (!isfinite(t)) return 0;
+  return fmodf(fabsf(t), 2.f) != 0.f;
+}
+
+vec3 pc_texture_eval(const pc_texture *t, vec2 uv) {
+  if (t->type == PC_TEX_CONST) return t->value;
+  float u = uv.x * t->uscale + t->uoffset, v = uv.y * t->vscale + t->voffset;
+  if (!isfinite(u) || !isfinite(v)) return v3s(0.f);
+  if (t->type == PC_TEX_BITMAP) return bitmap_eval(&t->img, u, v);
+  /* Mitsuba: x = 2 mod((int)(2u), 2) - 1, likewise y; x * y == 1 selects color0, i.e. equal
+   * parities. */
+  return checker_parity(u) == checker_parity(v) ? t->color0 : t->color1;
+}
+
+vec3 pc_texture_average(const pc_texture *t) {
+  if (t->type == PC_TEX_CONST) return t->value;
+  if (t->type == PC_TEX_CHECKER) return v3_scale(v3_add(t->color0, t->color1), 0.5f);
+  const pc_image *img = &t->img;
+  if (!img->rgb || img->w <= 0 || img->h <= 0) return v3s(0.f);
+  double s[3] = {0, 0, 0};
+  size_t n = (size_t)img->w * (size_t)img->h;
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) s[c] += img->rgb[3 * i + c];
+  return v3((float)(s[0] / n), (float)(s[1] / n), (float)(s[2] / n));
+}
+
+void pc_texture_free(pc_texture *t) {
+  if (t->type == PC_TEX_BITMAP) pc_image_free(&t->img);
+}

@@ -1,0 +1,238 @@
+/* xml_values.c: parsing of Mitsuba 0.6 value elements (numbers, colours, transforms, IOR
+ * names); see xml_values.h. */
+#include "xml_values.h"
+
+#include <ctype.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+int pc_xv_numbers(const char *file, const pc_xml_node *n, const char *attr, const char *s, double *out,
+                  int min, int max, int *count, pc_err *e) {
+  int k = 0;
+  if (!s) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> lacks attribute '%s'", file, n->line, n->name, attr);
+  const char *p = s;
+  for (;;) {
+    while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == ',') p++;
+    if (!*p) break;
+    if (k == max)
+      return pc_errf(e, PC_EPARSE, "%s:%d: <%s> attribute '%s' has more than %d numbers", file, n->line, n->name, attr, max);
+    char *end;
+    double d = strtod(p, &end);
+    if (end == p || !(*end == 0 || *end == ' ' || *end == ',' || *end == '\t' || *end == '\n' || *end == '\r'))
+      return pc_errf(e, PC_EPARSE, "%s:%d: <%s> attribute '%s' is not a number list: '%.40s'", file, n->line, n->name, attr, s);
+    if (!isfinite(d))
+      return pc_errf(e, PC_ENUMERIC, "%s:%d: <%s> attribute '%s' has a non-finite number", file, n->line, n->name, attr);
+    out[k++] = d;
+    p = end;
+  }
+  if (k < min)
+    return pc_errf(e, PC_EPARSE, "%s:%d: <%s> attribute '%s' needs %d number%s", file, n->line, n->name, attr, min,
+                   min > 1 ? "s" : "");
+  *count = k;
+  return 0;
+}
+
+int pc_xv_number(const char *file, const pc_xml_node *n, const char *attr, double *out, pc_err *e) {
+  int k;
+  return pc_xv_numbers(file, n, attr, pc_xml_attr(n, attr), out, 1, 1, &k, e);
+}
+
+static double srgb_to_linear(double c) {
+  return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
+  double v[3];
+  int k = 0, rc;
+  const char *val = pc_xml_attr(n, "value");
+  if (strcmp(n->name, "spectrum") == 0) {
+    static const char *const allowed[] = {"name", "value", NULL};
+    if ((rc = pc_xml_check_attrs(file, n, allowed, e))) return rc;
+    if (val && strchr(val, ':'))
+      return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <spectrum> with wavelength:value pairs is unsupported (pcbpt renders RGB; use <rgb>)", file, n->line);
+    double many[16];
+    if ((rc = pc_xv_numbers(file, n, "value", val, many, 1, 16, &k, e))) return rc;
+    if (k != 1)
+      return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <spectrum> must be a single number (sampled spectra are unsupported; use <rgb>)", file, n->line);
+    v[0] = many[0];
+    v[1] = v[2] = v[0];
+  } else if (strcmp(n->name, "rgb") == 0 || strcmp(n->name, "srgb") == 0) {
+    static const char *const allowed[] = {"name", "value", "intent", NULL};
+    if ((rc = pc_xml_check_attrs(file, n, allowed, e))) return rc;
+    const char *intent = pc_xml_attr(n, "intent");
+    /* The intent only matters for spectral upsampling, which an RGB renderer never does. */
+    if (intent && strcmp(intent, "reflectance") != 0 && strcmp(intent, "illuminant") != 0)
+      return pc_errf(e, PC_EPARSE, "%s:%d: <%s> has an invalid intent '%s'", file, n->line, n->name, intent);
+    int srgb = n->name[0] == 's';
+    if (srgb && val && val[0] == '#') {
+      size_t len = strlen(val);
+      if (len != 7) return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+      for (int i = 0; i < 3; i++) {
+        char hex[3] = {val[1 + 2 * i], val[2 + 2 * i], 0};
+        if (!isxdigit((unsigned char)hex[0]) || !isxdigit((unsigned char)hex[1]))
+          return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+        v[i] = (double)strtol(hex, NULL, 16) / 255.0;
+      }
+    } else {
+      if ((rc = pc_xv_numbers(file, n, "value", val, v, 1, 3, &k, e))) return rc;
+      if (k == 2) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> needs 1 or 3 numbers", file, n->line, n->name);
+      if (k == 1) v[1] = v[2] = v[0];
+    }
+    if (srgb)
+      for (int i = 0; i < 3; i++) {
+        if (v[i] < 0) break;
+        v[i] = srgb_to_linear(v[i]);
+      }
+  } else if (strcmp(n->name, "blackbody") == 0) {
+    return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <blackbody> spectra are unsupported (pcbpt renders RGB; use <rgb>)", file, n->line);
+  } else {
+    return pc_errf(e, PC_EPARSE, "%s:%d: expected <rgb>, <srgb> or <spectrum>, found <%s>", file, n->line, n->name);
+  }
+  for (int i = 0; i < 3; i++) {
+    if (v[i] < 0) return pc_errf(e, PC_EINVAL, "%s:%d: <%s> has a negative value", file, n->line, n->name);
+    if (!(v[i] <= 3.4e38)) return pc_errf(e, PC_ENUMERIC, "%s:%d: <%s> value out of range", file, n->line, n->name);
+  }
+  *out = v3((float)v[0], (float)v[1], (float)v[2]);
+  return 0;
+}
+
+static int xyz_attrs(const char *file, const pc_xml_node *n, double def, double out[3], pc_err *e) {
+  static const char *const names[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; i++) {
+    out[i] = def;
+    if (pc_xml_attr(n, names[i])) {
+      int rc = pc_xv_number(file, n, names[i], &out[i], e);
+      if (rc) return rc;
+    }
+  }
+  return 0;
+}
+
+static int vec_attr(const char *file, const pc_xml_node *n, const char *attr, double out[3], pc_err *e) {
+  int k;
+  return pc_xv_numbers(file, n, attr, pc_xml_attr(n, attr), out, 3, 3, &k, e);
+}
+
+static void normalize3(double v[3]) {
+  double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  for (int i = 0; i < 3; i++) v[i] /= l;
+}
+
+static void cross3(const double a[3], const double b[3], double out[3]) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static int one_transform(const char *file, const pc_xml_node *c, mat4 *t, pc_err *e) {
+  static const char *const xyz[] = {"x", "y", "z", NULL};
+  static const char *const rot[] = {"x", "y", "z", "angle", NULL};
+  static const char *const scl[] = {"x", "y", "z", "value", NULL};
+  static const char *const mat[] = {"value", NULL};
+  static const char *const look[] = {"origin", "target", "up", NULL};
+  double v[16];
+  int rc, k;
+  *t = mat4_identity();
+  if (c->first) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> must be empty", file, c->line, c->name);
+  if (strcmp(c->name, "translate") == 0) {
+    if ((rc = pc_xml_check_attrs(file, c, xyz, e)) || (rc = xyz_attrs(file, c, 0, v, e))) return rc;
+    for (int i = 0; i < 3; i++) t->m[i][3] = v[i];
+  } else if (strcmp(c->name, "scale") == 0) {
+    if ((rc = pc_xml_check_attrs(file, c, scl, e))) return rc;
+    if (pc_xml_attr(c, "value")) {
+      if (pc_xml_attr(c, "x") || pc_xml_attr(c, "y") || pc_xml_attr(c, "z"))
+        return pc_errf(e, PC_EPARSE, "%s:%d: <scale> takes either value or x, y, z", file, c->line);
+      if ((rc = pc_xv_number(file, c, "value", &v[0], e))) return rc;
+      v[1] = v[2] = v[0];
+    } else if ((rc = xyz_attrs(file, c, 1, v, e))) {
+      return rc;
+    }
+    for (int i = 0; i < 3; i++) t->m[i][i] = v[i];
+  } else if (strcmp(c->name, "rotate") == 0) {
+    double ang;
+    if ((rc = pc_xml_check_attrs(file, c, rot, e)) || (rc = xyz_attrs(file, c, 0, v, e)) ||
+        (rc = pc_xv_number(file, c, "angle", &ang, e)))
+      return rc;
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(l > 0) || !isfinite(l)) return pc_errf(e, PC_EINVAL, "%s:%d: <rotate> has a zero axis", file, c->line);
+    double x = v[0] / l, y = v[1] / l, z = v[2] / l;
+    double s = sin(ang * 3.14159265358979323846 / 180.0), co = cos(ang * 3.14159265358979323846 / 180.0);
+    /* Rodrigues' formula, right-handed (Mitsuba's Transform::rotate). */
+    double r[3][3] = {{x * x + (1 - x * x) * co, x * y * (1 - co) - z * s, x * z * (1 - co) + y * s},
+                      {x * y * (1 - co) + z * s, y * y + (1 - y * y) * co, y * z * (1 - co) - x * s},
+                      {x * z * (1 - co) - y * s, y * z * (1 - co) + x * s, z * z + (1 - z * z) * co}};
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) t->m[i][j] = r[i][j];
+  } else if (strcmp(c->name, "matrix") == 0) {
+    if ((rc = pc_xml_check_attrs(file, c, mat, e)) ||
+        (rc = pc_xv_numbers(file, c, "value", pc_xml_attr(c, "value"), v, 16, 16, &k, e)))
+      return rc;
+    for (int i = 0; i < 16; i++) t->m[i / 4][i % 4] = v[i];
+    if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1)
+      return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <matrix> must be affine (last row 0 0 0 1)", file, c->line);
+  } else if (strcmp(c->name, "lookat") == 0 || strcmp(c->name, "lookAt") == 0) {
+    double o[3], tg[3], up[3], dir[3], left[3], nup[3];
+    if ((rc = pc_xml_check_attrs(file, c, look, e)) || (rc = vec_attr(file, c, "origin", o, e)) ||
+        (rc = vec_attr(file, c, "target", tg, e)) || (rc = vec_attr(file, c, "up", up, e)))
+      return rc;
+    for (int i = 0; i < 3; i++) dir[i] = tg[i] - o[i];
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    if (!(dl > 0) || !isfinite(dl)) return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> origin equals target", file, c->line);
+    normalize3(dir);
+    cross3(up, dir, left);
+    double ll = sqrt(left[0] * left[0] + left[1] * left[1] + left[2] * left[2]);
+    double ul = sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
+    if (!(ll > 1e-6 * ul) || !isfinite(ll))
+      return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> up is zero or parallel to the view direction", file, c->line);
+    normalize3(left);
+    cross3(dir, left, nup);
+    for (int i = 0; i < 3; i++) {
+      t->m[i][0] = left[i];
+      t->m[i][1] = nup[i];
+      t->m[i][2] = dir[i];
+      t->m[i][3] = o[i];
+    }
+  } else {
+    return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: unknown transform element <%s>", file, c->line, c->name);
+  }
+  return 0;
+}
+
+int pc_xv_transform(const char *file, const pc_xml_node *n, mat4 *out, pc_err *e) {
+  mat4 m = mat4_identity();
+  for (const pc_xml_node *c = n->first; c; c = c->next) {
+    mat4 t;
+    int rc = one_transform(file, c, &t, e);
+    if (rc) return rc;
+    m = mat4_mul(&t, &m);
+    for (int i = 0; i < 4; i++)
+      for (int j = 0; j < 4; j++)
+        if (!isfinite(m.m[i][j]) || fabs(m.m[i][j]) > 1e30)
+          return pc_errf(e, PC_ENUMERIC, "%s:%d: <%s> makes the transform non-finite", file, c->line, c->name);
+  }
+  mat4 inv;
+  if (!mat4_inverse(&m, &inv)) return pc_errf(e, PC_EINVAL, "%s:%d: <transform> is singular", file, n->line);
+  *out = m;
+  return 0;
+}
+
+bool pc_xv_ior_name(const char *name, float *out) {
+  /* Mitsuba's table (Hecht, Optics; 0-20 degrees Celsius at ~589 nm). */
+  static const struct { const char *name; float ior; } tab[] = {
+      {"vacuum", 1.0f},          {"helium", 1.000036f},     {"hydrogen", 1.000132f},
+      {"air", 1.000277f},        {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
+      {"acetone", 1.36f},        {"ethanol", 1.361f},       {"carbon tetrachloride", 1.461f},
+      {"glycerol", 1.4729f},     {"benzene", 1.501f},       {"silicone oil", 1.52045f},
+      {"bromine", 1.661f},       {"water ice", 1.31f},      {"fused quartz", 1.458f},
+      {"pyrex", 1.470f},         {"acrylic glass", 1.49f},  {"polypropylene", 1.49f},
+      {"bk7", 1.5046f},          {"sodium chloride", 1.544f}, {"amber", 1.55f},
+      {"pet", 1.5750f},          {"diamond", 2.419f},
+  };
+  for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
+    if (strcasecmp(name, tab[i].name) == 0) {
+      *out = tab[i].ior;
+      return true;
+    }
+  return false;
+}

@@ -1,0 +1,542 @@
+/* test_scene_parser.c: the Mitsuba scene loader: good scenes give the right values, every
+ * refused construct fails with "scene.xml:line:" and a key word, and mutated files never
+ * crash. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <sys/stat.h>
+
+#include "scene.h"
+#include "test_helpers_fs.h"
+
+static void good_path(char *out, size_t cap, const char *name) {
+  snprintf(out, cap, "%s/tests/data/good/%s", th_source_dir(), name);
+}
+
+static void near3(vec3 a, vec3 b, float tol) {
+  if (fabsf(a.x - b.x) > tol || fabsf(a.y - b.y) > tol || fabsf(a.z - b.z) > tol) {
+    print_error("(%g %g %g) != (%g %g %g)\n", a.x, a.y, a.z, b.x, b.y, b.z);
+    fail();
+  }
+}
+
+static vec3 tri_normal(const pc_mesh *m, uint32_t t) {
+  vec3 a = m->p[m->idx[3 * t]], b = m->p[m->idx[3 * t + 1]], c = m->p[m->idx[3 * t + 2]];
+  return v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
+static void test_full_scene(void **state) {
+  (void)state;
+  char path[4096];
+  good_path(path, sizeof path, "full.xml");
+  pc_scene s;
+  pc_err e = {0};
+  int rc = pc_scene_load(path, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_string_equal(s.path, path);
+  assert_int_equal(s.method, PC_METHOD_PCBPT);
+  assert_int_equal(s.max_depth, 5); /* the first <default> wins */
+
+  /* camera: lookat from +z toward the origin: left = -x, up = +y, dir = -z */
+  const pc_camera *c = &s.camera;
+  assert_int_equal(c->width, 320);
+  assert_int_equal(c->height, 240);
+  assert_true(c->fov_deg == 40.f);
+  assert_int_equal(c->fov_axis, 'y');
+  double want[3][4] = {{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, -1, 5}};
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 4; j++) assert_true(fabs(c->to_world.m[i][j] - want[i][j]) < 1e-9);
+
+  /* textures: the scene-level checkerboard and the one nested in the roughplastic */
+  assert_int_equal(s.ntextures, 2);
+  assert_int_equal(s.textures[0].type, PC_TEX_CHECKER);
+  near3(s.textures[0].color0, v3(0.1f, 0.2f, 0.3f), 1e-6f);
+  near3(s.textures[0].color1, v3s(0.2f), 1e-6f);
+  assert_true(s.textures[0].uscale == 4.f && s.textures[0].vscale == 1.f && s.textures[0].uoffset == 0.f);
+  near3(s.textures[1].color0, v3s(0.4f), 1e-6f);
+
+  /* materials in declaration order; shapes without a BSDF share Mitsuba's diffuse 0.5 */
+  assert_int_equal(s.nmaterials, 8);
+  const pc_material *m = s.materials;
+  assert_int_equal(m[0].type, PC_MAT_DIFFUSE);
+  assert_false(m[0].twosided);
+  assert_int_equal(m[0].reflectance.tex, 0);
+  assert_int_equal(m[1].type, PC_MAT_DIFFUSE);
+  assert_true(m[1].twosided);
+  assert_int_equal(m[1].reflectance.tex, 0);
+  assert_int_equal(m[2].type, PC_MAT_ROUGHCONDUCTOR);
+  assert_true(fabsf(m[2].alpha - 0.25f) < 1e-7f);
+  vec3 eta, k;
+  assert_true(pc_conductor_ior("Au", &eta, &k));
+  near3(m[2].eta, eta, 1e-6f);
+  near3(m[2].k, k, 1e-6f);
+  near3(m[2].specular.value, v3s(1), 0);
+  assert_int_equal(m[3].type, PC_MAT_DIELECTRIC);
+  assert_true(fabsf(m[3].int_ior - 1.333f) < 1e-6f && m[3].ext_ior == 1.f);
+  assert_int_equal(m[4].type, PC_MAT_PLASTIC);
+  assert_true(fabsf(m[4].int_ior - 1.49f) < 1e-6f && fabsf(m[4].ext_ior - 1.000277f) < 1e-6f);
+  assert_true(m[4].nonlinear);
+  near3(m[4].reflectance.value, v3s(0.21586f), 1e-4f); /* sRGB #808080 in linear */
+  assert_int_equal(m[4].reflectance.tex, -1);
+  assert_int_equal(m[5].type, PC_MAT_DIFFUSE);
+  near3(m[5].reflectance.value, v3s(0.5f), 0);
+  assert_int_equal(m[6].type, PC_MAT_ROUGHPLASTIC);
+  assert_true(fabsf(m[6].alpha - 0.3f) < 1e-7f);
+  assert_int_equal(m[6].reflectance.tex, 1);
+  assert_int_equal(m[7].type, PC_MAT_CONDUCTOR);
+  assert_true(pc_conductor_ior("Cu", &eta, &k));
+  near3(m[7].eta, eta, 1e-6f);
+
+  assert_int_equal(s.nshapes, 7);
+  const pc_shape *sh = s.shapes;
+  /* obj and ply describe the same quad; both rotated 90 degrees about z then translated */
+  const pc_mesh *a = &sh[0].mesh, *b = &sh[1].mesh;
+  assert_int_equal(sh[0].material, 1);
+  assert_int_equal(sh[1].material, 4);
+  assert_int_equal(a->nverts, 4);
+  assert_int_equal(a->ntris, 2);
+  assert_int_equal(b->nverts, 4);
+  assert_int_equal(b->ntris, 2);
+  assert_non_null(a->n);
+  assert_non_null(a->uv);
+  for (uint32_t i = 0; i < 4; i++) {
+    near3(a->p[i], b->p[i], 1e-6f);
+    near3(a->n[i], b->n[i], 1e-6f);
+    near3(a->n[i], v3(0, 0, 1), 1e-6f);
+    assert_true(a->uv[i].x == b->uv[i].x && a->uv[i].y == b->uv[i].y);
+  }
+  for (int i = 0; i < 6; i++) assert_int_equal(a->idx[i], b->idx[i]);
+  near3(a->p[1], v3(1, 3, 3), 1e-6f); /* (1,0,0) rotated to (0,1,0), then translated */
+  near3(a->p[3], v3(0, 2, 3), 1e-6f); /* (0,1,0) rotated to (-1,0,0) */
+  assert_true(a->uv[0].y == 1.f);     /* flipTexCoords defaults to true */
+
+  /* rectangle: scaled, rotated to face -y, flipped to face +y; an area light */
+  const pc_mesh *r = &sh[2].mesh;
+  assert_int_equal(sh[2].kind, PC_SHAPE_MESH);
+  assert_null(r->n);
+  for (uint32_t t = 0; t < r->ntris; t++) near3(tri_normal(r, t), v3(0, 1, 0), 1e-6f);
+  for (uint32_t i = 0; i < r->nverts; i++) {
+    assert_true(fabsf(r->p[i].y - 3.f) < 1e-6f);
+    assert_true(fabsf(fabsf(r->p[i].x) - 0.5f) < 1e-6f && fabsf(fabsf(r->p[i].z) - 0.5f) < 1e-6f);
+  }
+  assert_int_equal(sh[2].light, 0);
+  assert_int_equal(sh[2].material, 5);
+  assert_int_equal(s.nlights, 2);
+  assert_int_equal(s.lights[0].type, PC_LIGHT_AREA);
+  assert_int_equal(s.lights[0].shape, 2);
+  near3(s.lights[0].radiance, v3(10, 8, 6), 0);
+  assert_int_equal(s.lights[1].type, PC_LIGHT_POINT);
+  near3(s.lights[1].position, v3(0, 4, 0), 0);
+  near3(s.lights[1].intensity, v3s(3), 0);
+
+  /* sphere: center (1,0,0) radius 0.5, scaled by 2 then moved down z */
+  assert_int_equal(sh[3].kind, PC_SHAPE_SPHERE);
+  near3(sh[3].center, v3(2, 0, -1), 1e-6f);
+  assert_true(fabsf(sh[3].radius - 1.f) < 1e-6f);
+  assert_false(sh[3].flip_normals);
+  assert_int_equal(sh[3].material, 3);
+
+  /* cube: 12 outward-facing triangles */
+  const pc_mesh *cu = &sh[4].mesh;
+  assert_int_equal(cu->ntris, 12);
+  for (uint32_t t = 0; t < 12; t++) {
+    vec3 cen = v3_scale(v3_add(v3_add(cu->p[cu->idx[3 * t]], cu->p[cu->idx[3 * t + 1]]), cu->p[cu->idx[3 * t + 2]]), 1.f / 3);
+    assert_true(v3_dot(tri_normal(cu, t), cen) > 0.3f);
+  }
+  /* disk: facing +z, area close to pi */
+  const pc_mesh *d = &sh[5].mesh;
+  double area = 0;
+  for (uint32_t t = 0; t < d->ntris; t++) {
+    near3(tri_normal(d, t), v3(0, 0, 1), 1e-5f);
+    vec3 p0 = d->p[d->idx[3 * t]], p1 = d->p[d->idx[3 * t + 1]], p2 = d->p[d->idx[3 * t + 2]];
+    area += 0.5 * v3_len(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+  }
+  assert_true(fabs(area - M_PI) < 1e-3);
+  /* faceNormals drops the file's normals */
+  assert_null(sh[6].mesh.n);
+  assert_int_equal(sh[6].material, 5);
+  for (int i = 0; i < s.nshapes; i++)
+    if (i != 2) assert_int_equal(sh[i].light, -1);
+  pc_scene_free(&s);
+}
+
+static void test_cornell_box(void **state) {
+  (void)state;
+  const char *shared = getenv("PCBPT_SHARED_DIR");
+  if (!shared) skip();
+  char path[4096];
+  snprintf(path, sizeof path, "%s/scenes/cornell-box-bitterli/scene.xml", shared);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = pc_scene_load(path, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 8);
+  assert_int_equal(s.nlights, 1);
+  assert_int_equal(s.lights[0].shape, 7);
+  assert_int_equal(s.shapes[7].light, 0);
+  near3(s.lights[0].radiance, v3(17, 12, 4), 0);
+  const pc_material *left = &s.materials[s.shapes[4].material];
+  assert_int_equal(left->type, PC_MAT_DIFFUSE);
+  assert_true(left->twosided);
+  near3(left->reflectance.value, v3(0.63f, 0.065f, 0.05f), 1e-7f);
+  assert_false(s.materials[s.shapes[7].material].twosided);
+  assert_int_equal(s.method, PC_METHOD_BDPT);
+  assert_int_equal(s.max_depth, 11);
+  assert_int_equal(s.camera.width, 256);
+  assert_true(s.camera.fov_deg == 19.5f);
+  assert_int_equal(s.camera.fov_axis, 'x');
+  assert_true(fabs(s.camera.to_world.m[2][3] - 6.8) < 1e-9 && s.camera.to_world.m[1][3] == 1.0);
+  /* the left wall at x = -1 has normals computed from its winding, which faces -x (the
+   * walls are twosided, so the file never needed to care) */
+  const pc_mesh *w = &s.shapes[4].mesh;
+  assert_non_null(w->n);
+  near3(w->n[0], v3(-1, 0, 0), 1e-6f);
+  pc_scene_free(&s);
+}
+
+/* ---- scenes written to a temporary folder ---- */
+
+typedef struct tmp {
+  char root[256];  /* holds outside.obj */
+  char dir[300];   /* the scene folder */
+  char scene[400];
+} tmp;
+
+static const char *QUAD_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+
+static void tmp_make(tmp *t) {
+  strcpy(t->root, "/tmp/pcbpt_scene_XXXXXX");
+  assert_non_null(mkdtemp(t->root));
+  snprintf(t->dir, sizeof t->dir, "%s/scene", t->root);
+  assert_int_equal(mkdir(t->dir, 0700), 0);
+  snprintf(t->scene, sizeof t->scene, "%s/scene.xml", t->dir);
+  assert_int_equal(th_write_str(t->root, "outside.obj", QUAD_OBJ), 0);
+  assert_int_equal(th_write_str(t->dir, "quad.obj", QUAD_OBJ), 0);
+  assert_int_equal(th_write_str(t->dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), 0);
+  assert_int_equal(th_write_str(t->dir, "badidx.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nf 1 2 9\n"), 0);
+  assert_int_equal(th_write_str(t->dir, "tex.png", "not really a png"), 0);
+  char link[400], target[400];
+  snprintf(link, sizeof link, "%s/escape.obj", t->dir);
+  snprintf(target, sizeof target, "%s/outside.obj", t->root);
+  assert_int_equal(symlink(target, link), 0);
+}
+
+/* Loads `body` wrapped in <scene version="0.6.0"> (which is line 1, so body line k is file
+ * line k+1). */
+static int load_body(tmp *t, const char *body, pc_scene *s, pc_err *e) {
+  char *xml = malloc(strlen(body) + 64);
+  sprintf(xml, "<scene version=\"0.6.0\">\n%s\n</scene>\n", body);
+  int w = th_write_str(t->dir, "scene.xml", xml);
+  free(xml);
+  assert_int_equal(w, 0);
+  return pc_scene_load(t->scene, s, e);
+}
+
+#define SENSOR "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>"
+
+typedef struct bad_case {
+  const char *body;
+  int line;
+  const char *word;
+} bad_case;
+
+static const bad_case bad_cases[] = {
+    /* integrator */
+    {"<integrator type=\"path\">\n<integer name=\"maxDepth\" value=\"0\"/>\n</integrator>", 3, "maxDepth"},
+    {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"-2\"/></integrator>", 2, "maxDepth"},
+    {"<integrator type=\"bdpt\">\n<integer name=\"rrDepth\" value=\"5\"/></integrator>", 3, "rrDepth"},
+    {"<integrator type=\"bdpt\"><boolean name=\"lightImage\" value=\"true\"/></integrator>", 2, "lightImage"},
+    {"\n<integrator type=\"volpath\"/>", 3, "volpath"},
+    {"<integrator type=\"path\"/>\n<integrator type=\"path\"/>", 3, "integrator"},
+    {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"5x\"/></integrator>", 2, "integer"},
+    {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"99999999999\"/></integrator>", 2, "integer"},
+    {"<integrator type=\"path\"><sampler type=\"independent\"/></integrator>", 2, "sampler"},
+    /* sensor */
+    {"<sensor type=\"orthographic\"/>", 2, "orthographic"},
+    {"<sensor type=\"perspective\"/>", 2, "fov"},
+    {"<sensor type=\"perspective\">\n<float name=\"focalLength\" value=\"50\"/></sensor>", 3, "focalLength"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<string name=\"fovAxis\" value=\"z\"/></sensor>", 3, "fovAxis"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"180\"/></sensor>", 2, "fov"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<transform name=\"toWorld\"><scale value=\"2\"/></transform></sensor>", 3, "rigid"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<film type=\"hdrfilm\"><integer name=\"width\" value=\"0\"/></film></sensor>", 3, "width"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<film type=\"hdrfilm\"><integer name=\"height\" value=\"20000\"/></film></sensor>", 3, "height"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"/></film></sensor>", 3, "gaussian"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<film type=\"ldrfilm\"/></sensor>", 3, "ldrfilm"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<sampler type=\"independent\"><integer name=\"sampleCount\" value=\"4\"/></sampler></sensor>", 3, "sampler"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><film type=\"hdrfilm\">\n<string name=\"pixelFormat\" value=\"rgb\"/></film></sensor>", 3, "pixelFormat"},
+    {SENSOR "\n" SENSOR, 3, "sensor"},
+    {"<shape type=\"cube\"/>", 1, "no <sensor>"},
+    /* transforms */
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<translate x=\"nan\"/></transform></sensor>", 3, "non-finite"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<lookat origin=\"0,0,0\" target=\"0,1,0\" up=\"0,1,0\"/></transform></sensor>", 3, "parallel"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<lookat origin=\"1,1,1\" target=\"1,1,1\" up=\"0,1,0\"/></transform></sensor>", 3, "origin equals target"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<lookat origin=\"1,1\" target=\"0,0,0\" up=\"0,1,0\"/></transform></sensor>", 3, "origin"},
+    {"<shape type=\"cube\">\n<transform name=\"toWorld\"><scale x=\"0\"/></transform></shape>", 3, "singular"},
+    {"<shape type=\"cube\"><transform name=\"toWorld\">\n<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 1 1\"/></transform></shape>", 3, "affine"},
+    {"<shape type=\"cube\"><transform name=\"toWorld\">\n<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 1\"/></transform></shape>", 3, "16 numbers"},
+    {"<shape type=\"cube\"><transform name=\"toWorld\">\n<skew value=\"1\"/></transform></shape>", 3, "skew"},
+    {"<shape type=\"cube\"><transform name=\"toWorld\">\n<rotate angle=\"30\"/></transform></shape>", 3, "zero axis"},
+    {"<shape type=\"cube\"><transform name=\"toWorld\">\n<translate x=\"1e300\"/><scale value=\"1e300\"/></transform></shape>", 3, "non-finite"},
+    /* shapes and files */
+    {"\n<shape type=\"cylinder\"/>", 3, "cylinder"},
+    {"<shape type=\"obj\"/>", 2, "filename"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>", 2, "cannot find"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"/etc/passwd\"/></shape>", 2, "absolute"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"../outside.obj\"/></shape>", 2, "outside"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"escape.obj\"/></shape>", 2, "outside"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"flat.obj\"/></shape>", 2, "degenerate"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"badidx.obj\"/></shape>", 2, "badidx.obj:5:"},
+    {"<shape type=\"ply\"><string name=\"filename\" value=\"quad.obj\"/></shape>", 2, "not a PLY"},
+    {"<shape type=\"sphere\">\n<transform name=\"toWorld\"><scale x=\"2\"/></transform></shape>", 2, "sphere"},
+    {"<shape type=\"sphere\"><float name=\"radius\" value=\"-1\"/></shape>", 2, "radius"},
+    {"<shape type=\"cube\"><string name=\"filename\" value=\"quad.obj\"/></shape>", 2, "filename"},
+    {"<shape type=\"ply\"><string name=\"filename\" value=\"quad.obj\"/><boolean name=\"flipTexCoords\" value=\"true\"/></shape>", 2, "flipTexCoords"},
+    {"<shape type=\"cube\"><boolean name=\"flipNormals\" value=\"yes\"/></shape>", 2, "true or false"},
+    {"<shape type=\"cube\"><bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/></shape>", 3, "more than one BSDF"},
+    {"<shape type=\"cube\">\n<medium type=\"homogeneous\" name=\"interior\"/></shape>", 3, "medium"},
+    /* emitters */
+    {"<emitter type=\"envmap\"/>", 2, "envmap"},
+    {"<emitter type=\"constant\"/>", 2, "constant"},
+    {"<emitter type=\"directional\"/>", 2, "directional"},
+    {"<emitter type=\"spot\"/>", 2, "spot"},
+    {"<emitter type=\"sunsky\"/>", 2, "sunsky"},
+    {"<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>", 2, "nested"},
+    {"<shape type=\"cube\">\n<emitter type=\"area\"/></shape>", 3, "radiance"},
+    {"<shape type=\"cube\">\n<emitter type=\"point\"/></shape>", 3, "point"},
+    {"<shape type=\"cube\"><emitter type=\"area\">\n<rgb name=\"radiance\" value=\"0\"/></emitter></shape>", 3, "radiance"},
+    {"<emitter type=\"point\">\n<float name=\"samplingWeight\" value=\"2\"/></emitter>", 3, "samplingWeight"},
+    /* BSDFs */
+    {"<bsdf type=\"phong\"/>", 2, "phong"},
+    {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"1.5, 0.5, 0.5\"/></bsdf>", 3, "above 1"},
+    {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"-0.5\"/></bsdf>", 3, "negative"},
+    {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.1, 0.2\"/></bsdf>", 3, "1 or 3"},
+    {"<bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.5, 500:0.5\"/></bsdf>", 3, "wavelength"},
+    {"<bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"0.1 0.2\"/></bsdf>", 3, "single number"},
+    {"<bsdf type=\"diffuse\">\n<blackbody name=\"reflectance\" temperature=\"5000\"/></bsdf>", 3, "blackbody"},
+    {"<bsdf type=\"diffuse\">\n<float name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "cannot be given"},
+    {"<bsdf type=\"diffuse\">\n<rgb name=\"foo\" value=\"0.5\"/></bsdf>", 3, "foo"},
+    {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
+    {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
+    {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
+    {"<bsdf type=\"roughconductor\"/>", 2, "ggx"},
+    {"<bsdf type=\"roughplastic\">\n<string name=\"distribution\" value=\"beckmann\"/></bsdf>", 2, "beckmann"},
+    {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
+    {"<bsdf type=\"conductor\"><string name=\"material\" value=\"Xx\"/></bsdf>", 2, "Xx"},
+    {"<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"1\"/></bsdf>", 2, "eta and k"},
+    {"<bsdf type=\"conductor\">\n<string name=\"distribution\" value=\"ggx\"/></bsdf>", 3, "distribution"},
+    {"<bsdf type=\"dielectric\">\n<string name=\"intIOR\" value=\"unobtainium\"/></bsdf>", 3, "unobtainium"},
+    {"<bsdf type=\"dielectric\">\n<float name=\"intIOR\" value=\"-1\"/></bsdf>", 2, "intIOR"},
+    {"<bsdf type=\"roughdielectric\"/>", 2, "roughdielectric"},
+    {"<bsdf type=\"twosided\">\n<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "twosided"},
+    {"<bsdf type=\"twosided\">\n<bsdf type=\"dielectric\"/></bsdf>", 3, "dielectric"},
+    {"<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
+    {"<bsdf type=\"twosided\"/>", 2, "wraps no"},
+    {"<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"twosided\" id=\"b\"><ref id=\"a\"/></bsdf>\n<bsdf type=\"twosided\"><ref id=\"b\"/></bsdf>", 3, "twosided"},
+    {"<bsdf type=\"diffuse\"/>\n<bsdf/>", 3, "type"},
+    /* textures */
+    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<string name=\"wrapMode\" value=\"clamp\"/></texture>", 2, "repeat"},
+    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"gamma\" value=\"2.2\"/></texture>", 3, "gamma"},
+    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<string name=\"filterType\" value=\"cubic\"/></texture>", 2, "filterType"},
+    {"<texture type=\"bitmap\" id=\"t\"/>", 2, "filename"},
+    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"nothere.png\"/></texture>", 2, "cannot find"},
+    {"<texture type=\"scale\" id=\"t\"/>", 2, "scale"},
+    {"<texture type=\"checkerboard\"/>", 2, "id"},
+    {"<texture type=\"checkerboard\" id=\"t\"><float name=\"uscale\" value=\"0\"/></texture>", 2, "uscale"},
+    {"<bsdf type=\"diffuse\">\n<texture type=\"checkerboard\"/></bsdf>", 3, "unexpected"},
+    /* ids and references */
+    {"<shape type=\"cube\">\n<ref id=\"nope\"/></shape>", 3, "unknown id"},
+    {"<texture type=\"checkerboard\" id=\"t\"/><shape type=\"cube\">\n<ref id=\"t\"/></shape>", 3, "not a BSDF"},
+    {"<bsdf type=\"diffuse\" id=\"b\"/><bsdf type=\"diffuse\">\n<ref name=\"reflectance\" id=\"b\"/></bsdf>", 3, "not a texture"},
+    {"<bsdf type=\"diffuse\" id=\"x\"/>\n<texture type=\"checkerboard\" id=\"x\"/>", 3, "duplicate id"},
+    /* defaults and substitution */
+    {"<shape type=\"cube\">\n<float name=\"x\" value=\"$undefined\"/></shape>", 3, "undefined parameter"},
+    {"<shape type=\"cube\">\n<default name=\"a\" value=\"1\"/></shape>", 3, "<default>"},
+    {"<default name=\"a\"/>", 2, "<default>"},
+    /* structure */
+    {"\n<include filename=\"other.xml\"/>", 3, "include"},
+    {"<medium type=\"homogeneous\"/>", 2, "medium"},
+    {"<shape type=\"cube\" color=\"red\"/>", 2, "unknown attribute"},
+    {"<shape type=\"cube\">\n<bsdf type=\"diffuse\">", 4, "syntax"},
+    {"<shape type=\"cube\">hello</shape>", 2, "text"},
+};
+
+static void test_bad_scenes(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  int failures = 0;
+  for (size_t i = 0; i < sizeof bad_cases / sizeof bad_cases[0]; i++) {
+    const bad_case *bc = &bad_cases[i];
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, bc->body, &s, &e);
+    char where[64];
+    snprintf(where, sizeof where, "scene.xml:%d:", bc->line);
+    if (rc == 0) {
+      print_error("case %zu loaded but should fail: %s\n", i, bc->body);
+      pc_scene_free(&s);
+      failures++;
+    } else if (!strstr(e.msg, where) || !strstr(e.msg, bc->word) || e.code != rc) {
+      print_error("case %zu: message '%s' lacks '%s' or '%s'\n", i, e.msg, where, bc->word);
+      failures++;
+    }
+  }
+  th_rm_rf(t.root);
+  assert_int_equal(failures, 0);
+}
+
+static void test_bad_documents(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct { const char *xml; const char *word; } docs[] = {
+      {"<scene version=\"2.0.0\"/>", "version"},
+      {"<scene/>", "version"},
+      {"<notascene version=\"0.6.0\"/>", "root element"},
+      {"<!DOCTYPE scene [<!ENTITY a \"aaaa\">]>\n<scene version=\"0.6.0\"/>", "DOCTYPE"},
+      {"", "syntax"},
+  };
+  for (size_t i = 0; i < sizeof docs / sizeof docs[0]; i++) {
+    assert_int_equal(th_write_str(t.dir, "scene.xml", docs[i].xml), 0);
+    pc_scene s;
+    pc_err e = {0};
+    assert_true(pc_scene_load(t.scene, &s, &e) < 0);
+    if (!strstr(e.msg, docs[i].word)) print_error("doc %zu: '%s'\n", i, e.msg);
+    assert_non_null(strstr(e.msg, docs[i].word));
+  }
+  /* nesting deeper than the bound */
+  char deep[64 * 20 + 64] = "<scene version=\"0.6.0\">";
+  for (int i = 0; i < 70; i++) strcat(deep, "<a>");
+  assert_int_equal(th_write_str(t.dir, "scene.xml", deep), 0);
+  pc_scene s;
+  pc_err e = {0};
+  assert_int_equal(pc_scene_load(t.scene, &s, &e), PC_ELIMIT);
+  assert_non_null(strstr(e.msg, "deeply"));
+  /* a missing scene file */
+  char missing[512];
+  snprintf(missing, sizeof missing, "%s/none.xml", t.dir);
+  assert_true(pc_scene_load(missing, &s, &e) < 0);
+  th_rm_rf(t.root);
+}
+
+static void test_defaults_and_values(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  /* no integrator, no film: Mitsuba's defaults; mirror flips allowed on the camera; matrix,
+   * rotate and order of transform children; extEta divides; srgb; near/far clip accepted */
+  const char *body =
+      "<default name=\"w\" value=\"0.25\"/>\n"
+      "<sensor type=\"perspective\"><float name=\"fov\" value=\"30\"/><float name=\"nearClip\" value=\"0.1\"/>"
+      "<float name=\"farClip\" value=\"100\"/>"
+      "<transform name=\"toWorld\"><scale x=\"-1\"/><translate x=\"2\"/></transform></sensor>\n"
+      "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate x=\"1\"/><scale value=\"2\"/></transform>"
+      "<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"2, 2, 2\"/><rgb name=\"k\" value=\"4\"/>"
+      "<float name=\"extEta\" value=\"2\"/></bsdf></shape>\n"
+      "<shape type=\"rectangle\"><transform name=\"toWorld\">"
+      "<matrix value=\"1 0 0 5, 0 1 0 0, 0 0 1 0, 0 0 0 1\"/><rotate y=\"1\" angle=\"90\"/></transform>"
+      "<bsdf type=\"diffuse\"><srgb name=\"reflectance\" value=\"$w\"/></bsdf></shape>\n"
+      "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"-1\"/></transform></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.method, PC_METHOD_PT);
+  assert_int_equal(s.max_depth, -1);
+  assert_int_equal(s.camera.width, 768);
+  assert_int_equal(s.camera.height, 576);
+  assert_int_equal(s.camera.fov_axis, 'x');
+  assert_true(s.camera.to_world.m[0][0] == -1 && s.camera.to_world.m[0][3] == 2);
+  /* translate then scale: (1,1,0) -> (2,1,0) -> (4,2,0) */
+  near3(s.shapes[0].mesh.p[2], v3(4, 2, 0), 1e-6f);
+  near3(s.materials[0].eta, v3s(1), 0);
+  near3(s.materials[0].k, v3s(2), 0);
+  /* the matrix moves +5 in x, then rotate +90 about y (right-handed) maps +x to -z:
+   * (1,1,0) -> (6,1,0) -> (0,1,-6) */
+  near3(s.shapes[1].mesh.p[2], v3(0, 1, -6), 1e-5f);
+  near3(s.materials[1].reflectance.value, v3s(0.050876f), 1e-5f);
+  assert_int_equal(s.shapes[2].material, s.shapes[0].material + 2);
+  /* a mirrored rectangle still faces +z: the winding follows the transformed normal */
+  near3(tri_normal(&s.shapes[2].mesh, 0), v3(0, 0, 1), 1e-6f);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
+/* Mutated copies of the full scene never crash (run under -DPCBPT_SANITIZE=ON as well). */
+static void test_mutations(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  char src[4096], p[512];
+  good_path(src, sizeof src, "full.xml");
+  size_t len = 0;
+  char *orig = th_read(src, &len);
+  assert_non_null(orig);
+  snprintf(p, sizeof p, "%s/meshes", t.dir);
+  assert_int_equal(mkdir(p, 0700), 0);
+  const char *meshes[] = {"quad.obj", "quad.ply", "tri_normals.obj"};
+  for (int i = 0; i < 3; i++) {
+    char name[512];
+    snprintf(name, sizeof name, "meshes/%s", meshes[i]);
+    good_path(src, sizeof src, name);
+    char *m = th_read(src, NULL);
+    assert_non_null(m);
+    assert_int_equal(th_write_str(t.dir, name, m), 0);
+    free(m);
+  }
+  static const char alphabet[] = "<>/=\"$ -0123456789.,#xyz\n";
+  uint64_t seed = 12345;
+  char *buf = malloc(len + 64);
+  int loaded = 0;
+  for (int it = 0; it < 400; it++) {
+    memcpy(buf, orig, len);
+    size_t n = len;
+    int edits = 1 + it % 4;
+    for (int k = 0; k < edits; k++) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      size_t pos = (size_t)(seed >> 33) % n;
+      int op = (int)((seed >> 20) % 4);
+      char ch = alphabet[(seed >> 8) % (sizeof alphabet - 1)];
+      if (op == 0) buf[pos] = ch;
+      else if (op == 1) n = pos + 1; /* truncate */
+      else if (op == 2 && n + 1 < len + 64) {
+        memmove(buf + pos + 1, buf + pos, n - pos);
+        buf[pos] = ch;
+        n++;
+      } else if (n > 1) {
+        memmove(buf + pos, buf + pos + 1, n - pos - 1);
+        n--;
+      }
+    }
+    snprintf(p, sizeof p, "%s/scene.xml", t.dir);
+    assert_int_equal(th_write(p, buf, n), 0);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = pc_scene_load(p, &s, &e);
+    if (rc == 0) {
+      loaded++;
+      pc_scene_free(&s);
+    } else {
+      assert_true(strlen(e.msg) > 0);
+    }
+  }
+  free(buf);
+  free(orig);
+  th_rm_rf(t.root);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
+      cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
+      cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_mutations),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
