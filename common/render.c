@@ -1,17 +1,21 @@
 /* render.c: the renderer: a thread pool bound to a scene and settings, and the iteration loop
  * that every front end (standalone render, farm worker, tests) calls. One iteration renders the
  * whole image into a scratch film that is added to the caller's film only when complete, so a
- * cancelled call never leaves a partial iteration behind. */
+ * cancelled call never leaves a partial iteration behind. An iteration is an eye pass over
+ * pixel tiles (pt, lt's s=0, or BDPT with its paired light paths) and, for lt and bdpt, a light
+ * pass over the light paths no pixel is paired with; the threads' light splats are then merged
+ * and the light layers count N_L light paths. */
 #include "render.h"
 
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include "integrator.h"
+#include "bidir.h"
 #include "thread_pool.h"
 
 #define TILE 16
+#define LIGHT_CHUNK 1024 /* light paths per work item of the light pass */
 
 struct pc_renderer {
   const pc_scene *scene;
@@ -22,6 +26,9 @@ struct pc_renderer {
   pc_tctx *tctx;       /* one per thread */
   atomic_bool *cancel;
   int tiles_x, tiles_y;
+  uint64_t n_light;       /* N_L */
+  uint64_t light_first;   /* first light path of the light pass (the others are paired) */
+  pc_path_vertex *verts;  /* per-thread sub-path buffers */
 };
 
 void pc_render_settings_default(pc_render_settings *s) {
@@ -74,7 +81,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
   if (rc != PC_OK) return rc;
-  if (settings->method != PC_METHOD_PT)
+  if (settings->method != PC_METHOD_PT && settings->method != PC_METHOD_LT && settings->method != PC_METHOD_BDPT)
     return pc_errf(e, PC_EUNSUPPORTED, "method %s is not implemented yet", pc_method_name(settings->method));
   if (threads < 0 || threads > 1024) return pc_errf(e, PC_EINVAL, "threads %d out of range 0..1024", threads);
   if (threads == 0) threads = pc_cpu_count();
@@ -89,7 +96,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
     r->tctx = calloc((size_t)threads, sizeof(pc_tctx));
-    if (!r->splat || !r->tctx) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+    r->verts = calloc((size_t)threads * 2 * (PC_MAX_SEGMENTS + 2), sizeof(pc_path_vertex));
+    if (!r->splat || !r->tctx || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
   for (int i = 0; rc == PC_OK && i < threads; i++)
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
@@ -98,7 +106,16 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     return rc;
   }
   int max_seg = settings->max_depth < 0 ? PC_MAX_SEGMENTS : settings->max_depth;
+  uint64_t npix = (uint64_t)settings->width * (uint64_t)settings->height;
+  r->n_light = settings->light_paths ? settings->light_paths : npix;
+  r->light_first = settings->method == PC_METHOD_LT ? 0 : npix;
   for (int i = 0; i < threads; i++) {
+    pc_path_vertex *v = r->verts + (size_t)i * 2 * (PC_MAX_SEGMENTS + 2);
+    r->tctx[i].light_path = v;
+    r->tctx[i].eye_path = v + PC_MAX_SEGMENTS + 2;
+    r->tctx[i].n_light = r->n_light;
+    r->tctx[i].counts = pc_mis_counts_bdpt(settings, r->n_light);
+    r->tctx[i].weighted = true;
     r->tctx[i].scene = scene;
     r->tctx[i].set = &r->set;
     r->tctx[i].max_segments = max_seg;
@@ -117,6 +134,7 @@ void pc_renderer_destroy(pc_renderer *r) {
     for (int i = 0; i < n; i++) pc_film_free(&r->splat[i]);
   free(r->splat);
   free(r->tctx);
+  free(r->verts);
   pc_film_free(&r->scratch);
   free(r);
 }
@@ -132,8 +150,35 @@ static void eye_tile(void *arg, int thread, int item) {
   int tx = item % r->tiles_x, ty = item / r->tiles_x;
   int x1 = (tx + 1) * TILE < r->set.width ? (tx + 1) * TILE : r->set.width;
   int y1 = (ty + 1) * TILE < r->set.height ? (ty + 1) * TILE : r->set.height;
+  void (*pixel)(pc_tctx *, int, int) = r->set.method == PC_METHOD_LT ? pc_lt_pixel
+                                       : r->set.method == PC_METHOD_BDPT ? pc_bdpt_pixel
+                                                                         : pc_pt_pixel;
   for (int y = ty * TILE; y < y1; y++)
-    for (int x = tx * TILE; x < x1; x++) pc_pt_pixel(c, x, y);
+    for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
+}
+
+static void light_chunk(void *arg, int thread, int item) {
+  pc_renderer *r = arg;
+  if (cancelled(r)) return;
+  uint64_t a = r->light_first + (uint64_t)item * LIGHT_CHUNK;
+  uint64_t b = a + LIGHT_CHUNK < r->n_light ? a + LIGHT_CHUNK : r->n_light;
+  for (uint64_t i = a; i < b; i++) pc_lt_light_path(&r->tctx[thread], i);
+}
+
+/* Adds the light layers of every thread's splat film into the scratch film and clears them. */
+static void merge_splats(pc_renderer *r) {
+  size_t n = (size_t)r->set.width * (size_t)r->set.height * 3;
+  for (int t = 0; t < pc_pool_size(r->pool); t++) {
+    pc_film *f = &r->splat[t];
+    for (int i = 0; i < f->nlayers; i++) {
+      if (f->layers[i].norm != PC_NORM_LIGHT) continue;
+      double *d = r->scratch.layers[i].sum, *src = f->layers[i].sum;
+      for (size_t j = 0; j < n; j++) d[j] += src[j];
+      memset(src, 0, n * sizeof(double));
+    }
+    r->scratch.dropped_nonfinite += f->dropped_nonfinite;
+    f->dropped_nonfinite = 0;
+  }
 }
 
 int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film *film, pc_render_stats *stats,
@@ -150,19 +195,45 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
     for (int i = 0; i < nthreads; i++) {
       r->tctx[i].iteration = first + k;
       r->tctx[i].rays = 0;
+      r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
     }
     pc_pool_run(r->pool, r->tiles_x * r->tiles_y, eye_tile, r);
-    if (cancelled(r)) return pc_errf(e, PC_ECANCELED, "render cancelled");
+    bool light = r->set.method != PC_METHOD_PT;
+    if (light && r->n_light > r->light_first)
+      pc_pool_run(r->pool, (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK), light_chunk, r);
+    if (cancelled(r)) {
+      for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
+      return pc_errf(e, PC_ECANCELED, "render cancelled");
+    }
     double t1 = now_seconds();
-    for (int i = 0; i < r->scratch.nlayers; i++)
+    if (light) merge_splats(r);
+    for (int i = 0; i < r->scratch.nlayers; i++) {
       if (r->scratch.layers[i].norm == PC_NORM_EYE) r->scratch.layers[i].count = 1;
+      else if (light) r->scratch.layers[i].count = r->n_light;
+    }
     int rc = pc_film_add(film, &r->scratch, e);
     if (rc != PC_OK) return rc;
     if (stats) {
       stats->iterations++;
       stats->eye_paths += npix;
-      for (int i = 0; i < nthreads; i++) stats->rays += r->tctx[i].rays;
-      stats->t_paths += t1 - t0;
+      if (light) stats->light_paths += r->n_light;
+      /* The phases interleave on every thread: split the iteration's render time by the
+       * threads' summed time per phase. */
+      double tp = 0, tl = 0, tc = 0;
+      for (int i = 0; i < nthreads; i++) {
+        stats->rays += r->tctx[i].rays;
+        tp += r->tctx[i].t_paths;
+        tl += r->tctx[i].t_lt;
+        tc += r->tctx[i].t_connect;
+      }
+      double busy = tp + tl + tc;
+      if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
+        stats->t_paths += t1 - t0;
+      } else {
+        stats->t_paths += (t1 - t0) * tp / busy;
+        stats->t_lt += (t1 - t0) * tl / busy;
+        stats->t_connect += (t1 - t0) * tc / busy;
+      }
       stats->t_total += now_seconds() - t0;
     }
     if (progress) progress(user, k + 1);
