@@ -2,16 +2,26 @@
 #include "file_read.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err *e) {
   *data = NULL;
   *len = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+  /* O_NONBLOCK so a FIFO planted where a mesh should be cannot hang the open; non-regular
+   * files are refused below. */
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *f = fdopen(fd, "rb");
+  if (!f) {
+    int err = errno;
+    close(fd);
+    return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(err));
+  }
   struct stat st;
   if (fstat(fileno(f), &st) != 0) {
     int err = errno;

@@ -9,7 +9,7 @@ static int add_layer(pc_film *f, const char *name, pc_norm norm, pc_err *e) {
   if (f->nlayers >= PC_FILM_MAX_LAYERS)
     return pc_errf(e, PC_ELIMIT, "film: more than %d layers", PC_FILM_MAX_LAYERS);
   pc_film_layer *l = &f->layers[f->nlayers];
-  snprintf(l->name, sizeof l->name, "%s", name);
+  snprintf(l->name, sizeof l->name, "%.15s", name);
   l->norm = norm;
   l->count = 0;
   l->sum = calloc((size_t)f->w * f->h * 3, sizeof(double));
@@ -26,6 +26,7 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
     return pc_errf(e, PC_EINVAL, "film: strategy layer depth %d out of range 0..8", strategy_depth);
   f->w = w;
   f->h = h;
+  memset(f->strategy_index, -1, sizeof f->strategy_index);
   static const char *std_names[PC_LAYER_STD_COUNT] = {"pt", "nee", "lt", "inner"};
   int rc = PC_OK;
   for (int i = 0; i < PC_LAYER_STD_COUNT && rc == PC_OK; i++)
@@ -33,9 +34,10 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
   /* Path length k (segments) has strategies s + t = k + 1, t >= 1. */
   for (int k = 1; k <= strategy_depth && rc == PC_OK; k++)
     for (int t = 1; t <= k + 1 && rc == PC_OK; t++) {
-      char name[16];
+      char name[32];
       snprintf(name, sizeof name, "s%dt%d", k + 1 - t, t);
       rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, e);
+      if (rc == PC_OK) f->strategy_index[k + 1 - t][t] = (int8_t)(f->nlayers - 1);
     }
   if (rc != PC_OK) pc_film_free(f);
   return rc;
@@ -52,14 +54,6 @@ void pc_film_clear(pc_film *f) {
     f->layers[i].count = 0;
   }
   f->dropped_nonfinite = 0;
-}
-
-int pc_film_strategy_layer(const pc_film *f, int s, int t) {
-  char name[16];
-  snprintf(name, sizeof name, "s%dt%d", s, t);
-  for (int i = PC_LAYER_STD_COUNT; i < f->nlayers; i++)
-    if (strcmp(f->layers[i].name, name) == 0) return i;
-  return -1;
 }
 
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {

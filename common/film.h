@@ -15,6 +15,7 @@
 
 enum { PC_LAYER_PT = 0, PC_LAYER_NEE = 1, PC_LAYER_LT = 2, PC_LAYER_INNER = 3, PC_LAYER_STD_COUNT = 4 };
 #define PC_FILM_MAX_LAYERS 64
+#define PC_FILM_MAX_ST 10 /* s and t of per-strategy layers stay below this */
 
 typedef enum { PC_NORM_EYE, PC_NORM_LIGHT } pc_norm;
 
@@ -30,6 +31,7 @@ typedef struct pc_film {
   int nlayers;
   pc_film_layer layers[PC_FILM_MAX_LAYERS];
   uint64_t dropped_nonfinite; /* samples that would have added NaN/Inf, counted and dropped */
+  int8_t strategy_index[PC_FILM_MAX_ST][PC_FILM_MAX_ST]; /* [s][t] -> layer, -1 if not kept */
 } pc_film;
 
 /* Creates the four standard layers; with strategy_depth > 0 also one layer per (s,t) with
@@ -38,7 +40,9 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
 void pc_film_free(pc_film *f);
 void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
 /* Index of the per-strategy layer (s,t), or -1 if not kept. */
-int pc_film_strategy_layer(const pc_film *f, int s, int t);
+static inline int pc_film_strategy_layer(const pc_film *f, int s, int t) {
+  return s >= 0 && t >= 0 && s < PC_FILM_MAX_ST && t < PC_FILM_MAX_ST ? f->strategy_index[s][t] : -1;
+}
 /* Adds src into dst (same shape, same layers): sums and counts. */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
 /* Normalized RGB of layer i into out (w*h*3). */

@@ -120,7 +120,18 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
   pc_camera_prepare(&s->camera);
   if (!(s->camera.image_area > 0.f) || !isfinite(s->camera.image_area))
     return pc_errf(e, PC_EINVAL, "%s: camera field of view %.3g is out of range", s->path, s->camera.fov_deg);
-  for (int i = 0; i < s->nmaterials; i++) pc_material_prepare(&s->materials[i]);
+  for (int i = 0; i < s->nmaterials; i++) {
+    pc_material *m = &s->materials[i];
+    /* Derived quantities (plastic's lobe choice) use a slot's constant; for a textured slot
+     * that is the texture's average, as Mitsuba's getAverage(). */
+    pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance};
+    for (int k = 0; k < 3; k++) {
+      if (slots[k]->tex >= s->ntextures)
+        return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, slots[k]->tex, s->ntextures);
+      if (slots[k]->tex >= 0) slots[k]->value = pc_texture_average(&s->textures[slots[k]->tex]);
+    }
+    pc_material_prepare(m);
+  }
   int rc = build_lights(s, e);
   if (rc != PC_OK) return rc;
   /* Embree calls the error function with this address for the device's lifetime; it lives in

@@ -13,6 +13,14 @@ typedef struct verb {
 static const verb verbs[] = {
     {"render", pc_cmd_render, "render a scene on this machine"},
     {"compare", pc_cmd_compare, "RMSE, relMSE and L1 between two EXR images, per layer"},
+    {"serve", pc_cmd_serve, "run the farm coordinator"},
+    {"submit", pc_cmd_submit, "submit a scene as a farm job (prints the job id)"},
+    {"status", pc_cmd_status, "progress of one job or all"},
+    {"list", pc_cmd_list, "list the jobs"},
+    {"workers", pc_cmd_workers, "list the connected workers"},
+    {"wait", pc_cmd_wait, "wait for a job (exit 0 when done)"},
+    {"cancel", pc_cmd_cancel, "cancel a job"},
+    {"fetch", pc_cmd_fetch, "download a job's image"},
 };
 
 static void usage(FILE *f) {
@@ -35,7 +43,6 @@ int main(int argc, char **argv) {
   }
   for (size_t i = 0; i < sizeof verbs / sizeof verbs[0]; i++)
     if (strcmp(argv[1], verbs[i].name) == 0) return verbs[i].run(argc - 2, argv + 2);
-  fprintf(stderr, "pcbpt-coord: unknown verb '%s'\n", argv[1]);
-  usage(stderr);
+  fprintf(stderr, "pcbpt-coord: unknown verb '%s' (see pcbpt-coord --help)\n", argv[1]);
   return 2;
 }

@@ -210,7 +210,7 @@ def ajar_door():
     # (checked in check_door below; +6 would push it through the opening and seal it)
     s.box((-0.09, 0.0, -0.55), (-0.05, 2.1, 0.55), ref("door"), rot_y=-6.0, pivot=(-0.05, 0.0, -0.55))
     # light: ceiling panel of room B, facing down
-    s.rect((1.6, 2.49, 0.0), 0.5, 0.5, "-y", BLACK, emit=(300, 300, 300))
+    s.rect((1.6, 2.49, 0.0), 0.5, 0.5, "-y", BLACK, emit=(1500, 1500, 1500))
     # furniture in room A
     s.box((-2.4, 0.0, -1.7), (-1.6, 0.8, -0.9), ref("wall"), rot_y=20)
     s.box((-1.2, 0.0, 1.1), (-0.6, 1.2, 1.7), '<bsdf type="plastic"><rgb name="diffuseReflectance" '
@@ -238,7 +238,7 @@ def slit_room():
     s.box((-2.1, 1.59, zl), (-1.5, 1.66, zh), ref("wall"))
     s.box((1.5, 1.59, zl), (2.1, 1.66, zh), ref("wall"))
     # the emitter outside: 6 x 2 m at z=-5, y in [2.5, 4.5], facing +z (toward the blind)
-    s.rect((0.0, 3.5, -5.0), 3.0, 1.0, "+z", BLACK, emit=(100, 100, 100))
+    s.rect((0.0, 3.5, -5.0), 3.0, 1.0, "+z", BLACK, emit=(400, 400, 400))
     # a box and a sphere inside
     s.box((-1.2, 0.0, -0.4), (-0.5, 0.7, 0.3), diffuse((0.65, 0.25, 0.2)), rot_y=30)
     s.sphere((0.9, 0.4, -0.6), 0.4, diffuse((0.25, 0.5, 0.6)))
@@ -265,7 +265,9 @@ def open_room():
 
 def glossy_glass():
     """Closed room 4 x 3 x 4, checkerboard floor, a small bright ceiling light off to the left;
-    glass sphere (caustic on the floor to its lower right), rough gold sphere, rough plastic cube."""
+    glass sphere, rough gold sphere, rough plastic cube. The light sits in the back-left corner so
+    the glass sphere's caustic (traced: centred about (0.69, 0, -0.42), 0.1 m wide) lands on the floor
+    in front-right of the sphere where the camera sees it."""
     s = Scene("glossy-glass", "pcbpt", -1,
               "Glossy and glass: rough gold (GGX 0.15), rough plastic, glass sphere casting a "
               "caustic from a small light, checkerboard floor, closed room")
@@ -279,7 +281,7 @@ def glossy_glass():
     # the checkerboard is on a rectangle just above the floor slab so its uv are the plain
     # [0,1]^2 of the rectangle (cube uv are per face and not documented in Mitsuba 0.6)
     s.rect((0.0, 0.0005, 0.0), 2.0, 2.0, "+y", ref("floor"))
-    s.rect((-1.0, 2.99, -0.6), 0.2, 0.2, "-y", BLACK, emit=(120, 120, 120))
+    s.rect((-1.6, 2.99, -1.6), 0.2, 0.2, "-y", BLACK, emit=(120, 120, 120))
     s.sphere((0.35, 0.45, -0.6), 0.45, '<bsdf type="dielectric"><float name="intIOR" value="1.5"/>'
              '<float name="extIOR" value="1.0"/></bsdf>')
     s.sphere((-0.75, 0.4, -1.1), 0.4, '<bsdf type="roughconductor"><string name="distribution" value="ggx"/>'

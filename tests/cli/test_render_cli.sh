@@ -37,7 +37,7 @@ check missing-value 2 "--time" -- "$bin" render "$scene" --time
 check bad-threads 2 "--threads" -- "$bin" render "$scene" --threads -1
 check missing-scene 1 "nope.xml" -- "$bin" render "$tmp/nope.xml" --spp 1
 check no-scene 2 "SCENE" -- "$bin" render --spp 1
-check render 0 "samples/s" -- "$bin" render "$scene" --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
+check render 0 "samples/s" -- "$bin" render "$scene" --method pt --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
 [ -s "$tmp/cb.exr" ] && [ -s "$tmp/cb.png" ] || { echo "FAIL render: outputs missing"; fail=1; }
 check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
 grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }

@@ -38,7 +38,7 @@ static void check_method(pc_method method) {
     int d = depths[k] < 0 ? 100000 : depths[k];
     for (int i = 0; i < d && ak > 1e-12; i++, ak *= a) exact += le * ak;
 
-    stat_blocks st;
+    stat_blocks st = {0};
     assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, ITERATIONS, -1, RES, &st), 0);
     double mean = stat_mean(&st, 0), se = stat_se(&st, 0);
     double err = fabs(mean - exact);

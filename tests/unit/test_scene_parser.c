@@ -469,6 +469,38 @@ static void test_defaults_and_values(void **state) {
   th_rm_rf(t.root);
 }
 
+static void test_bitmap_texture(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  char png[512];
+  snprintf(png, sizeof png, "%s/tex/checker.png", t.dir);
+  char sub[512];
+  snprintf(sub, sizeof sub, "%s/tex", t.dir);
+  assert_int_equal(mkdir(sub, 0700), 0);
+  const float rgb[6] = {1, 1, 1, 0, 0, 0};
+  pc_err e = {0};
+  assert_int_equal(pc_png_write_preview(png, 2, 1, rgb, 0.f, &e), 0);
+  pc_scene s;
+  const char *body =
+      SENSOR "\n<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex/checker.png\"/>"
+      "<float name=\"uscale\" value=\"2\"/><float name=\"voffset\" value=\"0.5\"/>"
+      "<string name=\"filterType\" value=\"nearest\"/><string name=\"wrapMode\" value=\"repeat\"/></texture>\n"
+      "<shape type=\"rectangle\"><bsdf type=\"diffuse\"><ref name=\"reflectance\" id=\"t\"/></bsdf></shape>";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.ntextures, 1);
+  assert_int_equal(s.textures[0].type, PC_TEX_BITMAP);
+  assert_int_equal(s.textures[0].img.w, 2);
+  assert_int_equal(s.textures[0].img.h, 1);
+  assert_true(s.textures[0].uscale == 2.f && s.textures[0].vscale == 1.f && s.textures[0].voffset == 0.5f);
+  assert_true(fabsf(s.textures[0].img.rgb[0] - 1.f) < 1e-3f && s.textures[0].img.rgb[3] < 1e-3f);
+  assert_int_equal(s.materials[0].reflectance.tex, 0);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* Mutated copies of the full scene never crash (run under -DPCBPT_SANITIZE=ON as well). */
 static void test_mutations(void **state) {
   (void)state;
@@ -536,7 +568,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
-      cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_mutations),
+      cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
+      cmocka_unit_test(test_mutations),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,29 @@
+/* wire_film.h: a film's sums and counts as bytes (uploads and checkpoints) and the zstd
+ * compression that wraps them. Decoding is into a film the receiver already shaped from the
+ * job's settings, so a wrong resolution, a different layer set or a non-finite sum is refused
+ * before anything is added. */
+#ifndef PC_WIRE_FILM_H
+#define PC_WIRE_FILM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "film.h"
+
+/* Upper bound on a serialized film (and so on what a decompressor may produce). */
+#define PC_WIRE_FILM_MAX ((size_t)1 << 34)
+
+size_t pc_wire_film_size(const pc_film *f);
+/* Serializes f into a malloc'd buffer (little-endian, layer by layer). */
+int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
+/* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
+ * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error. */
+int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
+
+/* zstd one-shot compression into a malloc'd buffer. */
+int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);
+/* Decompresses a zstd frame whose content size must be exactly `expect` (<= limit). */
+int pc_wire_decompress(const uint8_t *in, size_t n, size_t expect, size_t limit, uint8_t **out, pc_err *e);
+
+#endif

@@ -1,0 +1,50 @@
+/* wire_settings.c: pc_render_settings <-> proto Settings. */
+#include "wire_settings.h"
+
+void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out) {
+  pcbpt__settings__init(out);
+  out->method = (char *)pc_method_name(s->method);
+  out->width = (uint32_t)s->width;
+  out->height = (uint32_t)s->height;
+  out->max_depth = s->max_depth;
+  out->seed = s->seed;
+  out->light_paths = s->light_paths;
+  out->mis_heuristic = (uint32_t)s->mis_heuristic;
+  out->strategy_layers = (uint32_t)s->strategy_layers;
+  out->pcbpt_m = (uint32_t)s->pcbpt_m;
+  out->pcbpt_k = (uint32_t)s->pcbpt_k;
+  out->cache_fraction = s->cache_fraction;
+  out->knn = (uint32_t)s->knn;
+  out->uniform_mix = s->uniform_mix;
+  out->mis_mode = (uint32_t)s->mis_mode;
+  out->pmf_mode = (uint32_t)s->pmf_mode;
+}
+
+int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *out, pc_err *e) {
+  pc_render_settings s;
+  pc_render_settings_default(&s);
+  if (!p) return pc_errf(e, PC_EINVAL, "settings: missing");
+  if (pc_method_parse(p->method, &s.method) != 0) return pc_errf(e, PC_EINVAL, "settings: unknown method '%.32s'", p->method);
+  if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
+      p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
+      p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT)
+    return pc_errf(e, PC_EINVAL, "settings: a value is out of range (size %ux%u)", p->width, p->height);
+  s.width = (int)p->width;
+  s.height = (int)p->height;
+  s.max_depth = p->max_depth;
+  s.seed = p->seed;
+  s.light_paths = p->light_paths;
+  s.mis_heuristic = (pc_mis_heuristic)p->mis_heuristic;
+  s.strategy_layers = (int)p->strategy_layers;
+  s.pcbpt_m = (int)p->pcbpt_m;
+  s.pcbpt_k = (int)p->pcbpt_k;
+  s.cache_fraction = p->cache_fraction;
+  s.knn = (int)p->knn;
+  s.uniform_mix = p->uniform_mix;
+  s.mis_mode = (pc_mis_mode)p->mis_mode;
+  s.pmf_mode = (pc_pmf_mode)p->pmf_mode;
+  int rc = pc_render_settings_check(&s, e);
+  if (rc) return rc;
+  *out = s;
+  return 0;
+}

@@ -1,0 +1,132 @@
+/* client.c: blocking client connections (submit, status, wait, cancel, fetch ...). */
+#include "client.h"
+
+#include <errno.h>
+#include <netdb.h>
+#include <poll.h>
+#include <sodium.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "auth.h"
+#include "wire_conn.h"
+
+int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e) {
+  uint8_t *buf;
+  size_t n;
+  int rc = pc_wire_encode(env, &buf, &n, e);
+  if (rc) return rc;
+  size_t off = 0;
+  while (off < n) {
+    ssize_t w = send(cl->fd, buf + off, n - off, MSG_NOSIGNAL);
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) { free(buf); return pc_errf(e, PC_EIO, "send: %s", strerror(errno)); }
+    off += (size_t)w;
+  }
+  free(buf);
+  return 0;
+}
+
+int pc_client_recv(pc_client *cl, double timeout_s, Pcbpt__Envelope **out, pc_err *e) {
+  uint8_t buf[65536];
+  for (;;) {
+    struct pollfd pfd = {.fd = cl->fd, .events = POLLIN};
+    int pr = poll(&pfd, 1, (int)(timeout_s * 1000));
+    if (pr < 0 && errno == EINTR) continue;
+    if (pr < 0) return pc_errf(e, PC_EIO, "poll: %s", strerror(errno));
+    if (pr == 0) return pc_errf(e, PC_EIO, "no answer from the coordinator within %.0f s", timeout_s);
+    /* read at most up to the end of the current frame so no bytes are lost between calls */
+    size_t want = 4 - (cl->dec.hdr_have < 4 ? cl->dec.hdr_have : 4);
+    if (cl->dec.hdr_have == 4) want = cl->dec.len - cl->dec.have;
+    if (want > sizeof buf) want = sizeof buf;
+    ssize_t r = recv(cl->fd, buf, want ? want : 1, 0);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) return pc_errf(e, PC_EIO, "recv: %s", strerror(errno));
+    if (r == 0) return pc_errf(e, PC_EIO, "the coordinator closed the connection");
+    size_t used;
+    int d = pc_wire_decoder_push(&cl->dec, buf, (size_t)r, &used, out, e);
+    if (d < 0) return d;
+    if (d == 1) {
+      if ((*out)->msg_case == PCBPT__ENVELOPE__MSG_ERROR) {
+        int rc = pc_errf(e, PC_EINVAL, "coordinator: %s", (*out)->error->reason);
+        pcbpt__envelope__free_unpacked(*out, NULL);
+        *out = NULL;
+        return rc;
+      }
+      return 0;
+    }
+  }
+}
+
+void pc_client_close(pc_client *cl) {
+  if (cl->fd >= 0) close(cl->fd);
+  cl->fd = -1;
+  pc_wire_decoder_free(&cl->dec);
+}
+
+int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e) {
+  char host[256], portstr[16];
+  int port;
+  uint8_t key[PC_AUTH_KEY];
+  cl->fd = -1;
+  pc_wire_decoder_init(&cl->dec, 0);
+  if (pc_wire_parse_hostport(hostport, host, sizeof host, &port, 7878) != 0) return pc_errf(e, PC_EINVAL, "--host: expected HOST[:PORT], got '%s'", hostport);
+  int rc = pc_auth_init(e);
+  if (!rc) rc = pc_auth_load_token(token_file, key, e);
+  if (rc) return rc;
+  snprintf(portstr, sizeof portstr, "%d", port);
+  struct addrinfo hints = {.ai_socktype = SOCK_STREAM}, *ai = NULL;
+  int g = getaddrinfo(host, portstr, &hints, &ai);
+  if (g != 0) return pc_errf(e, PC_EIO, "%s: %s", host, gai_strerror(g));
+  for (struct addrinfo *a = ai; a; a = a->ai_next) {
+    int fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+    if (fd < 0) continue;
+    if (connect(fd, a->ai_addr, a->ai_addrlen) == 0) { cl->fd = fd; break; }
+    close(fd);
+  }
+  freeaddrinfo(ai);
+  if (cl->fd < 0) return pc_errf(e, PC_EIO, "cannot connect to %s:%d: %s", host, port, strerror(errno));
+  uint8_t cn[PC_AUTH_NONCE], mac[PC_AUTH_MAC];
+  pc_auth_nonce(cn);
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Hello h = PCBPT__HELLO__INIT;
+  h.protocol_version = PC_WIRE_PROTOCOL_VERSION;
+  h.role = PCBPT__ROLE__ROLE_CLIENT;
+  h.name = "client";
+  h.client_nonce.data = cn;
+  h.client_nonce.len = PC_AUTH_NONCE;
+  env.msg_case = PCBPT__ENVELOPE__MSG_HELLO;
+  env.hello = &h;
+  Pcbpt__Envelope *in = NULL;
+  if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 30, &in, e)) != 0) goto fail;
+  if (in->msg_case != PCBPT__ENVELOPE__MSG_CHALLENGE || in->challenge->nonce.len != PC_AUTH_NONCE ||
+      !pc_auth_verify(key, true, cn, in->challenge->nonce.data, in->challenge->server_mac.data, in->challenge->server_mac.len)) {
+    rc = pc_errf(e, PC_EINVAL, "the coordinator at %s did not prove it knows the token", hostport);
+    goto fail;
+  }
+  if ((rc = pc_auth_mac(key, false, in->challenge->nonce.data, cn, mac)) != 0) goto fail;
+  pcbpt__envelope__free_unpacked(in, NULL);
+  in = NULL;
+  Pcbpt__AuthResponse ar = PCBPT__AUTH_RESPONSE__INIT;
+  ar.mac.data = mac;
+  ar.mac.len = PC_AUTH_MAC;
+  env.msg_case = PCBPT__ENVELOPE__MSG_AUTH_RESPONSE;
+  env.auth_response = &ar;
+  if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 30, &in, e)) != 0) goto fail;
+  if (in->msg_case != PCBPT__ENVELOPE__MSG_AUTH_RESULT || !in->auth_result->ok) {
+    rc = pc_errf(e, PC_EINVAL, "authentication refused: %s",
+                 in->msg_case == PCBPT__ENVELOPE__MSG_AUTH_RESULT ? in->auth_result->reason : "unexpected reply");
+    goto fail;
+  }
+  pcbpt__envelope__free_unpacked(in, NULL);
+  sodium_memzero(key, sizeof key);
+  return 0;
+fail:
+  if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  sodium_memzero(key, sizeof key);
+  pc_client_close(cl);
+  return rc;
+}

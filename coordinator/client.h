@@ -1,0 +1,21 @@
+/* client.h: a blocking, authenticated connection from a client verb to a coordinator. */
+#ifndef PC_CLIENT_H
+#define PC_CLIENT_H
+
+#include "error.h"
+#include "wire_frame.h"
+
+typedef struct pc_client {
+  int fd;
+  pc_wire_decoder dec;
+} pc_client;
+
+/* Connects to "HOST[:PORT]", says hello as a client and completes the challenge/response,
+ * checking the coordinator's proof too. */
+int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e);
+int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e);
+/* Waits up to timeout_s for the next frame; an Error frame becomes PC_EINVAL with its reason. */
+int pc_client_recv(pc_client *cl, double timeout_s, Pcbpt__Envelope **out, pc_err *e);
+void pc_client_close(pc_client *cl);
+
+#endif

@@ -1,0 +1,347 @@
+/* cmd_client.c: the client verbs of pcbpt-coord: submit, status, list, workers, wait, cancel,
+ * fetch. Human-readable output by default, --json for scripts. The coordinator is --host
+ * (or $PCBPT_HOST, default 127.0.0.1:7878), the secret --token-file (or $PCBPT_TOKEN_FILE). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bundle.h"
+#include "client.h"
+#include "render_flags.h"
+#include "scene.h"
+#include "verbs.h"
+#include "wire_settings.h"
+
+typedef struct common_opts {
+  const char *host, *token;
+  bool json;
+  const char *out;
+  const char *name;
+  long long priority;
+} common_opts;
+
+/* Consumes the flags every client verb shares; returns 1 if argv[*i] was one, <0 on error. */
+static int common_flag(common_opts *o, int argc, char **argv, int *i) {
+  const char *a = argv[*i];
+  const char **dst = strcmp(a, "--host") == 0 ? &o->host : strcmp(a, "--token-file") == 0 ? &o->token
+                   : strcmp(a, "--out") == 0 ? &o->out : strcmp(a, "--name") == 0 ? &o->name : NULL;
+  if (strcmp(a, "--json") == 0) { o->json = true; return 1; }
+  if (strcmp(a, "--priority") == 0) {
+    if (*i + 1 >= argc || !pc_parse_i64(argv[*i + 1], -1000, 1000, &o->priority)) return -1;
+    (*i)++;
+    return 1;
+  }
+  if (!dst) return 0;
+  if (*i + 1 >= argc) return -1;
+  *dst = argv[++*i];
+  return 1;
+}
+
+static void opts_default(common_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->host = getenv("PCBPT_HOST") ? getenv("PCBPT_HOST") : "127.0.0.1:7878";
+  o->token = getenv("PCBPT_TOKEN_FILE");
+}
+
+static int connect_or_say(const char *verb, const common_opts *o, pc_client *cl) {
+  pc_err e = {0};
+  if (!o->token) { fprintf(stderr, "pcbpt-coord %s: --token-file (or PCBPT_TOKEN_FILE) is required\n", verb); return 2; }
+  if (pc_client_connect(o->host, o->token, cl, &e) != 0) { fprintf(stderr, "pcbpt-coord %s: %s\n", verb, e.msg); return 1; }
+  return 0;
+}
+
+static int parse_job_id(const char *s, uint64_t *id) { return pc_parse_u64(s, 1, UINT64_MAX, id) ? 0 : -1; }
+
+int pc_cmd_submit(int argc, char **argv) {
+  common_opts o;
+  opts_default(&o);
+  pc_render_request req;
+  pc_render_request_default(&req);
+  const char *scene_path = NULL;
+  pc_err e = {0};
+  for (int i = 0; i < argc; i++) {
+    int r = pc_render_flag_parse(&req, argc, argv, &i, &e);
+    if (r < 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 2; }
+    if (r > 0) continue;
+    if ((r = common_flag(&o, argc, argv, &i)) < 0) { fprintf(stderr, "pcbpt-coord submit: %s: bad value\n", argv[i]); return 2; }
+    if (r > 0) continue;
+    if (strcmp(argv[i], "--help") == 0) {
+      printf("usage: pcbpt-coord submit SCENE.xml [render flags] --host H:P --token-file F [--name N] [--priority P] [--json]\n%s",
+             pc_render_flags_help);
+      return 0;
+    }
+    if (argv[i][0] == '-' || scene_path) { fprintf(stderr, "pcbpt-coord submit: unexpected argument '%s'\n", argv[i]); return 2; }
+    scene_path = argv[i];
+  }
+  if (!scene_path) { fprintf(stderr, "pcbpt-coord submit: missing SCENE.xml\n"); return 2; }
+  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
+  /* the scene supplies what the flags left open, so every worker gets complete settings */
+  pc_scene scene = {0};
+  if (pc_scene_load(scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  pc_render_request_apply_scene(&req, &scene);
+  pc_scene_free(&scene);
+  if (pc_render_settings_check(&req.set, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 2; }
+  uint8_t *blob, hash[PC_BUNDLE_HASH];
+  size_t n;
+  if (pc_bundle_create(scene_path, &blob, &n, hash, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  pc_client cl;
+  int rc = connect_or_say("submit", &o, &cl);
+  if (rc) { free(blob); return rc; }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__BundleChunk bc = PCBPT__BUNDLE_CHUNK__INIT;
+  bc.hash.data = hash;
+  bc.hash.len = PC_BUNDLE_HASH;
+  bc.total = n;
+  env.msg_case = PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK;
+  env.bundle_chunk = &bc;
+  for (size_t off = 0; off < n && !rc; off += PC_WIRE_CHUNK) {
+    bc.offset = off;
+    bc.data.data = blob + off;
+    bc.data.len = n - off < PC_WIRE_CHUNK ? n - off : PC_WIRE_CHUNK;
+    rc = pc_client_send(&cl, &env, &e);
+  }
+  free(blob);
+  Pcbpt__Settings ps;
+  pc_wire_settings_to_proto(&req.set, &ps);
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  const char *base = strrchr(scene_path, '/');
+  sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);
+  sub.bundle_hash.data = hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = req.spp;
+  sub.halt_seconds = req.seconds;
+  sub.priority = (int32_t)o.priority;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = &sub;
+  Pcbpt__Envelope *in = NULL;
+  if (!rc) rc = pc_client_send(&cl, &env, &e);
+  if (!rc) rc = pc_client_recv(&cl, 60, &in, &e);
+  pc_client_close(&cl);
+  if (rc || in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) {
+    fprintf(stderr, "pcbpt-coord submit: %s\n", rc ? e.msg : "unexpected reply");
+    if (in) pcbpt__envelope__free_unpacked(in, NULL);
+    return 1;
+  }
+  if (o.json) printf("{\"job\": %llu}\n", (unsigned long long)in->submit_reply->job_id);
+  else printf("%llu\n", (unsigned long long)in->submit_reply->job_id);
+  pcbpt__envelope__free_unpacked(in, NULL);
+  return 0;
+}
+
+static int query(pc_client *cl, uint64_t job, Pcbpt__Envelope **in, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;
+  sr.job_id = job;
+  env.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REQUEST;
+  env.status_request = &sr;
+  int rc = pc_client_send(cl, &env, e);
+  if (!rc) rc = pc_client_recv(cl, 30, in, e);
+  if (!rc && (*in)->msg_case != PCBPT__ENVELOPE__MSG_STATUS_REPLY) {
+    pcbpt__envelope__free_unpacked(*in, NULL);
+    return pc_errf(e, PC_EPARSE, "unexpected reply");
+  }
+  return rc;
+}
+
+static void json_str(const char *s) {
+  putchar('"');
+  for (; *s; s++) {
+    if (*s == '"' || *s == '\\') printf("\\%c", *s);
+    else if ((unsigned char)*s < 0x20) printf("\\u%04x", *s);
+    else putchar(*s);
+  }
+  putchar('"');
+}
+
+static void print_job(const Pcbpt__JobStatus *j, bool json) {
+  if (json) {
+    printf("{\"job\": %llu, \"name\": ", (unsigned long long)j->job_id);
+    json_str(j->name);
+    printf(", \"state\": \"%s\", \"method\": \"%s\", \"iterations\": %llu, \"halt_iterations\": %llu, "
+           "\"halt_seconds\": %.3f, \"elapsed\": %.3f, \"iterations_per_second\": %.3f, \"eta_seconds\": %.3f, "
+           "\"workers\": %u, \"error\": ",
+           j->state, j->method, (unsigned long long)j->iterations_done, (unsigned long long)j->halt_iterations,
+           j->halt_seconds, j->elapsed, j->iterations_per_second, j->eta_seconds, j->workers);
+    json_str(j->error);
+    printf(", \"image\": ");
+    json_str(j->image);
+    printf("}");
+    return;
+  }
+  printf("%-6llu %-10s %-6s %8llu/%-8llu %6.1fs %8.2f it/s  eta %6.1fs  %u workers  %s%s%s\n",
+         (unsigned long long)j->job_id, j->state, j->method, (unsigned long long)j->iterations_done,
+         (unsigned long long)j->halt_iterations, j->elapsed, j->iterations_per_second, j->eta_seconds, j->workers, j->name,
+         *j->error ? "  error: " : "", j->error);
+}
+
+static int status_like(const char *verb, int argc, char **argv, bool workers) {
+  common_opts o;
+  opts_default(&o);
+  uint64_t job = 0;
+  for (int i = 0; i < argc; i++) {
+    int r = common_flag(&o, argc, argv, &i);
+    if (r < 0) { fprintf(stderr, "pcbpt-coord %s: %s: bad value\n", verb, argv[i]); return 2; }
+    if (r > 0) continue;
+    if (workers || parse_job_id(argv[i], &job) != 0) { fprintf(stderr, "pcbpt-coord %s: unexpected argument '%s'\n", verb, argv[i]); return 2; }
+  }
+  pc_client cl;
+  int rc = connect_or_say(verb, &o, &cl);
+  if (rc) return rc;
+  pc_err e;
+  Pcbpt__Envelope *in = NULL;
+  rc = query(&cl, job, &in, &e);
+  pc_client_close(&cl);
+  if (rc) { fprintf(stderr, "pcbpt-coord %s: %s\n", verb, e.msg); return 1; }
+  Pcbpt__StatusReply *s = in->status_reply;
+  if (job && s->n_jobs == 0) {
+    fprintf(stderr, "pcbpt-coord %s: no job %llu\n", verb, (unsigned long long)job);
+    pcbpt__envelope__free_unpacked(in, NULL);
+    return 1;
+  }
+  if (workers) {
+    if (o.json) printf("[");
+    for (size_t i = 0; i < s->n_workers; i++) {
+      Pcbpt__WorkerStatus *w = s->workers[i];
+      if (o.json) {
+        printf("%s{\"name\": ", i ? ", " : "");
+        json_str(w->name);
+        printf(", \"address\": \"%s\", \"threads\": %u, \"iterations_per_second\": %.3f, \"job\": %llu, \"range\": %llu}",
+               w->address, w->threads, w->iterations_per_second, (unsigned long long)w->job_id, (unsigned long long)w->range_id);
+      } else {
+        printf("%-20s %-22s %3u threads %8.2f it/s  job %llu range %llu\n", w->name, w->address, w->threads,
+               w->iterations_per_second, (unsigned long long)w->job_id, (unsigned long long)w->range_id);
+      }
+    }
+    if (o.json) printf("]\n");
+  } else {
+    if (o.json && !job) printf("[");
+    for (size_t i = 0; i < s->n_jobs; i++) {
+      if (o.json && i) printf(", ");
+      print_job(s->jobs[i], o.json);
+    }
+    if (o.json) printf(job ? "\n" : "]\n");
+  }
+  pcbpt__envelope__free_unpacked(in, NULL);
+  return 0;
+}
+
+int pc_cmd_status(int argc, char **argv) { return status_like("status", argc, argv, false); }
+int pc_cmd_list(int argc, char **argv) { return status_like("list", argc, argv, false); }
+int pc_cmd_workers(int argc, char **argv) { return status_like("workers", argc, argv, true); }
+
+static int one_job_args(const char *verb, int argc, char **argv, common_opts *o, uint64_t *job) {
+  opts_default(o);
+  *job = 0;
+  for (int i = 0; i < argc; i++) {
+    int r = common_flag(o, argc, argv, &i);
+    if (r < 0) { fprintf(stderr, "pcbpt-coord %s: %s: bad value\n", verb, argv[i]); return 2; }
+    if (r > 0) continue;
+    if (*job || parse_job_id(argv[i], job) != 0) { fprintf(stderr, "pcbpt-coord %s: unexpected argument '%s'\n", verb, argv[i]); return 2; }
+  }
+  if (!*job) { fprintf(stderr, "pcbpt-coord %s: missing JOB id\n", verb); return 2; }
+  return 0;
+}
+
+int pc_cmd_wait(int argc, char **argv) {
+  common_opts o;
+  uint64_t job;
+  int rc = one_job_args("wait", argc, argv, &o, &job);
+  if (rc) return rc;
+  pc_client cl;
+  if ((rc = connect_or_say("wait", &o, &cl)) != 0) return rc;
+  bool tty = isatty(2);
+  for (;;) {
+    pc_err e;
+    Pcbpt__Envelope *in = NULL;
+    if (query(&cl, job, &in, &e) != 0) { fprintf(stderr, "pcbpt-coord wait: %s\n", e.msg); pc_client_close(&cl); return 1; }
+    if (in->status_reply->n_jobs != 1) {
+      fprintf(stderr, "pcbpt-coord wait: no job %llu\n", (unsigned long long)job);
+      pcbpt__envelope__free_unpacked(in, NULL);
+      pc_client_close(&cl);
+      return 1;
+    }
+    Pcbpt__JobStatus *j = in->status_reply->jobs[0];
+    const char *st = j->state;
+    if (strcmp(st, "done") == 0 || strcmp(st, "failed") == 0 || strcmp(st, "cancelled") == 0) {
+      if (tty) fprintf(stderr, "\n");
+      print_job(j, o.json);
+      if (o.json) printf("\n");
+      rc = strcmp(st, "done") == 0 ? 0 : 1;
+      pcbpt__envelope__free_unpacked(in, NULL);
+      pc_client_close(&cl);
+      return rc;
+    }
+    fprintf(stderr, "%sjob %llu %s: %llu iterations, %.1f it/s, %u workers, eta %.0f s%s", tty ? "\r" : "",
+            (unsigned long long)job, st, (unsigned long long)j->iterations_done, j->iterations_per_second, j->workers,
+            j->eta_seconds, tty ? "   " : "\n");
+    pcbpt__envelope__free_unpacked(in, NULL);
+    struct timespec ts = {0, 500000000};
+    nanosleep(&ts, NULL);
+  }
+}
+
+int pc_cmd_cancel(int argc, char **argv) {
+  common_opts o;
+  uint64_t job;
+  int rc = one_job_args("cancel", argc, argv, &o, &job);
+  if (rc) return rc;
+  pc_client cl;
+  if ((rc = connect_or_say("cancel", &o, &cl)) != 0) return rc;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  Pcbpt__CancelRequest cr = PCBPT__CANCEL_REQUEST__INIT;
+  cr.job_id = job;
+  env.msg_case = PCBPT__ENVELOPE__MSG_CANCEL_REQUEST;
+  env.cancel_request = &cr;
+  pc_err e;
+  rc = pc_client_send(&cl, &env, &e);
+  if (!rc) rc = pc_client_recv(&cl, 30, &in, &e);
+  pc_client_close(&cl);
+  if (rc) { fprintf(stderr, "pcbpt-coord cancel: %s\n", e.msg); return 1; }
+  if (in->msg_case == PCBPT__ENVELOPE__MSG_STATUS_REPLY && in->status_reply->n_jobs == 1) print_job(in->status_reply->jobs[0], o.json);
+  if (o.json) printf("\n");
+  pcbpt__envelope__free_unpacked(in, NULL);
+  return 0;
+}
+
+int pc_cmd_fetch(int argc, char **argv) {
+  common_opts o;
+  uint64_t job;
+  int rc = one_job_args("fetch", argc, argv, &o, &job);
+  if (rc) return rc;
+  if (!o.out) { fprintf(stderr, "pcbpt-coord fetch: --out F.exr is required\n"); return 2; }
+  pc_client cl;
+  if ((rc = connect_or_say("fetch", &o, &cl)) != 0) return rc;
+  char tmp[4096];
+  snprintf(tmp, sizeof tmp, "%s.part.%ld", o.out, (long)getpid());
+  FILE *f = fopen(tmp, "wb");
+  if (!f) { fprintf(stderr, "pcbpt-coord fetch: %s: cannot create\n", tmp); pc_client_close(&cl); return 1; }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  Pcbpt__FetchRequest fr = PCBPT__FETCH_REQUEST__INIT;
+  fr.job_id = job;
+  env.msg_case = PCBPT__ENVELOPE__MSG_FETCH_REQUEST;
+  env.fetch_request = &fr;
+  pc_err e = {0};
+  uint64_t got = 0, total = 1;
+  rc = pc_client_send(&cl, &env, &e);
+  while (!rc && got < total) {
+    if ((rc = pc_client_recv(&cl, 60, &in, &e)) != 0) break;
+    if (in->msg_case != PCBPT__ENVELOPE__MSG_FETCH_CHUNK || in->fetch_chunk->offset != got) rc = pc_errf(&e, PC_EPARSE, "unexpected reply");
+    else {
+      total = in->fetch_chunk->total;
+      if (fwrite(in->fetch_chunk->data.data, 1, in->fetch_chunk->data.len, f) != in->fetch_chunk->data.len) rc = pc_errf(&e, PC_EIO, "%s: write failed", tmp);
+      got += in->fetch_chunk->data.len;
+    }
+    pcbpt__envelope__free_unpacked(in, NULL);
+  }
+  pc_client_close(&cl);
+  if (fclose(f) != 0 && !rc) rc = pc_errf(&e, PC_EIO, "%s: write failed", tmp);
+  if (!rc && rename(tmp, o.out) != 0) rc = pc_errf(&e, PC_EIO, "%s: cannot rename into place", o.out);
+  if (rc) { unlink(tmp); fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg); return 1; }
+  if (o.json) printf("{\"job\": %llu, \"out\": \"%s\", \"bytes\": %llu}\n", (unsigned long long)job, o.out, (unsigned long long)got);
+  else printf("%s\n", o.out);
+  return 0;
+}

@@ -1,0 +1,154 @@
+/* coord.h: the coordinator's in-memory state (`pcbpt-coord serve`): jobs with their open
+ * iteration ranges and merged film, connected peers, and the store. Everything here is owned
+ * by the loop thread; a job's film is touched by at most one background operation at a time
+ * (the job's op queue), never concurrently with the loop. */
+#ifndef PC_COORD_H
+#define PC_COORD_H
+
+#include <sqlite3.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "auth.h"
+#include "bundle.h"
+#include "film.h"
+#include "render.h"
+#include "wire_conn.h"
+
+typedef enum { PC_JOB_QUEUED, PC_JOB_RUNNING, PC_JOB_STOPPING, PC_JOB_DONE, PC_JOB_FAILED, PC_JOB_CANCELLED } pc_job_state;
+
+typedef struct pc_peer pc_peer;
+typedef struct pc_coord pc_coord;
+typedef struct pc_op pc_op;
+
+/* Iterations [first, first+count) of a job handed to one worker. `acked` iterations from
+ * first are committed (checkpoint + store); `merged` >= acked are in the film in memory. */
+typedef struct pc_range {
+  uint64_t id, first, count, acked, merged;
+  pc_peer *owner;
+  double orphan_since;  /* when the owner went away; 0 while owned */
+  bool merging;         /* an upload for it is being merged */
+  bool final;           /* the owner sent its last upload: close at merged on commit */
+  struct pc_range *next;
+} pc_range;
+
+/* An acknowledgement waiting for the next commit. */
+typedef struct pc_pending_ack {
+  pc_peer *peer;
+  uint64_t range_id, acked_end;
+  struct pc_pending_ack *next;
+} pc_pending_ack;
+
+typedef struct pc_job {
+  uint64_t id;
+  char name[128];
+  uint8_t bundle[PC_BUNDLE_HASH];
+  uint8_t *settings_blob; size_t settings_len;  /* packed proto Settings, as stored */
+  pc_render_settings set;
+  uint64_t halt_iterations;  /* 0: none */
+  double halt_seconds;       /* 0: none */
+  int priority;
+  pc_job_state state;
+  uint64_t next_iter, done, ckpt_gen;
+  int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
+  double elapsed, stopping_since, last_exr;
+  char error[256];
+  bool film_ready;
+  pc_film film;
+  pc_range *ranges;          /* open ranges */
+  bool busy;                 /* a background op runs on the film */
+  pc_op *ops, *ops_tail;
+  pc_pending_ack *acks;      /* merged, waiting for a commit */
+  bool dirty;                /* merged > acked somewhere */
+  bool finishing;            /* the final image is being written */
+  struct pc_job *next;
+} pc_job;
+
+/* Bytes being streamed from a file to a peer in bulk chunks (a bundle or a fetched image). */
+typedef struct pc_stream_out {
+  int fd;
+  uint64_t off, total;
+  bool is_bundle;
+  uint8_t hash[PC_BUNDLE_HASH];
+} pc_stream_out;
+
+struct pc_peer {
+  pc_conn conn;
+  pc_coord *coord;
+  int refs;                  /* background ops holding this peer */
+  bool closed;
+  int role;
+  bool authed, hello_seen;
+  uint8_t nonce[PC_AUTH_NONCE], client_nonce[PC_AUTH_NONCE];
+  char name[64];
+  uint32_t threads;
+  double connected, last_seen, rate;
+  /* upload being assembled */
+  uint8_t *up_buf; size_t up_len, up_cap;
+  uint32_t up_next, up_nchunks;
+  uint64_t up_job, up_range, up_first, up_count, up_raw;
+  bool up_final;
+  /* bundle being received from a client */
+  int bun_fd; char bun_tmp[640]; uint64_t bun_off, bun_total; uint8_t bun_hash[PC_BUNDLE_HASH];
+  pc_stream_out out;
+  struct pc_peer *next;
+};
+
+struct pc_coord {
+  uv_loop_t *loop;
+  uv_tcp_t listener;
+  uv_timer_t tick;
+  uv_signal_t sigint, sigterm;
+  sqlite3 *db;
+  char data_dir[256];
+  uint8_t key[PC_AUTH_KEY];
+  pc_job *jobs;
+  pc_peer *peers;
+  int bound_port;            /* after listen (for --listen HOST:0) */
+  /* tunables */
+  double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;
+};
+
+double pc_coord_now(void);
+const char *pc_job_state_name(pc_job_state s);
+int pc_job_state_parse(const char *s, pc_job_state *out);
+pc_job *pc_coord_job(pc_coord *c, uint64_t id);
+
+/* store.c: the SQLite job store. */
+int pc_store_open(pc_coord *c, pc_err *e);
+void pc_store_close(pc_coord *c);
+int pc_store_begin(pc_coord *c, pc_err *e);
+int pc_store_commit(pc_coord *c, pc_err *e);
+void pc_store_rollback(pc_coord *c);
+int pc_store_insert_job(pc_coord *c, pc_job *j, pc_err *e);
+int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e);
+int pc_store_insert_range(pc_coord *c, uint64_t job, uint64_t first, uint64_t count, uint64_t *id, pc_err *e);
+int pc_store_update_range(pc_coord *c, const pc_range *r, bool open, pc_err *e);
+/* Loads every job (in submission order) and the open ranges of unfinished ones. */
+int pc_store_load(pc_coord *c, pc_err *e);
+
+/* job.c: job lifecycle: films, checkpoints, images, halting. */
+int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
+void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
+void pc_job_cancel(pc_coord *c, pc_job *j);
+void pc_job_tick(pc_coord *c, pc_job *j, double dt);
+void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out, size_t n);
+/* Queues a merge of a received upload (takes buf). */
+void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
+                  uint64_t first, uint64_t count, bool final);
+void pc_job_free(pc_job *j);
+
+/* sched.c: handing out ranges and taking them back. */
+void pc_sched_request(pc_coord *c, pc_peer *p);
+void pc_sched_peer_gone(pc_coord *c, pc_peer *p);
+void pc_sched_tick(pc_coord *c);
+pc_range *pc_sched_find_range(pc_job *j, uint64_t id);
+
+/* serve.c helpers used by the others. */
+void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const char *refused);
+void pc_peer_send_cancel(pc_peer *p, uint64_t job, uint64_t range, bool upload_partial);
+void pc_peer_ref(pc_peer *p);
+void pc_peer_unref(pc_peer *p);
+
+#endif

@@ -1,0 +1,449 @@
+/* job.c: a job's film and its background operations: merging uploads, checkpointing (film to
+ * a file by atomic rename, then range progress to the store in one transaction, then the
+ * acknowledgements), writing the EXR, halting and finishing. The ops of one job run one at a
+ * time on the libuv thread pool, so the film is never touched by two threads at once. */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "coord.h"
+#include "wire_film.h"
+#include "wire_log.h"
+
+typedef struct range_snap { uint64_t id, merged; bool final; } range_snap;
+
+struct pc_op {
+  uv_work_t work;
+  pc_coord *c;
+  pc_job *j;
+  bool is_merge;
+  /* merge */
+  pc_peer *peer;
+  uint64_t range_id, first, count, raw;
+  bool final;
+  uint8_t *buf;
+  size_t len;
+  int64_t light_per_iter;
+  /* checkpoint */
+  uint64_t gen;
+  bool write_exr;
+  range_snap *snap;
+  int nsnap;
+  pc_pending_ack *acks;
+  int rc;
+  pc_err err;
+  pc_op *next;
+};
+
+void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out, size_t n) {
+  /* job names never become paths: only the numeric id does */
+  snprintf(out, n, "%s/jobs/%llu%s%s", c->data_dir, (unsigned long long)j->id, leaf ? "/" : "", leaf ? leaf : "");
+}
+
+static void op_start(pc_job *j);
+
+static void queue_op(pc_job *j, pc_op *op) {
+  op->next = NULL;
+  if (j->ops_tail) j->ops_tail->next = op;
+  else j->ops = op;
+  j->ops_tail = op;
+  if (!j->busy) op_start(j);
+}
+
+static void merge_work(uv_work_t *w) {
+  pc_op *op = w->data;
+  pc_job *j = op->j;
+  pc_film tmp;
+  uint8_t *raw = NULL;
+  size_t want = pc_wire_film_size(&j->film);
+  if (op->raw != want) {
+    op->rc = pc_errf(&op->err, PC_EINVAL, "upload of %llu bytes, a %dx%d film with %d layers is %zu (wrong resolution?)",
+                     (unsigned long long)op->raw, j->film.w, j->film.h, j->film.nlayers, want);
+    return;
+  }
+  if ((op->rc = pc_film_init(&tmp, j->film.w, j->film.h, j->set.strategy_layers, &op->err)) != 0) return;
+  if ((op->rc = pc_wire_decompress(op->buf, op->len, want, want, &raw, &op->err)) != 0) goto done;
+  if ((op->rc = pc_wire_film_unpack(raw, want, &tmp, &op->err)) != 0) goto done;
+  for (int l = 0; l < tmp.nlayers; l++) {
+    uint64_t cnt = tmp.layers[l].count;
+    if (tmp.layers[l].norm == PC_NORM_EYE) {
+      if (cnt != op->count) {
+        op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations",
+                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        goto done;
+      }
+    } else {
+      int64_t per = (int64_t)(cnt / op->count);
+      if (cnt % op->count != 0 || (op->light_per_iter >= 0 && per != op->light_per_iter)) {
+        op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: light layer '%s' counts %llu for %llu iterations",
+                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        goto done;
+      }
+      op->light_per_iter = per;
+    }
+  }
+  op->rc = pc_film_add(&j->film, &tmp, &op->err);
+done:
+  free(raw);
+  pc_film_free(&tmp);
+}
+
+static int write_all(int fd, const uint8_t *d, size_t n) {
+  while (n) {
+    ssize_t w = write(fd, d, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) return -1;
+    d += w;
+    n -= (size_t)w;
+  }
+  return 0;
+}
+
+static void ckpt_work(uv_work_t *w) {
+  pc_op *op = w->data;
+  pc_job *j = op->j;
+  char dir[512], path[600], tmp[640];
+  pc_job_path(op->c, j, NULL, dir, sizeof dir);
+  snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  uint8_t *raw = NULL, *z = NULL;
+  size_t n, zn;
+  if ((op->rc = pc_wire_film_pack(&j->film, &raw, &n, &op->err)) != 0) return;
+  op->rc = pc_wire_compress(raw, n, &z, &zn, &op->err);
+  free(raw);
+  if (op->rc) return;
+  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0 || write_all(fd, z, zn) != 0 || fsync(fd) != 0) {
+    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
+    if (fd >= 0) close(fd);
+    free(z);
+    return;
+  }
+  free(z);
+  if (close(fd) != 0 || rename(tmp, path) != 0) {
+    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
+    return;
+  }
+  int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
+  if (dfd >= 0) close(dfd);
+  if (op->rc || !op->write_exr) return;
+  char img[600], idbuf[32], iters[32];
+  snprintf(img, sizeof img, "%s/image.exr", dir);
+  snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
+  snprintf(iters, sizeof iters, "%llu", (unsigned long long)j->film.layers[0].count);
+  pc_exr_attr attrs[] = {
+    {.name = "pcbpt.job", .type = PC_ATTR_STRING, .s = idbuf},
+    {.name = "pcbpt.method", .type = PC_ATTR_STRING, .s = pc_method_name(j->set.method)},
+    {.name = "pcbpt.iterations", .type = PC_ATTR_STRING, .s = iters},
+    {.name = "pcbpt.seed", .type = PC_ATTR_DOUBLE, .d = (double)j->set.seed},
+    {.name = "pcbpt.elapsed", .type = PC_ATTR_DOUBLE, .d = j->elapsed},
+  };
+  op->rc = pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err);
+}
+
+static void free_range_list_closed(pc_job *j) {
+  pc_range **pp = &j->ranges;
+  while (*pp) {
+    pc_range *r = *pp;
+    if (r->acked == r->count && !r->merging) {
+      *pp = r->next;
+      free(r);
+    } else {
+      pp = &r->next;
+    }
+  }
+}
+
+static void check_finished(pc_coord *c, pc_job *j);
+
+static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
+  pc_err e = {0};
+  int rc = pc_store_begin(c, &e);
+  uint64_t added = 0;
+  for (int i = 0; !rc && i < op->nsnap; i++) {
+    pc_range *r = pc_sched_find_range(j, op->snap[i].id);
+    if (!r) continue;
+    pc_range upd = *r;
+    added += op->snap[i].merged - r->acked;
+    upd.acked = op->snap[i].merged;
+    bool split = op->snap[i].final && upd.acked < upd.count;
+    if (split) {
+      uint64_t id;
+      if (j->state == PC_JOB_RUNNING)
+        rc = pc_store_insert_range(c, j->id, r->first + upd.acked, r->count - upd.acked, &id, &e);
+      if (!rc && j->state == PC_JOB_RUNNING) {
+        pc_range *nr = calloc(1, sizeof *nr);
+        if (!nr) rc = pc_errf(&e, PC_ENOMEM, "out of memory");
+        else {
+          nr->id = id;
+          nr->first = r->first + upd.acked;
+          nr->count = r->count - upd.acked;
+          nr->orphan_since = 1; /* available at once */
+          nr->next = r->next;
+          r->next = nr;
+        }
+      }
+      upd.count = upd.acked;
+    }
+    if (!rc) rc = pc_store_update_range(c, &upd, upd.acked < upd.count, &e);
+    if (!rc) {
+      r->acked = upd.acked;
+      r->count = upd.count;
+      if (upd.acked == upd.count) r->owner = NULL;
+    }
+  }
+  uint64_t old_gen = j->ckpt_gen;
+  j->ckpt_gen = op->gen;
+  j->done += added;
+  if (!rc) rc = pc_store_update_job(c, j, &e);
+  if (!rc) rc = pc_store_commit(c, &e);
+  if (rc) {
+    pc_store_rollback(c);
+    j->ckpt_gen = old_gen;
+    j->done -= added;
+    pc_job_fail(c, j, e.msg);
+    return;
+  }
+  if (old_gen) {
+    char p[600], leaf[40];
+    snprintf(leaf, sizeof leaf, "ckpt.%llu", (unsigned long long)old_gen);
+    pc_job_path(c, j, leaf, p, sizeof p);
+    if (unlink(p) != 0 && errno != ENOENT) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
+  }
+  for (pc_pending_ack *a = op->acks; a; a = a->next)
+    if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, a->acked_end, NULL);
+  free_range_list_closed(j);
+}
+
+static void op_after(uv_work_t *w, int status) {
+  pc_op *op = w->data;
+  pc_coord *c = op->c;
+  pc_job *j = op->j;
+  j->busy = false;
+  if (status != 0 && !op->rc) op->rc = pc_errf(&op->err, PC_EIO, "background work cancelled: %s", uv_strerror(status));
+  if (op->is_merge) {
+    pc_range *r = pc_sched_find_range(j, op->range_id);
+    if (r) r->merging = false;
+    if (op->rc) {
+      pc_wire_log("job %llu: refused upload from %s for range %llu [%llu,+%llu): %s", (unsigned long long)j->id,
+                  op->peer->conn.peer, (unsigned long long)op->range_id, (unsigned long long)op->first,
+                  (unsigned long long)op->count, op->err.msg);
+      if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, op->err.msg);
+      /* the worker drops the range; hand it to someone else at once */
+      if (r && r->owner == op->peer) { r->owner = NULL; r->orphan_since = 1; }
+    } else if (r) {
+      r->merged += op->count;
+      r->final = r->final || op->final;
+      j->light_per_iter = op->light_per_iter;
+      j->dirty = true;
+      pc_pending_ack *a = calloc(1, sizeof *a);
+      if (a) {
+        a->peer = op->peer;
+        pc_peer_ref(op->peer);
+        a->range_id = r->id;
+        a->acked_end = r->first + r->merged;
+        a->next = j->acks;
+        j->acks = a;
+      }
+    }
+    pc_peer_unref(op->peer);
+    free(op->buf);
+  } else {
+    if (op->rc) pc_job_fail(c, j, op->err.msg);
+    else {
+      if (op->write_exr) j->last_exr = pc_coord_now();
+      commit_ckpt(c, j, op);
+    }
+    while (op->acks) {
+      pc_pending_ack *a = op->acks;
+      op->acks = a->next;
+      pc_peer_unref(a->peer);
+      free(a);
+    }
+    free(op->snap);
+    if (j->finishing && !op->rc && j->state != PC_JOB_FAILED) {
+      j->finishing = false;
+      j->state = PC_JOB_DONE;
+      pc_err e;
+      if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+      pc_wire_log("job %llu: done, %llu iterations", (unsigned long long)j->id, (unsigned long long)j->done);
+    }
+  }
+  free(op);
+  if (j->ops) op_start(j);
+  else if (!j->finishing) check_finished(c, j);
+  if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
+      j->film_ready) {
+    pc_film_free(&j->film);
+    j->film_ready = false;
+  }
+}
+
+static void op_start(pc_job *j) {
+  pc_op *op = j->ops;
+  j->ops = op->next;
+  if (!j->ops) j->ops_tail = NULL;
+  j->busy = true;
+  op->work.data = op;
+  if (op->is_merge) op->light_per_iter = j->light_per_iter;
+  int r = uv_queue_work(op->c->loop, &op->work, op->is_merge ? merge_work : ckpt_work, op_after);
+  if (r) {
+    op->rc = pc_errf(&op->err, PC_EIO, "uv_queue_work: %s", uv_strerror(r));
+    op_after(&op->work, 0);
+  }
+}
+
+void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
+                  uint64_t first, uint64_t count, bool final) {
+  pc_op *op = calloc(1, sizeof *op);
+  if (!op) { free(buf); pc_peer_send_ack(p, r->id, 0, "coordinator out of memory"); return; }
+  op->c = c;
+  op->j = j;
+  op->is_merge = true;
+  op->peer = p;
+  pc_peer_ref(p);
+  op->range_id = r->id;
+  op->first = first;
+  op->count = count;
+  op->final = final;
+  op->buf = buf;
+  op->len = len;
+  op->raw = raw;
+  r->merging = true;
+  queue_op(j, op);
+}
+
+/* Snapshots range progress and pending acks, and queues a checkpoint. */
+static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
+  pc_op *op = calloc(1, sizeof *op);
+  int n = 0;
+  for (pc_range *r = j->ranges; r; r = r->next) n++;
+  if (op) op->snap = calloc((size_t)n + 1, sizeof *op->snap);
+  if (!op || !op->snap) { free(op); pc_wire_log("job %llu: out of memory for a checkpoint", (unsigned long long)j->id); return; }
+  op->c = c;
+  op->j = j;
+  op->gen = j->ckpt_gen + 1;
+  op->write_exr = exr;
+  for (pc_range *r = j->ranges; r; r = r->next) {
+    if (r->merged == r->acked && !r->final) continue;
+    op->snap[op->nsnap].id = r->id;
+    op->snap[op->nsnap].merged = r->merged;
+    op->snap[op->nsnap].final = r->final;
+    op->nsnap++;
+  }
+  op->acks = j->acks;
+  j->acks = NULL;
+  j->dirty = false;
+  queue_op(j, op);
+}
+
+static void check_finished(pc_coord *c, pc_job *j) {
+  if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) return;
+  if (j->busy || j->ops || j->dirty || j->finishing) return;
+  bool halted = j->state == PC_JOB_STOPPING || (j->halt_iterations && j->next_iter >= j->halt_iterations);
+  if (!halted || j->ranges) return;
+  j->finishing = true;
+  queue_ckpt(c, j, true);
+}
+
+int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
+  if (j->film_ready) return 0;
+  char dir[512];
+  snprintf(dir, sizeof dir, "%s/jobs", c->data_dir);
+  if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
+  pc_job_path(c, j, NULL, dir, sizeof dir);
+  if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
+  int rc = pc_film_init(&j->film, j->set.width, j->set.height, j->set.strategy_layers, e);
+  if (rc) return rc;
+  if (j->ckpt_gen) {
+    char path[600], leaf[40];
+    snprintf(leaf, sizeof leaf, "ckpt.%llu", (unsigned long long)j->ckpt_gen);
+    pc_job_path(c, j, leaf, path, sizeof path);
+    FILE *f = fopen(path, "rb");
+    uint8_t *z = NULL, *raw = NULL;
+    long zn = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0) zn = ftell(f);
+    if (f && zn > 0 && fseek(f, 0, SEEK_SET) == 0 && (z = malloc((size_t)zn)) && fread(z, 1, (size_t)zn, f) == (size_t)zn) {
+      size_t want = pc_wire_film_size(&j->film);
+      rc = pc_wire_decompress(z, (size_t)zn, want, want, &raw, e);
+      if (!rc) rc = pc_wire_film_unpack(raw, want, &j->film, e);
+    } else {
+      rc = pc_errf(e, PC_EIO, "%s: cannot read checkpoint: %s", path, strerror(errno));
+    }
+    if (f) fclose(f);
+    free(z);
+    free(raw);
+    if (rc) { pc_film_free(&j->film); return rc; }
+  }
+  j->film_ready = true;
+  if (j->state == PC_JOB_QUEUED) {
+    j->state = PC_JOB_RUNNING;
+    if ((rc = pc_store_update_job(c, j, e)) != 0) return rc;
+  }
+  return 0;
+}
+
+void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
+  pc_wire_log("job %llu: failed: %s", (unsigned long long)j->id, why);
+  snprintf(j->error, sizeof j->error, "%s", why);
+  j->state = PC_JOB_FAILED;
+  j->finishing = false;
+  for (pc_range *r = j->ranges; r; r = r->next)
+    if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
+  pc_err e;
+  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+}
+
+void pc_job_cancel(pc_coord *c, pc_job *j) {
+  if (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) return;
+  for (pc_range *r = j->ranges; r; r = r->next)
+    if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
+  j->state = PC_JOB_CANCELLED;
+  j->finishing = false;
+  pc_err e;
+  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+  pc_wire_log("job %llu: cancelled", (unsigned long long)j->id);
+}
+
+void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
+  if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) return;
+  double now = pc_coord_now();
+  if (j->state == PC_JOB_RUNNING) {
+    j->elapsed += dt;
+    if (j->halt_seconds > 0 && j->elapsed >= j->halt_seconds) {
+      j->state = PC_JOB_STOPPING;
+      j->stopping_since = now;
+      for (pc_range *r = j->ranges; r; r = r->next)
+        if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, r->id, true);
+    }
+  }
+  if (j->state == PC_JOB_STOPPING) {
+    /* ranges nobody will finish are closed at what is merged */
+    bool force = now - j->stopping_since > c->orphan_grace + 10;
+    for (pc_range *r = j->ranges; r; r = r->next)
+      if (!r->merging && (!r->owner || force) && !r->final) { r->final = true; j->dirty = true; }
+  }
+  if (j->dirty && !j->busy && !j->ops) queue_ckpt(c, j, now - j->last_exr >= c->exr_interval);
+  else check_finished(c, j);
+}
+
+void pc_job_free(pc_job *j) {
+  while (j->ranges) {
+    pc_range *r = j->ranges;
+    j->ranges = r->next;
+    free(r);
+  }
+  while (j->acks) {
+    pc_pending_ack *a = j->acks;
+    j->acks = a->next;
+    free(a);
+  }
+  if (j->film_ready) pc_film_free(&j->film);
+  free(j->settings_blob);
+  free(j);
+}

@@ -1,0 +1,147 @@
+/* sched.c: hands out iteration ranges. Orphaned ranges (their worker went away longer than
+ * the grace period ago) go first, split at what is acknowledged so the late uploads of the
+ * old owner can never be counted twice; then fresh iterations, sized to a few seconds of the
+ * asking worker's measured throughput and, for iteration-bounded jobs, to a fair share so
+ * that workers joining late get work at once. Jobs are served by priority, then submission. */
+#include <stdlib.h>
+
+#include "coord.h"
+#include "wire_log.h"
+#include "wire_settings.h"
+
+pc_range *pc_sched_find_range(pc_job *j, uint64_t id) {
+  for (pc_range *r = j->ranges; r; r = r->next)
+    if (r->id == id) return r;
+  return NULL;
+}
+
+static int count_workers(pc_coord *c) {
+  int n = 0;
+  for (pc_peer *p = c->peers; p; p = p->next)
+    if (p->authed && p->role == PCBPT__ROLE__ROLE_WORKER) n++;
+  return n;
+}
+
+static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
+  (void)c;
+  Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
+  if (!s) { pc_job_fail(c, j, "stored settings do not decode"); return; }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Assign a = PCBPT__ASSIGN__INIT;
+  a.job_id = j->id;
+  a.range_id = r->id;
+  a.first = r->first + r->acked;
+  a.count = r->count - r->acked;
+  a.bundle_hash.data = j->bundle;
+  a.bundle_hash.len = PC_BUNDLE_HASH;
+  a.settings = s;
+  env.msg_case = PCBPT__ENVELOPE__MSG_ASSIGN;
+  env.assign = &a;
+  r->owner = p;
+  r->orphan_since = 0;
+  pc_conn_send(&p->conn, &env);
+  pcbpt__settings__free_unpacked(s, NULL);
+  pc_wire_log("job %llu: range %llu [%llu,+%llu) -> %s (%s)", (unsigned long long)j->id, (unsigned long long)r->id,
+              (unsigned long long)a.first, (unsigned long long)a.count, p->name, p->conn.peer);
+}
+
+/* Takes back an orphan: closes it at its acknowledged prefix and opens the rest as a new range. */
+static pc_range *claim_orphan(pc_coord *c, pc_job *j, pc_range *r, pc_err *e) {
+  if (r->acked == 0) return r;
+  uint64_t id;
+  pc_range old = *r;
+  old.count = r->acked;
+  int rc = pc_store_begin(c, e);
+  if (!rc) rc = pc_store_update_range(c, &old, false, e);
+  if (!rc) rc = pc_store_insert_range(c, j->id, r->first + r->acked, r->count - r->acked, &id, e);
+  if (!rc) rc = pc_store_commit(c, e);
+  if (rc) { pc_store_rollback(c); return NULL; }
+  pc_range *nr = calloc(1, sizeof *nr);
+  if (!nr) { pc_errf(e, PC_ENOMEM, "out of memory"); return NULL; }
+  nr->id = id;
+  nr->first = r->first + r->acked;
+  nr->count = r->count - r->acked;
+  nr->next = r->next;
+  r->count = r->acked; /* closed; freed at the next checkpoint sweep */
+  r->next = nr;
+  return nr;
+}
+
+static bool try_job(pc_coord *c, pc_peer *p, pc_job *j, int nworkers) {
+  double now = pc_coord_now();
+  pc_err e = {0};
+  if (!j->film_ready && pc_job_activate(c, j, &e) != 0) { pc_job_fail(c, j, e.msg); return false; }
+  for (pc_range *r = j->ranges; r; r = r->next) {
+    if (r->owner || r->merging || r->final || r->merged != r->acked || r->acked == r->count) continue;
+    if (r->orphan_since == 0 || now - r->orphan_since < c->orphan_grace) continue;
+    pc_range *g = claim_orphan(c, j, r, &e);
+    if (!g) { pc_job_fail(c, j, e.msg); return false; }
+    send_assign(c, p, j, g);
+    return true;
+  }
+  if (j->halt_iterations && j->next_iter >= j->halt_iterations) return false;
+  double want = p->rate > 0 ? p->rate * c->range_seconds : 1;
+  uint64_t n = want < 1 ? 1 : want > 1e6 ? 1000000 : (uint64_t)want;
+  if (j->halt_iterations) {
+    uint64_t left = j->halt_iterations - j->next_iter;
+    uint64_t share = (left + (uint64_t)nworkers - 1) / (uint64_t)nworkers;
+    if (n > share) n = share;
+    if (n > left) n = left;
+    if (n < 1) n = 1;
+  }
+  uint64_t id;
+  int rc = pc_store_begin(c, &e);
+  if (!rc) rc = pc_store_insert_range(c, j->id, j->next_iter, n, &id, &e);
+  j->next_iter += n;
+  if (!rc) rc = pc_store_update_job(c, j, &e);
+  if (!rc) rc = pc_store_commit(c, &e);
+  pc_range *r = rc ? NULL : calloc(1, sizeof *r);
+  if (!r) {
+    pc_store_rollback(c);
+    j->next_iter -= n;
+    pc_job_fail(c, j, rc ? e.msg : "out of memory");
+    return false;
+  }
+  r->id = id;
+  r->first = j->next_iter - n;
+  r->count = n;
+  r->next = j->ranges;
+  j->ranges = r;
+  send_assign(c, p, j, r);
+  return true;
+}
+
+void pc_sched_request(pc_coord *c, pc_peer *p) {
+  int nworkers = count_workers(c);
+  if (nworkers < 1) nworkers = 1;
+  /* highest priority first (pass 0), then any runnable job; each in submission order */
+  for (int pri_pass = 0; pri_pass < 2; pri_pass++) {
+    int top = -2147483647;
+    for (pc_job *j = c->jobs; j; j = j->next)
+      if ((j->state == PC_JOB_QUEUED || j->state == PC_JOB_RUNNING) && j->priority > top) top = j->priority;
+    for (pc_job *j = c->jobs; j; j = j->next) {
+      if ((j->state != PC_JOB_QUEUED && j->state != PC_JOB_RUNNING) || j->finishing) continue;
+      if (pri_pass == 0 && j->priority != top) continue;
+      if (try_job(c, p, j, nworkers)) return;
+    }
+  }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__NoWork nw = PCBPT__NO_WORK__INIT;
+  nw.retry_ms = 500;
+  env.msg_case = PCBPT__ENVELOPE__MSG_NO_WORK;
+  env.no_work = &nw;
+  pc_conn_send(&p->conn, &env);
+}
+
+void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {
+  double now = pc_coord_now();
+  for (pc_job *j = c->jobs; j; j = j->next)
+    for (pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner == p) {
+        r->owner = NULL;
+        r->orphan_since = now;
+        pc_wire_log("job %llu: range %llu orphaned (%s gone), %llu of %llu iterations acknowledged",
+                    (unsigned long long)j->id, (unsigned long long)r->id, p->name, (unsigned long long)r->acked,
+                    (unsigned long long)r->count);
+      }
+}

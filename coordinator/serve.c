@@ -1,0 +1,716 @@
+/* serve.c: `pcbpt-coord serve`: the coordinator's libuv loop: accepting connections, the
+ * hello/challenge/response handshake, dispatching each peer's messages by role, assembling
+ * uploads and bundles, liveness, and the periodic tick that drives checkpoints and halting.
+ * Any protocol violation closes that peer's connection with a logged reason only. */
+#include <errno.h>
+#include <fcntl.h>
+#include <sodium.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+#include <zstd.h>
+
+#include "coord.h"
+#include "render_flags.h"
+#include "serve.h"
+#include "verbs.h"
+#include "wire_film.h"
+#include "wire_log.h"
+#include "wire_settings.h"
+
+#define TICK_MS 250
+#define HANDSHAKE_TIMEOUT 10.0
+
+double pc_coord_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static const char *const state_names[] = {"queued", "running", "stopping", "done", "failed", "cancelled"};
+const char *pc_job_state_name(pc_job_state s) { return state_names[s]; }
+int pc_job_state_parse(const char *s, pc_job_state *out) {
+  for (int i = 0; i < 6; i++)
+    if (s && strcmp(s, state_names[i]) == 0) { *out = (pc_job_state)i; return 0; }
+  return PC_EINVAL;
+}
+
+pc_job *pc_coord_job(pc_coord *c, uint64_t id) {
+  for (pc_job *j = c->jobs; j; j = j->next)
+    if (j->id == id) return j;
+  return NULL;
+}
+
+void pc_peer_ref(pc_peer *p) { p->refs++; }
+void pc_peer_unref(pc_peer *p) {
+  if (--p->refs == 0) free(p);
+}
+
+void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const char *refused) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__UploadAck a = PCBPT__UPLOAD_ACK__INIT;
+  a.range_id = range_id;
+  a.acked_end = acked_end;
+  a.refused = refused != NULL;
+  a.reason = (char *)(refused ? refused : "");
+  env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_ACK;
+  env.upload_ack = &a;
+  pc_conn_send(&p->conn, &env);
+}
+
+void pc_peer_send_cancel(pc_peer *p, uint64_t job, uint64_t range, bool upload_partial) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Cancel m = PCBPT__CANCEL__INIT;
+  m.job_id = job;
+  m.range_id = range;
+  m.upload_partial = upload_partial;
+  env.msg_case = PCBPT__ENVELOPE__MSG_CANCEL;
+  env.cancel = &m;
+  pc_conn_send(&p->conn, &env);
+}
+
+static void send_error(pc_peer *p, const char *reason) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Error m = PCBPT__ERROR__INIT;
+  m.reason = (char *)reason;
+  env.msg_case = PCBPT__ENVELOPE__MSG_ERROR;
+  env.error = &m;
+  pc_conn_send(&p->conn, &env);
+}
+
+/* Logs, tells the peer why, and drops it. */
+static void drop(pc_peer *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void drop(pc_peer *p, const char *fmt, ...) {
+  char why[400];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(why, sizeof why, fmt, ap);
+  va_end(ap);
+  send_error(p, why);
+  pc_conn_close(&p->conn, why);
+}
+
+/* ---- handshake ---- */
+
+static void on_hello(pc_peer *p, const Pcbpt__Hello *h) {
+  pc_coord *c = p->coord;
+  if (h->protocol_version != PC_WIRE_PROTOCOL_VERSION) {
+    drop(p, "protocol version %u, this coordinator speaks %u", h->protocol_version, PC_WIRE_PROTOCOL_VERSION);
+    return;
+  }
+  if (h->role != PCBPT__ROLE__ROLE_WORKER && h->role != PCBPT__ROLE__ROLE_CLIENT) { drop(p, "hello without a valid role"); return; }
+  if (h->client_nonce.len != PC_AUTH_NONCE) { drop(p, "hello with a %zu-byte nonce", h->client_nonce.len); return; }
+  p->role = h->role;
+  p->threads = h->threads;
+  snprintf(p->name, sizeof p->name, "%s", h->name && *h->name ? h->name : p->conn.peer);
+  for (char *s = p->name; *s; s++)
+    if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
+  memcpy(p->client_nonce, h->client_nonce.data, PC_AUTH_NONCE);
+  pc_auth_nonce(p->nonce);
+  uint8_t mac[PC_AUTH_MAC];
+  if (pc_auth_mac(c->key, true, p->client_nonce, p->nonce, mac) != 0) { drop(p, "auth: MAC failed"); return; }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Challenge ch = PCBPT__CHALLENGE__INIT;
+  ch.nonce.data = p->nonce;
+  ch.nonce.len = PC_AUTH_NONCE;
+  ch.server_mac.data = mac;
+  ch.server_mac.len = PC_AUTH_MAC;
+  env.msg_case = PCBPT__ENVELOPE__MSG_CHALLENGE;
+  env.challenge = &ch;
+  p->hello_seen = true;
+  pc_conn_send(&p->conn, &env);
+}
+
+static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__AuthResult r = PCBPT__AUTH_RESULT__INIT;
+  env.msg_case = PCBPT__ENVELOPE__MSG_AUTH_RESULT;
+  env.auth_result = &r;
+  if (!pc_auth_verify(p->coord->key, false, p->nonce, p->client_nonce, a->mac.data, a->mac.len)) {
+    r.reason = "authentication failed (wrong token)";
+    pc_conn_send(&p->conn, &env);
+    pc_conn_close(&p->conn, "authentication failed (wrong token)");
+    return;
+  }
+  p->authed = true;
+  r.ok = true;
+  r.reason = "";
+  pc_conn_send(&p->conn, &env);
+  if (p->role == PCBPT__ROLE__ROLE_WORKER)
+    pc_wire_log("%s: worker '%s' joined (%u threads)", p->conn.peer, p->name, p->threads);
+}
+
+/* ---- worker messages ---- */
+
+static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
+  pc_coord *c = p->coord;
+  if (h->iterations_per_second >= 0 && h->iterations_per_second < 1e9) p->rate = h->iterations_per_second;
+  if (!h->range_id) return;
+  pc_job *j = pc_coord_job(c, h->job_id);
+  pc_range *r = j && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) ? pc_sched_find_range(j, h->range_id) : NULL;
+  if (r && r->owner == p) return;
+  if (r && !r->owner && !r->final && r->acked < r->count) {
+    r->owner = p;
+    r->orphan_since = 0;
+    pc_wire_log("job %llu: range %llu re-attached to %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name);
+    if (j->state == PC_JOB_STOPPING) pc_peer_send_cancel(p, j->id, r->id, true);
+    return;
+  }
+  pc_peer_send_cancel(p, h->job_id, h->range_id, false);
+}
+
+static void stream_next(pc_peer *p) {
+  pc_stream_out *o = &p->out;
+  if (o->fd < 0) return;
+  uint8_t buf[PC_WIRE_CHUNK];
+  size_t want = o->total - o->off < sizeof buf ? (size_t)(o->total - o->off) : sizeof buf;
+  ssize_t n = want ? pread(o->fd, buf, want, (off_t)o->off) : 0;
+  if (n < 0 || (size_t)n != want) {
+    close(o->fd);
+    o->fd = -1;
+    drop(p, "reading a file to send failed: %s", n < 0 ? strerror(errno) : "short read");
+    return;
+  }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__BundleChunk bc = PCBPT__BUNDLE_CHUNK__INIT;
+  Pcbpt__FetchChunk fc = PCBPT__FETCH_CHUNK__INIT;
+  if (o->is_bundle) {
+    bc.hash.data = o->hash;
+    bc.hash.len = PC_BUNDLE_HASH;
+    bc.offset = o->off;
+    bc.total = o->total;
+    bc.data.data = buf;
+    bc.data.len = (size_t)n;
+    env.msg_case = PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK;
+    env.bundle_chunk = &bc;
+  } else {
+    fc.offset = o->off;
+    fc.total = o->total;
+    fc.data.data = buf;
+    fc.data.len = (size_t)n;
+    env.msg_case = PCBPT__ENVELOPE__MSG_FETCH_CHUNK;
+    env.fetch_chunk = &fc;
+  }
+  o->off += (uint64_t)n;
+  if (o->off >= o->total) {
+    close(o->fd);
+    o->fd = -1;
+  }
+  pc_conn_send_bulk(&p->conn, &env);
+}
+
+static void on_drain(pc_conn *conn) { stream_next(conn->data); }
+
+static int stream_file(pc_peer *p, const char *path, bool is_bundle, const uint8_t *hash) {
+  if (p->out.fd >= 0) return PC_EINVAL;
+  int fd = open(path, O_RDONLY | O_CLOEXEC);
+  struct stat st;
+  if (fd < 0) return PC_EIO;
+  if (fstat(fd, &st) != 0) { close(fd); return PC_EIO; }
+  p->out.fd = fd;
+  p->out.off = 0;
+  p->out.total = (uint64_t)st.st_size;
+  p->out.is_bundle = is_bundle;
+  if (hash) memcpy(p->out.hash, hash, PC_BUNDLE_HASH);
+  stream_next(p);
+  return 0;
+}
+
+static void on_bundle_request(pc_peer *p, const Pcbpt__BundleRequest *b) {
+  char hex[2 * PC_BUNDLE_HASH + 1], path[600];
+  if (b->hash.len != PC_BUNDLE_HASH) { drop(p, "bundle request with a %zu-byte hash", b->hash.len); return; }
+  pc_bundle_hex(b->hash.data, hex);
+  snprintf(path, sizeof path, "%s/bundles/%s", p->coord->data_dir, hex);
+  if (stream_file(p, path, true, b->hash.data) != 0) drop(p, "bundle %.16s... unavailable or a transfer is already running", hex);
+}
+
+static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
+  pc_coord *c = p->coord;
+  if (u->index != p->up_next || u->nchunks == 0 || u->index >= u->nchunks) {
+    drop(p, "upload chunk %u/%u out of order (expected %u)", u->index, u->nchunks, p->up_next);
+    return;
+  }
+  pc_job *j = pc_coord_job(c, u->job_id);
+  if (u->index == 0) {
+    p->up_len = 0;
+    p->up_job = u->job_id;
+    p->up_range = u->range_id;
+    p->up_first = u->first;
+    p->up_count = u->count;
+    p->up_raw = u->raw_size;
+    p->up_nchunks = u->nchunks;
+    p->up_final = u->final;
+  } else if (u->job_id != p->up_job || u->range_id != p->up_range || u->first != p->up_first ||
+             u->count != p->up_count || u->raw_size != p->up_raw || u->nchunks != p->up_nchunks) {
+    drop(p, "upload chunk %u does not match the upload it continues", u->index);
+    return;
+  }
+  /* bound what one peer can make the coordinator hold: one compressed film of the job */
+  size_t limit = j && j->film_ready ? ZSTD_compressBound(pc_wire_film_size(&j->film)) : PC_WIRE_CHUNK;
+  if (p->up_len + u->data.len > limit) {
+    drop(p, "upload for job %llu exceeds %zu bytes", (unsigned long long)u->job_id, limit);
+    return;
+  }
+  if (p->up_len + u->data.len > p->up_cap) {
+    size_t cap = p->up_cap ? p->up_cap : 65536;
+    while (cap < p->up_len + u->data.len) cap *= 2;
+    uint8_t *nb = realloc(p->up_buf, cap);
+    if (!nb) { drop(p, "out of memory for an upload"); return; }
+    p->up_buf = nb;
+    p->up_cap = cap;
+  }
+  memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
+  p->up_len += u->data.len;
+  p->up_next = u->index + 1;
+  if (p->up_next < p->up_nchunks) return;
+  p->up_next = 0;
+
+  const char *refuse = NULL;
+  char why[200];
+  pc_range *r = NULL;
+  if (!j || !j->film_ready || (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING)) refuse = "job is not running";
+  else if (!(r = pc_sched_find_range(j, p->up_range))) refuse = "range is closed or unknown";
+  else if (r->owner && r->owner != p) refuse = "range was handed to another worker";
+  else if (r->merging) refuse = "an upload for this range is still being merged";
+  uint64_t end = p->up_first + p->up_count;
+  if (!refuse && (p->up_count == 0 || p->up_first < r->first || end > r->first + r->count)) refuse = "iterations outside the range";
+  if (refuse) {
+    pc_wire_log("job %llu: refused upload from %s for range %llu: %s", (unsigned long long)p->up_job, p->conn.peer,
+                (unsigned long long)p->up_range, refuse);
+    pc_peer_send_ack(p, p->up_range, 0, refuse);
+    return;
+  }
+  if (!r->owner) { r->owner = p; r->orphan_since = 0; }
+  if (end <= r->first + r->merged) {
+    /* a re-sent upload already counted: acknowledge, never add twice */
+    if (end <= r->first + r->acked) pc_peer_send_ack(p, r->id, r->first + r->acked, NULL);
+    else {
+      pc_pending_ack *a = calloc(1, sizeof *a);
+      if (a) {
+        a->peer = p;
+        pc_peer_ref(p);
+        a->range_id = r->id;
+        a->acked_end = r->first + r->merged;
+        a->next = j->acks;
+        j->acks = a;
+      }
+    }
+    return;
+  }
+  if (p->up_first != r->first + r->merged) {
+    snprintf(why, sizeof why, "upload starts at iteration %llu, the range continues at %llu",
+             (unsigned long long)p->up_first, (unsigned long long)(r->first + r->merged));
+    pc_wire_log("job %llu: refused upload from %s: %s", (unsigned long long)j->id, p->conn.peer, why);
+    pc_peer_send_ack(p, r->id, 0, why);
+    return;
+  }
+  uint8_t *buf = p->up_buf;
+  size_t len = p->up_len;
+  p->up_buf = NULL;
+  p->up_len = p->up_cap = 0;
+  pc_job_merge(c, j, p, r, buf, len, p->up_raw, p->up_first, p->up_count, p->up_final);
+}
+
+/* ---- client messages ---- */
+
+static void on_bundle_chunk(pc_peer *p, const Pcbpt__BundleChunk *b) {
+  pc_coord *c = p->coord;
+  if (b->hash.len != PC_BUNDLE_HASH || b->total == 0 || b->total > PC_BUNDLE_MAX || b->offset != p->bun_off ||
+      b->offset + b->data.len > b->total || (b->offset > 0 && (b->total != p->bun_total || memcmp(b->hash.data, p->bun_hash, PC_BUNDLE_HASH)))) {
+    drop(p, "bundle chunk at %llu does not continue the transfer", (unsigned long long)b->offset);
+    return;
+  }
+  if (b->offset == 0) {
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/bundles", c->data_dir);
+    if (mkdir(dir, 0700) != 0 && errno != EEXIST) { drop(p, "%s: %s", dir, strerror(errno)); return; }
+    snprintf(p->bun_tmp, sizeof p->bun_tmp, "%s/.upload.%08x%08x", dir, randombytes_random(), randombytes_random());
+    p->bun_fd = open(p->bun_tmp, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (p->bun_fd < 0) { drop(p, "%s: %s", p->bun_tmp, strerror(errno)); return; }
+    p->bun_total = b->total;
+    memcpy(p->bun_hash, b->hash.data, PC_BUNDLE_HASH);
+  }
+  size_t done = 0;
+  while (done < b->data.len) {
+    ssize_t w = write(p->bun_fd, b->data.data + done, b->data.len - done);
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) { drop(p, "%s: %s", p->bun_tmp, strerror(errno)); return; }
+    done += (size_t)w;
+  }
+  p->bun_off += b->data.len;
+  if (p->bun_off < p->bun_total) return;
+  /* complete: verify the content against its address before anyone can use it */
+  int fd = p->bun_fd;
+  p->bun_fd = -1;
+  p->bun_off = 0;
+  uint8_t *blob = malloc(p->bun_total);
+  int ok = blob && fsync(fd) == 0 && pread(fd, blob, p->bun_total, 0) == (ssize_t)p->bun_total;
+  close(fd);
+  uint8_t got[PC_BUNDLE_HASH];
+  pc_err e;
+  char hex[2 * PC_BUNDLE_HASH + 1], final[600];
+  pc_bundle_hex(p->bun_hash, hex);
+  if (!ok || pc_bundle_hash(blob, p->bun_total, got, &e) != 0 || sodium_memcmp(got, p->bun_hash, PC_BUNDLE_HASH) != 0) {
+    free(blob);
+    unlink(p->bun_tmp);
+    p->bun_tmp[0] = 0;
+    drop(p, "refused scene bundle %.16s...: content hash does not match", hex);
+    return;
+  }
+  free(blob);
+  snprintf(final, sizeof final, "%s/bundles/%s", c->data_dir, hex);
+  if (rename(p->bun_tmp, final) != 0) { drop(p, "%s: %s", final, strerror(errno)); return; }
+  p->bun_tmp[0] = 0;
+}
+
+static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
+  pc_coord *c = p->coord;
+  pc_err e = {0};
+  char hex[2 * PC_BUNDLE_HASH + 1], path[600];
+  if (s->bundle_hash.len != PC_BUNDLE_HASH) { send_error(p, "submit: missing bundle hash"); return; }
+  pc_bundle_hex(s->bundle_hash.data, hex);
+  snprintf(path, sizeof path, "%s/bundles/%s", c->data_dir, hex);
+  pc_job *j = calloc(1, sizeof *j);
+  if (!j) { send_error(p, "submit: out of memory"); return; }
+  j->light_per_iter = -1;
+  if (access(path, R_OK) != 0) pc_errf(&e, PC_EINVAL, "submit: scene bundle %.16s... was not uploaded", hex);
+  else if (pc_wire_settings_from_proto(s->settings, &j->set, &e) != 0) {}
+  else if (j->set.width < 1 || j->set.height < 1) pc_errf(&e, PC_EINVAL, "submit: film size missing");
+  else if (s->halt_iterations == 0 && !(s->halt_seconds > 0)) pc_errf(&e, PC_EINVAL, "submit: needs --spp or --time");
+  else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
+  if (e.code) {
+    pc_wire_log("%s: %s", p->conn.peer, e.msg);
+    send_error(p, e.msg);
+    free(j);
+    return;
+  }
+  memcpy(j->bundle, s->bundle_hash.data, PC_BUNDLE_HASH);
+  snprintf(j->name, sizeof j->name, "%s", s->name ? s->name : "");
+  for (char *q = j->name; *q; q++)
+    if ((unsigned char)*q < 0x20 || *q == 0x7f) *q = '?';
+  j->settings_len = pcbpt__settings__get_packed_size(s->settings);
+  j->settings_blob = malloc(j->settings_len + 1);
+  if (!j->settings_blob) { free(j); send_error(p, "submit: out of memory"); return; }
+  pcbpt__settings__pack(s->settings, j->settings_blob);
+  j->halt_iterations = s->halt_iterations;
+  j->halt_seconds = s->halt_seconds;
+  j->priority = s->priority;
+  j->state = PC_JOB_QUEUED;
+  if (pc_store_insert_job(c, j, &e) != 0) {
+    pc_wire_log("%s", e.msg);
+    send_error(p, e.msg);
+    pc_job_free(j);
+    return;
+  }
+  pc_job **tail = &c->jobs;
+  while (*tail) tail = &(*tail)->next;
+  *tail = j;
+  pc_wire_log("job %llu: submitted by %s: '%s' %s %dx%d, %llu iterations, %.1f s", (unsigned long long)j->id, p->name,
+              j->name, pc_method_name(j->set.method), j->set.width, j->set.height,
+              (unsigned long long)j->halt_iterations, j->halt_seconds);
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__SubmitReply r = PCBPT__SUBMIT_REPLY__INIT;
+  r.job_id = j->id;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT_REPLY;
+  env.submit_reply = &r;
+  pc_conn_send(&p->conn, &env);
+}
+
+static void send_status(pc_peer *p, uint64_t only) {
+  pc_coord *c = p->coord;
+  int nj = 0, nw = 0;
+  for (pc_job *j = c->jobs; j; j = j->next) nj++;
+  for (pc_peer *q = c->peers; q; q = q->next) nw++;
+  Pcbpt__JobStatus *js = calloc((size_t)nj + 1, sizeof *js);
+  Pcbpt__JobStatus **jp = calloc((size_t)nj + 1, sizeof *jp);
+  Pcbpt__WorkerStatus *ws = calloc((size_t)nw + 1, sizeof *ws);
+  Pcbpt__WorkerStatus **wp = calloc((size_t)nw + 1, sizeof *wp);
+  char(*images)[600] = calloc((size_t)nj + 1, sizeof *images);
+  if (!js || !jp || !ws || !wp || !images) { send_error(p, "status: out of memory"); goto done; }
+  Pcbpt__StatusReply rep = PCBPT__STATUS_REPLY__INIT;
+  size_t k = 0;
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    if (only && j->id != only) continue;
+    Pcbpt__JobStatus *s = &js[k];
+    pcbpt__job_status__init(s);
+    s->job_id = j->id;
+    s->name = j->name;
+    s->state = (char *)pc_job_state_name(j->state);
+    s->method = (char *)pc_method_name(j->set.method);
+    s->iterations_done = j->done;
+    s->halt_iterations = j->halt_iterations;
+    s->halt_seconds = j->halt_seconds;
+    s->elapsed = j->elapsed;
+    for (pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner) { s->workers++; s->iterations_per_second += r->owner->rate; }
+    if (j->state == PC_JOB_RUNNING) {
+      double eta_i = j->halt_iterations && s->iterations_per_second > 0
+                         ? (double)(j->halt_iterations - (j->done < j->halt_iterations ? j->done : j->halt_iterations)) / s->iterations_per_second
+                         : -1;
+      double eta_t = j->halt_seconds > 0 ? j->halt_seconds - j->elapsed : -1;
+      s->eta_seconds = eta_i >= 0 && (eta_t < 0 || eta_i < eta_t) ? eta_i : eta_t;
+    }
+    s->error = j->error;
+    pc_job_path(c, j, "image.exr", images[k], sizeof images[k]);
+    s->image = access(images[k], R_OK) == 0 ? images[k] : "";
+    jp[k] = s;
+    k++;
+  }
+  rep.n_jobs = k;
+  rep.jobs = jp;
+  k = 0;
+  for (pc_peer *q = c->peers; q; q = q->next) {
+    if (!q->authed || q->role != PCBPT__ROLE__ROLE_WORKER) continue;
+    Pcbpt__WorkerStatus *w = &ws[k];
+    pcbpt__worker_status__init(w);
+    w->name = q->name;
+    w->threads = q->threads;
+    w->iterations_per_second = q->rate;
+    w->address = q->conn.peer;
+    for (pc_job *j = c->jobs; j; j = j->next)
+      for (pc_range *r = j->ranges; r; r = r->next)
+        if (r->owner == q) { w->job_id = j->id; w->range_id = r->id; }
+    wp[k++] = w;
+  }
+  rep.n_workers = k;
+  rep.workers = wp;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  env.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REPLY;
+  env.status_reply = &rep;
+  pc_conn_send(&p->conn, &env);
+done:
+  free(js); free(jp); free(ws); free(wp); free(images);
+}
+
+static void on_fetch(pc_peer *p, uint64_t id) {
+  pc_job *j = pc_coord_job(p->coord, id);
+  char path[600];
+  if (!j) { send_error(p, "fetch: no such job"); return; }
+  pc_job_path(p->coord, j, "image.exr", path, sizeof path);
+  if (stream_file(p, path, false, NULL) != 0) send_error(p, "fetch: the job has no image yet");
+}
+
+/* ---- dispatch ---- */
+
+static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
+  pc_peer *p = conn->data;
+  p->last_seen = pc_coord_now();
+  int kind = env->msg_case;
+  if (!p->hello_seen) {
+    if (kind != PCBPT__ENVELOPE__MSG_HELLO) { drop(p, "expected hello, got %s", pc_wire_msg_name(kind)); return; }
+    on_hello(p, env->hello);
+    return;
+  }
+  if (!p->authed) {
+    if (kind != PCBPT__ENVELOPE__MSG_AUTH_RESPONSE) { drop(p, "expected auth_response, got %s", pc_wire_msg_name(kind)); return; }
+    on_auth(p, env->auth_response);
+    return;
+  }
+  if (p->role == PCBPT__ROLE__ROLE_WORKER) {
+    switch (kind) {
+    case PCBPT__ENVELOPE__MSG_WORK_REQUEST: pc_sched_request(p->coord, p); return;
+    case PCBPT__ENVELOPE__MSG_HEARTBEAT: on_heartbeat(p, env->heartbeat); return;
+    case PCBPT__ENVELOPE__MSG_BUNDLE_REQUEST: on_bundle_request(p, env->bundle_request); return;
+    case PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK: on_upload(p, env->upload_chunk); return;
+    default: break;
+    }
+  } else {
+    switch (kind) {
+    case PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK: on_bundle_chunk(p, env->bundle_chunk); return;
+    case PCBPT__ENVELOPE__MSG_SUBMIT: on_submit(p, env->submit); return;
+    case PCBPT__ENVELOPE__MSG_STATUS_REQUEST: send_status(p, env->status_request->job_id); return;
+    case PCBPT__ENVELOPE__MSG_CANCEL_REQUEST: {
+      pc_job *j = pc_coord_job(p->coord, env->cancel_request->job_id);
+      if (!j) { send_error(p, "cancel: no such job"); return; }
+      pc_job_cancel(p->coord, j);
+      send_status(p, j->id);
+      return;
+    }
+    case PCBPT__ENVELOPE__MSG_FETCH_REQUEST: on_fetch(p, env->fetch_request->job_id); return;
+    default: break;
+    }
+  }
+  drop(p, "unexpected %s from a %s", pc_wire_msg_name(kind), p->role == PCBPT__ROLE__ROLE_WORKER ? "worker" : "client");
+}
+
+static void on_closed(pc_conn *conn) {
+  pc_peer *p = conn->data;
+  pc_coord *c = p->coord;
+  p->closed = true;
+  for (pc_peer **pp = &c->peers; *pp; pp = &(*pp)->next)
+    if (*pp == p) { *pp = p->next; break; }
+  if (p->authed && p->role == PCBPT__ROLE__ROLE_WORKER) {
+    pc_wire_log("%s: worker '%s' left", conn->peer, p->name);
+    pc_sched_peer_gone(c, p);
+  }
+  free(p->up_buf);
+  p->up_buf = NULL;
+  if (p->bun_fd >= 0) close(p->bun_fd);
+  if (p->bun_tmp[0]) unlink(p->bun_tmp);
+  if (p->out.fd >= 0) close(p->out.fd);
+  pc_peer_unref(p);
+}
+
+static void on_connection(uv_stream_t *server, int status) {
+  pc_coord *c = server->data;
+  if (status < 0) { pc_wire_log("accept: %s", uv_strerror(status)); return; }
+  pc_peer *p = calloc(1, sizeof *p);
+  if (!p) { pc_wire_log("accept: out of memory"); return; }
+  pc_conn_cbs cbs = {.on_msg = on_msg, .on_drain = on_drain, .on_closed = on_closed};
+  int r = pc_conn_init(c->loop, &p->conn, &cbs, p, PC_WIRE_MAX_FRAME);
+  if (r) { pc_wire_log("accept: %s", uv_strerror(r)); free(p); return; }
+  p->coord = c;
+  p->refs = 1;
+  p->bun_fd = -1;
+  p->out.fd = -1;
+  p->connected = p->last_seen = pc_coord_now();
+  p->next = c->peers;
+  c->peers = p;
+  if ((r = uv_accept(server, (uv_stream_t *)&p->conn.tcp)) != 0 || (r = pc_conn_start(&p->conn)) != 0)
+    pc_conn_close(&p->conn, uv_strerror(r));
+}
+
+static void on_tick(uv_timer_t *t) {
+  pc_coord *c = t->data;
+  double now = pc_coord_now();
+  for (pc_peer *p = c->peers; p; p = p->next) {
+    if (p->conn.closing) continue;
+    if (!p->authed && now - p->connected > HANDSHAKE_TIMEOUT) pc_conn_close(&p->conn, "no authentication within 10 s");
+    else if (p->authed && p->role == PCBPT__ROLE__ROLE_WORKER && now - p->last_seen > c->heartbeat_timeout) {
+      char why[80];
+      snprintf(why, sizeof why, "no heartbeat for %.0f s", now - p->last_seen);
+      pc_conn_close(&p->conn, why);
+    }
+  }
+  for (pc_job *j = c->jobs; j; j = j->next) pc_job_tick(c, j, TICK_MS / 1000.0);
+}
+
+static void on_signal(uv_signal_t *s, int signum) {
+  pc_coord *c = s->data;
+  pc_wire_log("signal %d: stopping (the store and checkpoints are consistent)", signum);
+  uv_stop(c->loop);
+}
+
+int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, const char *data_dir,
+                   const uint8_t key[PC_AUTH_KEY], pc_err *e) {
+  c->loop = loop;
+  memcpy(c->key, key, PC_AUTH_KEY);
+  if (!c->orphan_grace) c->orphan_grace = 3;
+  if (!c->heartbeat_timeout) c->heartbeat_timeout = 10;
+  if (!c->range_seconds) c->range_seconds = 3;
+  if (!c->ckpt_interval) c->ckpt_interval = 1;
+  if (!c->exr_interval) c->exr_interval = 10;
+  if ((size_t)snprintf(c->data_dir, sizeof c->data_dir, "%s", data_dir) >= sizeof c->data_dir)
+    return pc_errf(e, PC_ELIMIT, "--data-dir: path too long");
+  if (mkdir(data_dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", data_dir, strerror(errno));
+  int rc = pc_store_open(c, e);
+  if (rc) return rc;
+  if ((rc = pc_store_load(c, e)) != 0) return rc;
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) continue;
+    pc_err je;
+    Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
+    if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0 || pc_job_activate(c, j, &je) != 0)
+      pc_job_fail(c, j, s ? je.msg : "stored settings do not decode");
+    else
+      pc_wire_log("job %llu: resumed at %llu acknowledged iterations", (unsigned long long)j->id, (unsigned long long)j->done);
+    if (j->state == PC_JOB_STOPPING) j->stopping_since = pc_coord_now();
+    if (s) pcbpt__settings__free_unpacked(s, NULL);
+  }
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    if (j->state != PC_JOB_QUEUED) continue;
+    pc_err je;
+    Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
+    if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0) pc_job_fail(c, j, "stored settings do not decode");
+    if (s) pcbpt__settings__free_unpacked(s, NULL);
+  }
+  struct sockaddr_storage addr;
+  if (uv_ip4_addr(host, port, (struct sockaddr_in *)&addr) != 0 && uv_ip6_addr(host, port, (struct sockaddr_in6 *)&addr) != 0)
+    return pc_errf(e, PC_EINVAL, "--listen: '%s' is not an IP address", host);
+  int r;
+  if ((r = uv_tcp_init(loop, &c->listener)) != 0) return pc_errf(e, PC_EIO, "listen: %s", uv_strerror(r));
+  c->listener.data = c;
+  if ((r = uv_tcp_bind(&c->listener, (struct sockaddr *)&addr, 0)) != 0 ||
+      (r = uv_listen((uv_stream_t *)&c->listener, 128, on_connection)) != 0)
+    return pc_errf(e, PC_EIO, "listen on %s:%d: %s", host, port, uv_strerror(r));
+  struct sockaddr_storage bound;
+  int blen = sizeof bound;
+  if ((r = uv_tcp_getsockname(&c->listener, (struct sockaddr *)&bound, &blen)) != 0) return pc_errf(e, PC_EIO, "getsockname: %s", uv_strerror(r));
+  c->bound_port = ntohs(bound.ss_family == AF_INET ? ((struct sockaddr_in *)&bound)->sin_port : ((struct sockaddr_in6 *)&bound)->sin6_port);
+  if ((r = uv_timer_init(loop, &c->tick)) != 0) return pc_errf(e, PC_EIO, "timer: %s", uv_strerror(r));
+  c->tick.data = c;
+  if ((r = uv_timer_start(&c->tick, on_tick, TICK_MS, TICK_MS)) != 0) return pc_errf(e, PC_EIO, "timer: %s", uv_strerror(r));
+  return 0;
+}
+
+void pc_coord_free(pc_coord *c) {
+  while (c->jobs) {
+    pc_job *j = c->jobs;
+    c->jobs = j->next;
+    pc_job_free(j);
+  }
+  pc_store_close(c);
+  sodium_memzero(c->key, sizeof c->key);
+}
+
+static const char serve_help[] =
+    "usage: pcbpt-coord serve --listen HOST:PORT --data-dir DIR --token-file F [options]\n"
+    "Runs the coordinator: a job store in DIR, workers and clients authenticated with the token.\n"
+    "  --orphan-grace S       seconds a vanished worker's range waits before reassignment (3)\n"
+    "  --heartbeat-timeout S  drop a worker silent for S seconds (10)\n"
+    "  --range-seconds S      target seconds of work per range (3)\n"
+    "  --exr-interval S       seconds between image writes of a running job (10)\n"
+    "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
+
+int pc_cmd_serve(int argc, char **argv) {
+  const char *listen = NULL, *dir = NULL, *token = NULL, *port_file = NULL;
+  pc_coord c;
+  memset(&c, 0, sizeof c);
+  for (int i = 0; i < argc; i++) {
+    const char *a = argv[i];
+    double *num = strcmp(a, "--orphan-grace") == 0 ? &c.orphan_grace
+                  : strcmp(a, "--heartbeat-timeout") == 0 ? &c.heartbeat_timeout
+                  : strcmp(a, "--range-seconds") == 0 ? &c.range_seconds
+                  : strcmp(a, "--exr-interval") == 0 ? &c.exr_interval : NULL;
+    if (strcmp(a, "--help") == 0) { fputs(serve_help, stdout); return 0; }
+    if (i + 1 >= argc) { fprintf(stderr, "pcbpt-coord serve: %s needs a value (see --help)\n", a); return 2; }
+    if (num) {
+      if (!pc_parse_f64(argv[++i], 0.01, 1e6, num)) { fprintf(stderr, "pcbpt-coord serve: %s: expected seconds\n", a); return 2; }
+    } else if (strcmp(a, "--listen") == 0) listen = argv[++i];
+    else if (strcmp(a, "--data-dir") == 0) dir = argv[++i];
+    else if (strcmp(a, "--token-file") == 0) token = argv[++i];
+    else if (strcmp(a, "--port-file") == 0) port_file = argv[++i];
+    else { fprintf(stderr, "pcbpt-coord serve: unknown argument '%s' (see --help)\n", a); return 2; }
+  }
+  if (!listen || !dir || !token) { fprintf(stderr, "pcbpt-coord serve: --listen, --data-dir and --token-file are required\n"); return 2; }
+  char host[256];
+  int port;
+  if (pc_wire_parse_hostport(listen, host, sizeof host, &port, 7878) != 0) { fprintf(stderr, "pcbpt-coord serve: --listen: expected HOST:PORT\n"); return 2; }
+  pc_err e = {0};
+  uint8_t key[PC_AUTH_KEY];
+  if (pc_auth_init(&e) != 0 || pc_auth_load_token(token, key, &e) != 0) { fprintf(stderr, "pcbpt-coord serve: %s\n", e.msg); return 1; }
+  uv_loop_t *loop = uv_default_loop();
+  if (pc_coord_start(&c, loop, host, port, dir, key, &e) != 0) {
+    sodium_memzero(key, sizeof key);
+    fprintf(stderr, "pcbpt-coord serve: %s\n", e.msg);
+    pc_coord_free(&c);
+    return 1;
+  }
+  sodium_memzero(key, sizeof key);
+  uv_signal_init(loop, &c.sigint);
+  uv_signal_init(loop, &c.sigterm);
+  c.sigint.data = c.sigterm.data = &c;
+  if (uv_signal_start(&c.sigint, on_signal, SIGINT) != 0 || uv_signal_start(&c.sigterm, on_signal, SIGTERM) != 0)
+    pc_wire_log("cannot install signal handlers");
+  if (port_file) {
+    FILE *f = fopen(port_file, "w");
+    if (!f || fprintf(f, "%d\n", c.bound_port) < 0 || fclose(f) != 0) { fprintf(stderr, "pcbpt-coord serve: %s: cannot write\n", port_file); return 1; }
+  }
+  pc_wire_log("coordinator listening on %s:%d, data in %s", host, c.bound_port, dir);
+  uv_run(loop, UV_RUN_DEFAULT);
+  pc_coord_free(&c);
+  return 0;
+}

@@ -1,0 +1,186 @@
+/* store.c: the job store (SQLite in the data dir): jobs with their settings, state and
+ * progress, and every iteration range handed out with how much of it is acknowledged. Range
+ * ids come from AUTOINCREMENT so they are never reused; iteration indices come from
+ * jobs.next_iter, which is advanced in the same transaction that records a new range. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "coord.h"
+
+static const char schema[] =
+    "PRAGMA journal_mode=WAL;"
+    "PRAGMA synchronous=FULL;"
+    "CREATE TABLE IF NOT EXISTS jobs(id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"
+    " bundle BLOB NOT NULL, settings BLOB NOT NULL, halt_iterations INTEGER NOT NULL,"
+    " halt_seconds REAL NOT NULL, priority INTEGER NOT NULL, state TEXT NOT NULL,"
+    " next_iter INTEGER NOT NULL DEFAULT 0, done INTEGER NOT NULL DEFAULT 0,"
+    " elapsed REAL NOT NULL DEFAULT 0, ckpt_gen INTEGER NOT NULL DEFAULT 0,"
+    " light_per_iter INTEGER NOT NULL DEFAULT -1, error TEXT NOT NULL DEFAULT '');"
+    "CREATE TABLE IF NOT EXISTS ranges(id INTEGER PRIMARY KEY AUTOINCREMENT, job INTEGER NOT NULL,"
+    " first INTEGER NOT NULL, count INTEGER NOT NULL, acked INTEGER NOT NULL DEFAULT 0,"
+    " open INTEGER NOT NULL DEFAULT 1);"
+    "CREATE INDEX IF NOT EXISTS ranges_open ON ranges(job, open);";
+
+static int db_err(pc_coord *c, pc_err *e, const char *what) {
+  return pc_errf(e, PC_EIO, "store %s/jobs.db: %s: %s", c->data_dir, what, sqlite3_errmsg(c->db));
+}
+
+int pc_store_open(pc_coord *c, pc_err *e) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/jobs.db", c->data_dir);
+  if (sqlite3_open_v2(path, &c->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, NULL) != SQLITE_OK) {
+    int rc = db_err(c, e, "open");
+    sqlite3_close(c->db);
+    c->db = NULL;
+    return rc;
+  }
+  char *msg = NULL;
+  if (sqlite3_busy_timeout(c->db, 5000) != SQLITE_OK || sqlite3_exec(c->db, schema, NULL, NULL, &msg) != SQLITE_OK) {
+    int rc = pc_errf(e, PC_EIO, "store %s: schema: %s", path, msg ? msg : sqlite3_errmsg(c->db));
+    sqlite3_free(msg);
+    sqlite3_close(c->db);
+    c->db = NULL;
+    return rc;
+  }
+  return 0;
+}
+
+void pc_store_close(pc_coord *c) {
+  if (c->db) sqlite3_close(c->db);
+  c->db = NULL;
+}
+
+static int exec(pc_coord *c, const char *sql, pc_err *e) {
+  if (sqlite3_exec(c->db, sql, NULL, NULL, NULL) != SQLITE_OK) return db_err(c, e, sql);
+  return 0;
+}
+int pc_store_begin(pc_coord *c, pc_err *e) { return exec(c, "BEGIN IMMEDIATE", e); }
+int pc_store_commit(pc_coord *c, pc_err *e) { return exec(c, "COMMIT", e); }
+void pc_store_rollback(pc_coord *c) { sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL); }
+
+static int step_done(pc_coord *c, sqlite3_stmt *st, pc_err *e, const char *what) {
+  int r = sqlite3_step(st);
+  int rc = r == SQLITE_DONE ? 0 : db_err(c, e, what);
+  sqlite3_finalize(st);
+  return rc;
+}
+
+int pc_store_insert_job(pc_coord *c, pc_job *j, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "INSERT INTO jobs(name,bundle,settings,halt_iterations,halt_seconds,priority,state)"
+                                " VALUES(?,?,?,?,?,?,?)", -1, &st, NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare insert job");
+  sqlite3_bind_text(st, 1, j->name, -1, SQLITE_TRANSIENT);
+  sqlite3_bind_blob(st, 2, j->bundle, PC_BUNDLE_HASH, SQLITE_TRANSIENT);
+  sqlite3_bind_blob(st, 3, j->settings_blob, (int)j->settings_len, SQLITE_TRANSIENT);
+  sqlite3_bind_int64(st, 4, (sqlite3_int64)j->halt_iterations);
+  sqlite3_bind_double(st, 5, j->halt_seconds);
+  sqlite3_bind_int(st, 6, j->priority);
+  sqlite3_bind_text(st, 7, pc_job_state_name(j->state), -1, SQLITE_STATIC);
+  int rc = step_done(c, st, e, "insert job");
+  if (!rc) j->id = (uint64_t)sqlite3_last_insert_rowid(c->db);
+  return rc;
+}
+
+int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?"
+                                " WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare update job");
+  sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
+  sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
+  sqlite3_bind_int64(st, 3, (sqlite3_int64)j->done);
+  sqlite3_bind_double(st, 4, j->elapsed);
+  sqlite3_bind_int64(st, 5, (sqlite3_int64)j->ckpt_gen);
+  sqlite3_bind_int64(st, 6, j->light_per_iter);
+  sqlite3_bind_text(st, 7, j->error, -1, SQLITE_TRANSIENT);
+  sqlite3_bind_int64(st, 8, (sqlite3_int64)j->id);
+  return step_done(c, st, e, "update job");
+}
+
+int pc_store_insert_range(pc_coord *c, uint64_t job, uint64_t first, uint64_t count, uint64_t *id, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "INSERT INTO ranges(job,first,count) VALUES(?,?,?)", -1, &st, NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare insert range");
+  sqlite3_bind_int64(st, 1, (sqlite3_int64)job);
+  sqlite3_bind_int64(st, 2, (sqlite3_int64)first);
+  sqlite3_bind_int64(st, 3, (sqlite3_int64)count);
+  int rc = step_done(c, st, e, "insert range");
+  if (!rc) *id = (uint64_t)sqlite3_last_insert_rowid(c->db);
+  return rc;
+}
+
+int pc_store_update_range(pc_coord *c, const pc_range *r, bool open, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "UPDATE ranges SET count=?,acked=?,open=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare update range");
+  sqlite3_bind_int64(st, 1, (sqlite3_int64)r->count);
+  sqlite3_bind_int64(st, 2, (sqlite3_int64)r->acked);
+  sqlite3_bind_int(st, 3, open ? 1 : 0);
+  sqlite3_bind_int64(st, 4, (sqlite3_int64)r->id);
+  return step_done(c, st, e, "update range");
+}
+
+static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "SELECT id,first,count,acked FROM ranges WHERE job=? AND open=1 ORDER BY id", -1, &st,
+                         NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare load ranges");
+  sqlite3_bind_int64(st, 1, (sqlite3_int64)j->id);
+  pc_range **tail = &j->ranges;
+  int r, rc = 0;
+  double now = pc_coord_now();
+  while ((r = sqlite3_step(st)) == SQLITE_ROW) {
+    pc_range *g = calloc(1, sizeof *g);
+    if (!g) { rc = pc_errf(e, PC_ENOMEM, "store: out of memory"); break; }
+    g->id = (uint64_t)sqlite3_column_int64(st, 0);
+    g->first = (uint64_t)sqlite3_column_int64(st, 1);
+    g->count = (uint64_t)sqlite3_column_int64(st, 2);
+    g->acked = g->merged = (uint64_t)sqlite3_column_int64(st, 3);
+    /* its worker may come back and claim it within the grace period */
+    g->orphan_since = now;
+    *tail = g;
+    tail = &g->next;
+  }
+  if (!rc && r != SQLITE_DONE) rc = db_err(c, e, "load ranges");
+  sqlite3_finalize(st);
+  return rc;
+}
+
+int pc_store_load(pc_coord *c, pc_err *e) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(c->db, "SELECT id,name,bundle,settings,halt_iterations,halt_seconds,priority,state,next_iter,"
+                                "done,elapsed,ckpt_gen,light_per_iter,error FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
+    return db_err(c, e, "prepare load jobs");
+  pc_job **tail = &c->jobs;
+  int r, rc = 0;
+  while ((r = sqlite3_step(st)) == SQLITE_ROW) {
+    pc_job *j = calloc(1, sizeof *j);
+    if (!j) { rc = pc_errf(e, PC_ENOMEM, "store: out of memory"); break; }
+    j->id = (uint64_t)sqlite3_column_int64(st, 0);
+    snprintf(j->name, sizeof j->name, "%s", (const char *)sqlite3_column_text(st, 1));
+    if (sqlite3_column_bytes(st, 2) == PC_BUNDLE_HASH) memcpy(j->bundle, sqlite3_column_blob(st, 2), PC_BUNDLE_HASH);
+    j->settings_len = (size_t)sqlite3_column_bytes(st, 3);
+    j->settings_blob = malloc(j->settings_len + 1);
+    if (!j->settings_blob) { free(j); rc = pc_errf(e, PC_ENOMEM, "store: out of memory"); break; }
+    if (j->settings_len) memcpy(j->settings_blob, sqlite3_column_blob(st, 3), j->settings_len);
+    j->halt_iterations = (uint64_t)sqlite3_column_int64(st, 4);
+    j->halt_seconds = sqlite3_column_double(st, 5);
+    j->priority = sqlite3_column_int(st, 6);
+    if (pc_job_state_parse((const char *)sqlite3_column_text(st, 7), &j->state) != 0) j->state = PC_JOB_FAILED;
+    j->next_iter = (uint64_t)sqlite3_column_int64(st, 8);
+    j->done = (uint64_t)sqlite3_column_int64(st, 9);
+    j->elapsed = sqlite3_column_double(st, 10);
+    j->ckpt_gen = (uint64_t)sqlite3_column_int64(st, 11);
+    j->light_per_iter = sqlite3_column_int64(st, 12);
+    snprintf(j->error, sizeof j->error, "%s", (const char *)sqlite3_column_text(st, 13));
+    *tail = j;
+    tail = &j->next;
+    if (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING || j->state == PC_JOB_QUEUED)
+      if ((rc = load_ranges(c, j, e)) != 0) break;
+  }
+  if (!rc && r != SQLITE_DONE) rc = db_err(c, e, "load jobs");
+  sqlite3_finalize(st);
+  return rc;
+}

@@ -1,0 +1,17 @@
+# kill_restart.sh: SIGKILL a worker mid-job, then SIGKILL the coordinator and restart it on
+# the same port: the job completes and counts exactly the requested iterations.
+. "$(dirname "$0")/lib.inc"
+start_coord
+start_worker w1; W1=$LAST
+start_worker w2
+J=$("$B/pcbpt-coord" submit "$S/scenes/furnace/scene.xml" --spp 400 --width 64 --height 64 $H | tail -1)
+sleep 2
+kill -9 "$W1"
+sleep 1
+kill -9 "$COORD"
+sleep 1
+start_coord "$PORT"
+start_worker w3
+timeout 55 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "wait"
+[ "$(job_field "$J" iterations)" = 400 ] || fail "iterations $(job_field "$J" iterations) != 400"
+echo PASS

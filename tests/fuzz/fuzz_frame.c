@@ -1,0 +1,23 @@
+/* fuzz_frame.c: libFuzzer target for the frame decoder: arbitrary bytes, fed in arbitrary
+ * splits, must never crash or leak; decoded envelopes are freed. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "wire_frame.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  pc_wire_decoder d;
+  pc_wire_decoder_init(&d, 1 << 16);
+  size_t off = 0, step = size ? (size_t)data[0] % 7 + 1 : 1;
+  while (off < size) {
+    size_t n = size - off < step ? size - off : step, used = 0;
+    Pcbpt__Envelope *env = NULL;
+    pc_err e;
+    int r = pc_wire_decoder_push(&d, data + off, n, &used, &env, &e);
+    if (r < 0) break;
+    if (r == 1) pcbpt__envelope__free_unpacked(env, NULL);
+    off += used;
+  }
+  pc_wire_decoder_free(&d);
+  return 0;
+}

@@ -1,0 +1,98 @@
+/* test_film.c: per-strategy layers keep their own counts and normalizations (DESIGN.md §4.2):
+ * eye layers divide by iterations, light layers by light paths / (W*H); adding films adds sums
+ * and counts; non-finite samples are dropped and counted; the EXR carries layers and counts. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "film.h"
+#include "image.h"
+
+static void test_layers_and_normalization(void **state) {
+  (void)state;
+  pc_film f;
+  pc_err e = {0};
+  assert_int_equal(pc_film_init(&f, 4, 2, 2, &e), 0);
+  /* 4 standard + path length 1 (s1t1, s0t2) + length 2 (s2t1, s1t2, s0t3) */
+  assert_int_equal(f.nlayers, 9);
+  assert_string_equal(f.layers[PC_LAYER_LT].name, "lt");
+  assert_int_equal(f.layers[PC_LAYER_LT].norm, PC_NORM_LIGHT);
+  int l = pc_film_strategy_layer(&f, 1, 2);
+  assert_true(l >= 4);
+  assert_string_equal(f.layers[l].name, "s1t2");
+  assert_int_equal(f.layers[pc_film_strategy_layer(&f, 2, 1)].norm, PC_NORM_LIGHT);
+  assert_int_equal(pc_film_strategy_layer(&f, 3, 1), -1);
+
+  pc_film_add_sample(&f, PC_LAYER_PT, 1, 0, v3(2, 4, 6));
+  pc_film_add_sample(&f, PC_LAYER_LT, 1, 0, v3(1, 1, 1));
+  pc_film_add_sample(&f, PC_LAYER_NEE, 0, 0, v3(NAN, 0, 0));
+  pc_film_add_sample(&f, PC_LAYER_NEE, 0, 0, v3(INFINITY, 0, 0));
+  assert_int_equal(f.dropped_nonfinite, 2);
+  f.layers[PC_LAYER_PT].count = 2;
+  f.layers[PC_LAYER_NEE].count = 2;
+  f.layers[PC_LAYER_INNER].count = 2;
+  f.layers[PC_LAYER_LT].count = 16; /* two iterations of 8 = W*H light paths */
+  float img[4 * 2 * 3];
+  pc_film_layer_image(&f, PC_LAYER_PT, img);
+  assert_true(fabsf(img[3] - 1.f) < 1e-6f && fabsf(img[5] - 3.f) < 1e-6f);
+  pc_film_layer_image(&f, PC_LAYER_LT, img);
+  assert_true(fabsf(img[3] - 0.5f) < 1e-6f); /* 1 * (W*H=8) / 16 */
+  pc_film_beauty(&f, img);
+  assert_true(fabsf(img[3] - 1.5f) < 1e-6f && fabsf(img[4] - 2.5f) < 1e-6f);
+  assert_true(pc_film_is_finite(&f));
+
+  pc_film g;
+  assert_int_equal(pc_film_init(&g, 4, 2, 2, &e), 0);
+  assert_int_equal(pc_film_add(&g, &f, &e), 0);
+  assert_int_equal(pc_film_add(&g, &f, &e), 0);
+  assert_int_equal(g.layers[PC_LAYER_LT].count, 32);
+  assert_int_equal(g.dropped_nonfinite, 4);
+  pc_film_beauty(&g, img);
+  assert_true(fabsf(img[3] - 1.5f) < 1e-6f); /* merging leaves normalized values unchanged */
+
+  pc_film h;
+  assert_int_equal(pc_film_init(&h, 4, 3, 0, &e), 0);
+  assert_int_not_equal(pc_film_add(&h, &f, &e), 0);
+  pc_film_free(&h);
+  pc_film_free(&g);
+
+  char dir[] = "/tmp/pcbpt-film-XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char path[256];
+  snprintf(path, sizeof path, "%s/f.exr", dir);
+  assert_int_equal(pc_film_write_exr(&f, path, NULL, 0, &e), 0);
+  pc_exr_file x;
+  assert_int_equal(pc_exr_read_layers(path, &x, &e), 0);
+  assert_int_equal(x.nlayers, 1 + f.nlayers);
+  int found = 0;
+  for (int i = 0; i < x.nattrs; i++)
+    if (strcmp(x.attr_names[i], "pcbpt.count.lt") == 0) found = atoi(x.attr_values[i]) == 16;
+  assert_true(found);
+  pc_exr_file_free(&x);
+  unlink(path);
+  rmdir(dir);
+  pc_film_free(&f);
+}
+
+static void test_bad_sizes(void **state) {
+  (void)state;
+  pc_film f;
+  pc_err e = {0};
+  assert_int_not_equal(pc_film_init(&f, 0, 4, 0, &e), 0);
+  assert_int_not_equal(pc_film_init(&f, 4, 4, 9, &e), 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_layers_and_normalization),
+      cmocka_unit_test(test_bad_sizes),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,175 @@
+/* test_wire.c: frame encoding/decoding (split reads, limits, garbage), film packing with its
+ * refusals, and zstd wrapping. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "wire_film.h"
+#include "wire_frame.h"
+
+static void encode_hello(uint8_t **b, size_t *n) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Hello h = PCBPT__HELLO__INIT;
+  h.protocol_version = PC_WIRE_PROTOCOL_VERSION;
+  h.role = PCBPT__ROLE__ROLE_WORKER;
+  h.name = "w1";
+  env.msg_case = PCBPT__ENVELOPE__MSG_HELLO;
+  env.hello = &h;
+  pc_err e;
+  assert_int_equal(pc_wire_encode(&env, b, n, &e), 0);
+}
+
+static void byte_by_byte(void **st) {
+  (void)st;
+  uint8_t *b;
+  size_t n;
+  encode_hello(&b, &n);
+  /* two frames back to back, fed one byte at a time */
+  uint8_t *two = malloc(2 * n);
+  memcpy(two, b, n);
+  memcpy(two + n, b, n);
+  pc_wire_decoder d;
+  pc_wire_decoder_init(&d, 0);
+  int frames = 0;
+  for (size_t i = 0; i < 2 * n; i++) {
+    size_t used;
+    Pcbpt__Envelope *env;
+    pc_err e;
+    int r = pc_wire_decoder_push(&d, two + i, 1, &used, &env, &e);
+    assert_true(r >= 0);
+    assert_int_equal(used, 1);
+    if (r == 1) {
+      assert_int_equal(env->msg_case, PCBPT__ENVELOPE__MSG_HELLO);
+      assert_string_equal(env->hello->name, "w1");
+      pcbpt__envelope__free_unpacked(env, NULL);
+      frames++;
+    }
+  }
+  assert_int_equal(frames, 2);
+  pc_wire_decoder_free(&d);
+  free(two);
+  free(b);
+}
+
+static void whole_buffer(void **st) {
+  (void)st;
+  uint8_t *b;
+  size_t n;
+  encode_hello(&b, &n);
+  uint8_t *two = malloc(2 * n);
+  memcpy(two, b, n);
+  memcpy(two + n, b, n);
+  pc_wire_decoder d;
+  pc_wire_decoder_init(&d, 0);
+  size_t off = 0, used;
+  int frames = 0;
+  Pcbpt__Envelope *env;
+  pc_err e;
+  while (off < 2 * n) {
+    int r = pc_wire_decoder_push(&d, two + off, 2 * n - off, &used, &env, &e);
+    assert_true(r >= 0);
+    off += used;
+    if (r == 1) { frames++; pcbpt__envelope__free_unpacked(env, NULL); }
+  }
+  assert_int_equal(frames, 2);
+  pc_wire_decoder_free(&d);
+  free(two);
+  free(b);
+}
+
+static int push_all(const uint8_t *b, size_t n, pc_err *e) {
+  pc_wire_decoder d;
+  pc_wire_decoder_init(&d, 0);
+  size_t off = 0, used;
+  Pcbpt__Envelope *env;
+  int r = 0;
+  while (off < n && (r = pc_wire_decoder_push(&d, b + off, n - off, &used, &env, e)) >= 0) {
+    off += used;
+    if (r == 1) pcbpt__envelope__free_unpacked(env, NULL);
+  }
+  pc_wire_decoder_free(&d);
+  return r;
+}
+
+static void refusals(void **st) {
+  (void)st;
+  pc_err e;
+  uint8_t big[4] = {0x00, 0x10, 0x00, 0x01}; /* 1 MiB + 1 */
+  assert_int_equal(push_all(big, 4, &e), PC_ELIMIT);
+  assert_non_null(strstr(e.msg, "exceeds"));
+  uint8_t empty[4] = {0, 0, 0, 0};
+  assert_int_equal(push_all(empty, 4, &e), PC_EPARSE);
+  uint8_t garbage[] = {0, 0, 0, 6, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff};
+  assert_int_equal(push_all(garbage, sizeof garbage, &e), PC_EPARSE);
+  uint8_t noset[] = {0, 0, 0, 2, 0x78, 0x01}; /* unknown field 15 varint: no message set */
+  assert_int_equal(push_all(noset, sizeof noset, &e), PC_EPARSE);
+  /* a truncated frame is simply incomplete: no error, nothing decoded */
+  uint8_t *b;
+  size_t n;
+  encode_hello(&b, &n);
+  assert_int_equal(push_all(b, n - 1, &e), 0);
+  free(b);
+}
+
+static void make_film(pc_film *f, int w, int h) {
+  memset(f, 0, sizeof *f);
+  f->w = w; f->h = h; f->nlayers = 2;
+  strcpy(f->layers[0].name, "pt");
+  f->layers[0].norm = PC_NORM_EYE;
+  strcpy(f->layers[1].name, "lt");
+  f->layers[1].norm = PC_NORM_LIGHT;
+  for (int l = 0; l < 2; l++) f->layers[l].sum = calloc((size_t)w * h * 3, sizeof(double));
+}
+static void free_film(pc_film *f) { for (int l = 0; l < f->nlayers; l++) free(f->layers[l].sum); }
+
+static void film_roundtrip(void **st) {
+  (void)st;
+  pc_film a, b, c;
+  make_film(&a, 4, 3);
+  make_film(&b, 4, 3);
+  make_film(&c, 3, 4);
+  for (int i = 0; i < 36; i++) { a.layers[0].sum[i] = i * 0.5; a.layers[1].sum[i] = -i; }
+  a.layers[0].count = 7;
+  a.layers[1].count = 7 * 12;
+  a.dropped_nonfinite = 3;
+  uint8_t *buf, *z, *back;
+  size_t n, zn;
+  pc_err e;
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  assert_int_equal(pc_wire_compress(buf, n, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_decompress(z, zn, n + 1, n + 1, &back, &e), PC_EINVAL);
+  assert_int_equal(pc_wire_decompress(z, zn, n, n, &back, &e), 0);
+  assert_memory_equal(buf, back, n);
+  assert_int_equal(pc_wire_film_unpack(back, n, &b, &e), 0);
+  assert_int_equal(b.layers[0].count, 7);
+  assert_int_equal(b.layers[1].count, 84);
+  assert_int_equal(b.dropped_nonfinite, 3);
+  assert_true(b.layers[0].sum[35] == 17.5);
+  /* wrong resolution */
+  assert_int_equal(pc_wire_film_unpack(back, n, &c, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "resolution"));
+  /* a NaN is refused and leaves the target untouched */
+  a.layers[1].sum[5] = 0.0 / 0.0;
+  free(buf);
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  b.layers[1].count = 1;
+  assert_int_equal(pc_wire_film_unpack(buf, n, &b, &e), PC_ENUMERIC);
+  assert_int_equal(b.layers[1].count, 1);
+  /* truncated */
+  assert_int_equal(pc_wire_film_unpack(buf, n - 8, &b, &e), PC_EINVAL);
+  free(buf); free(z); free(back);
+  free_film(&a); free_film(&b); free_film(&c);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
+    cmocka_unit_test(film_roundtrip),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

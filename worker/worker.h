@@ -1,0 +1,41 @@
+/* worker.h: pcbpt-worker's shared state: the range being rendered, shared between the
+ * protocol (loop thread) and the render thread under one mutex. */
+#ifndef PC_WORKER_H
+#define PC_WORKER_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "film.h"
+#include "render.h"
+
+typedef struct pc_wrender {
+  uv_mutex_t mu;
+  uv_cond_t cv;
+  uv_thread_t thread;
+  uv_async_t *notify;      /* woken on the loop after each batch and at the end of a range */
+  int threads;
+  /* the assignment (written by the loop while the thread is idle) */
+  bool have_range, range_done, failed, quit;
+  uint64_t job_id, range_id, first, count;
+  pc_render_settings set;
+  char scene_path[1200];
+  atomic_bool cancel;
+  /* progress (thread writes, loop reads and takes, under mu) */
+  uint64_t rendered;       /* iterations of the range rendered so far */
+  pc_film pending;         /* rendered, not yet taken for upload */
+  bool pending_ready;
+  uint64_t pend_first, pend_count;
+  double rate;             /* iterations per second */
+  char error[512];
+} pc_wrender;
+
+int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
+void pc_wrender_stop(pc_wrender *w);
+/* Starts a range (the thread must be idle). */
+int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
+                      const pc_render_settings *s, const char *scene_path, pc_err *e);
+
+#endif
