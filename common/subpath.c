@@ -25,10 +25,28 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     pc_hit h;
     c->rays++;
     if (!pc_scene_intersect(s, o, dir, INFINITY, &h)) break;
-    float cos_in = v3_absdot(h.ng, dir);
-    float d2 = v3_len2(v3_sub(h.p, prev->p));
+    /* The ray left from an offset origin: the MIS pdfs and the vertex's wo use the direction
+     * between the stored vertices, as every connection to them does. */
+    vec3 e = v3_sub(h.p, prev->p);
+    float d2 = v3_len2(e);
+    if (!(d2 > 0.f)) break;
+    vec3 da = v3_scale(e, 1.f / sqrtf(d2));
+    float cos_in = v3_absdot(h.ng, da);
     /* A grazing hit has no usable area pdf (its reverse strategies would divide by ~0). */
-    if (!(cos_in > 1e-6f) || !(d2 > 0.f)) break;
+    if (!(cos_in > 1e-6f)) break;
+    if (prev->kind == PC_VTX_SURFACE) {
+      cos_out = v3_absdot(prev->ng, da);
+      if (!delta) {
+        const pc_material *pm = &s->materials[prev->material];
+        pdf_fwd = pc_bsdf_pdf(pm, s->textures, &prev->sh, prev->wo, da) * prev->q;
+        pdf_rev = pc_bsdf_pdf(pm, s->textures, &prev->sh, da, prev->wo) * prev->q;
+        if (!(pdf_fwd > 0.f)) break;
+      }
+    } else if (prev->kind == PC_VTX_LIGHT && cos_out > 0.f) {
+      cos_out = v3_dot(prev->ng, da);
+      pdf_fwd = cos_out * PC_INV_PI;
+      if (!(pdf_fwd > 0.f)) break;
+    }
     const pc_shape *shape = &s->shapes[h.shape];
     const pc_material *m = &s->materials[shape->material];
     pc_path_vertex *cur = &v[nv];
@@ -36,7 +54,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->p = h.p;
     cur->ng = h.ng;
     cur->sh = pc_shading_from_hit(&h);
-    cur->wo = v3_neg(dir);
+    cur->wo = v3_neg(da);
     cur->beta = beta;
     cur->material = shape->material;
     cur->light = shape->light;
@@ -58,10 +76,11 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
     beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, cur->sh.sh.n) / (bs.pdf * q)));
     if (!v3_is_finite(beta) || v3_is_zero(beta)) break;
+    /* Delta lobes keep the sampled lobe probabilities; smooth ones are re-evaluated along the
+     * actual edge once it is known. */
     pdf_fwd = bs.pdf * q;
     pdf_rev = bs.pdf_rev * q;
     delta = bs.is_delta;
-    cos_out = v3_absdot(cur->ng, bs.wi);
     dir = bs.wi;
   }
   return nv;

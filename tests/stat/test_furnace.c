@@ -56,9 +56,21 @@ static void test_furnace_pt(void **state) {
   check_method(PC_METHOD_PT);
 }
 
+static void test_furnace_lt(void **state) {
+  (void)state;
+  check_method(PC_METHOD_LT);
+}
+
+static void test_furnace_bdpt(void **state) {
+  (void)state;
+  check_method(PC_METHOD_BDPT);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_furnace_pt),
+      cmocka_unit_test(test_furnace_lt),
+      cmocka_unit_test(test_furnace_bdpt),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
