@@ -238,8 +238,9 @@ int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int
   return PC_OK;
 }
 
-/* Keeps the entries with positive weight and normalizes them; if none has one, weights all
- * entries uniformly. */
+/* Keeps the entries with positive weight and normalizes them. If none has one, the records
+ * near z all face another way (often the other side of a thin wall, with a PMF of another
+ * room): p_conn falls back to the uniform PMF (u = 1) rather than trust them. */
 static void normalize_weights(pc_irec_lookup *L) {
   double sum = 0.0;
   int m = 0;
@@ -251,7 +252,8 @@ static void normalize_weights(pc_irec_lookup *L) {
     sum += L->w[m++];
   }
   if (m == 0) {
-    for (int j = 0; j < L->n; j++) L->w[j] = 1.0 / L->n;
+    L->n = 0;
+    L->u = 1.f;
     return;
   }
   L->n = m;
@@ -279,7 +281,8 @@ void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int kn
     if (rec->total <= 0.0) continue; /* no distribution to contribute */
     double cn = v3_dot(z->n, rec->site.n), cw = v3_dot(z->wi, rec->site.wi);
     double w = 0.0;
-    if (cn > 0.0 && cw > 0.0) w = cn * cw * (dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);
+    /* The distance factor ranks records against each other; a lone record keeps factor 1. */
+    if (cn > 0.0 && cw > 0.0) w = cn * cw * (k > 1 && dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);
     L->w[L->n] = w;
     L->pmf[L->n] = s->mass + rec->offset;
     L->cmf[L->n] = s->mass + rec->offset + (size_t)s->V;

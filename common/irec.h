@@ -85,9 +85,10 @@ typedef struct pc_irec_lookup {
  * cos(n, n_q) * cos(wi, wi_q) * (1 - d_q / sum_j d_j) over the knn found records (Popov et
  * al. sect. 6: product of the cosines, times the distance normalized over the selected
  * records); records with a non-positive cosine or weight, and records that see no light
- * vertex, are dropped. If every record with a PMF is dropped, they are weighted uniformly.
- * If none of the found records has a PMF, n = 0: p_conn is then the uniform PMF when u > 0,
- * and undefined (pc_irec_sample draws nothing) when u == 0. */
+ * vertex, are dropped. If every record with a PMF is dropped for its weight, p_conn falls
+ * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF, n = 0:
+ * p_conn is then the uniform PMF when u > 0, and undefined (pc_irec_sample draws nothing)
+ * when u == 0. */
 void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L);
 

@@ -46,6 +46,10 @@ static vec3 rand_dir(pc_rng *r) {
   return v3(s * cosf(phi), s * sinf(phi), z);
 }
 
+/* Directions around +z: records and eye vertices of one surface orientation, as in a scene,
+ * so most neighbours agree in normal and incoming direction. */
+static vec3 rand_dir_up(pc_rng *r) { return v3_norm(v3_add(rand_dir(r), v3(0, 0, 1.2f))); }
+
 static vec3 rand_point(pc_rng *r) { return v3(pc_rng_f(r), pc_rng_f(r), pc_rng_f(r)); }
 
 /* Light vertices on the cube's walls facing inwards-ish, every 7th with zero throughput;
@@ -61,8 +65,8 @@ static scene make_scene(int V, int R, uint64_t seed) {
   for (int i = 0; i < R; i++) {
     sc.sites[i].p = rand_point(&r);
     if (i % 10 == 9) sc.sites[i].p.z = -0.5f * pc_rng_f(&r) - 0.01f;
-    sc.sites[i].n = rand_dir(&r);
-    sc.sites[i].wi = rand_dir(&r);
+    sc.sites[i].n = rand_dir_up(&r);
+    sc.sites[i].wi = rand_dir_up(&r);
   }
   return sc;
 }
@@ -127,7 +131,7 @@ static void test_interpolated_pmf(void **state) {
   pc_rng r = pc_rng_make(2, 0, PC_STREAM_MISC, 7);
   int interpolated = 0, multi = 0;
   for (int q = 0; q < 500; q++) {
-    pc_irec_site z = {rand_point(&r), rand_dir(&r), rand_dir(&r), NULL};
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
     pc_irec_lookup L;
     pc_irec_lookup_cached(s, &z, 6, 0.1f, &L);
     assert_true(L.n >= 0 && L.n <= 6);
@@ -195,7 +199,7 @@ static void test_sampling_matches_pconn(void **state) {
   scene sc = make_scene(80, 200, 3);
   pc_irec_store *s = build(&sc, NULL);
   pc_err e = {0};
-  pc_irec_site z = {v3(0.5f, 0.4f, 0.6f), v3_norm(v3(0.2f, -1.f, 0.1f)), v3_norm(v3(0.3f, 0.1f, 1.f)), NULL};
+  pc_irec_site z = {v3(0.5f, 0.4f, 0.6f), v3_norm(v3(0.2f, -0.3f, 1.f)), v3_norm(v3(0.3f, 0.1f, 1.f)), NULL};
   pc_irec_lookup L;
   const float mixes[] = {0.1f, 0.f, 0.5f, 1.f};
   for (int m = 0; m < 4; m++) {
@@ -225,7 +229,7 @@ static void test_lazy_equals_materialised(void **state) {
   pc_rng r = pc_rng_make(4, 0, PC_STREAM_MISC, 3);
   double *C = malloc((size_t)sc.V * sizeof *C);
   for (int q = 0; q < 100; q++) {
-    pc_irec_site z = {rand_point(&r), rand_dir(&r), rand_dir(&r), NULL};
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
     pc_irec_lookup L;
     pc_irec_lookup_cached(s, &z, 1 + q % 12, 0.1f, &L);
     if (L.n == 0) continue;
@@ -297,8 +301,8 @@ static void test_bad_importance(void **state) {
   free_scene(&sc);
 }
 
-/* No usable record: uniform with u > 0, nothing drawn with u = 0. Records facing away only:
- * uniform weights over them. u = 1: exactly uniform. */
+/* No record with a PMF nearby: uniform with u > 0, nothing drawn with u = 0. Records facing
+ * away only: uniform. u = 1: exactly uniform. */
 static void test_fallbacks(void **state) {
   (void)state;
   scene sc = make_scene(30, 40, 7);
@@ -319,7 +323,8 @@ static void test_fallbacks(void **state) {
   chi_square(&L, 50000, 70);
   pc_irec_destroy(s);
 
-  /* Two records, normals opposite to the query's: both dropped, then weighted equally. */
+  /* Two records, normals opposite to the query's: both dropped, and p_conn is uniform even
+   * with u = 0. */
   pc_irec_site two[2] = {{v3(0.5f, 0.5f, 0.5f), v3(0, 0, -1), v3(0, 0, -1), NULL},
                          {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL}};
   s = NULL;
@@ -329,13 +334,18 @@ static void test_fallbacks(void **state) {
   assert_true(pc_irec_total(s, 0) > 0.0 && pc_irec_total(s, 1) > 0.0);
   pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL};
   pc_irec_lookup_cached(s, &up, 6, 0.f, &L);
-  assert_int_equal(L.n, 2);
-  assert_true(L.w[0] == 0.5 && L.w[1] == 0.5);
+  assert_int_equal(L.n, 0);
+  assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
+  for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
   /* Same orientation: weights follow 1 - d_q / sum d (distances 0.1 and 0.3). */
   pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL};
   pc_irec_lookup_cached(s, &down, 6, 0.f, &L);
   assert_int_equal(L.n, 2);
   assert_true(fabs(L.w[0] - 0.75 / 1.0) < 1e-5 && fabs(L.w[1] - 0.25) < 1e-5);
+  /* One neighbour: its weight is 1 (no distance factor to rank it against). */
+  pc_irec_lookup_cached(s, &down, 1, 0.f, &L);
+  assert_int_equal(L.n, 1);
+  assert_true(L.w[0] == 1.0);
   /* Mixing weight 1 is the uniform PMF whatever the records say. */
   pc_irec_lookup_cached(s, &down, 6, 1.f, &L);
   for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
