@@ -117,7 +117,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->tctx[i].eye_path = v + PC_MAX_SEGMENTS + 2;
     r->tctx[i].n_light = r->n_light;
     r->tctx[i].counts = pc_mis_counts_bdpt(settings, r->n_light);
-    r->tctx[i].weighted = true;
+    r->tctx[i].weighted = !settings->unweighted;
     r->tctx[i].scene = scene;
     r->tctx[i].set = &r->set;
     r->tctx[i].max_segments = max_seg;
