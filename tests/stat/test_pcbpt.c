@@ -5,7 +5,8 @@
  * PCBPT with a uniform PMF and K about V (M = 20 paths, ~60 vertices) agree within 4.5
  * combined standard errors measured from independent iterations. (Uniform PCBPT with K = V
  * equals CBDPT in expectation, not sample by sample: its K draws are i.i.d.) With --mis
- * standard the inner layer has other weights, so it is compared through the beauty image. */
+ * standard the inner layer has other weights, so it is compared through the beauty image.
+ * Every shipped scene renders finite with CBDPT and both PCBPT PMF modes. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -150,11 +151,39 @@ static void test_inner_agrees(void **state) {
   pc_scene_free(&scene);
 }
 
+/* No NaN or Inf on any shipped scene (glass and mirrors included), per-strategy layers on. */
+static void test_all_scenes_finite(void **state) {
+  (void)state;
+  static const char *const scenes[] = {"cornell-box", "furnace", "ajar-door", "slit-room", "open-room", "glossy-glass"};
+  const pc_method methods[] = {PC_METHOD_CBDPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT};
+  for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; si++)
+    for (int mi = 0; mi < 3; mi++) {
+      pc_render_request req = request(methods[mi], 24, -1);
+      req.set.height = 20;
+      req.set.strategy_layers = 4;
+      req.set.pmf_mode = mi == 2 ? PC_PMF_EXACT : PC_PMF_CACHED;
+      pc_scene scene = {0};
+      assert_int_equal(stat_load(scenes[si], &req, &scene), 0);
+      pc_film film;
+      pc_err e = {0};
+      pc_renderer *r = NULL;
+      assert_int_equal(pc_film_init(&film, req.set.width, req.set.height, req.set.strategy_layers, &e), 0);
+      assert_int_equal(pc_renderer_create(&scene, &req.set, 2, &r, &e), 0);
+      assert_int_equal(pc_render_iterations(r, 0, 3, &film, NULL, NULL, NULL, NULL, &e), 0);
+      assert_true(pc_film_is_finite(&film));
+      assert_int_equal(film.dropped_nonfinite, 0);
+      pc_renderer_destroy(r);
+      pc_film_free(&film);
+      pc_scene_free(&scene);
+    }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_furnace),
       cmocka_unit_test(test_shared_layers_equal_bdpt),
       cmocka_unit_test(test_inner_agrees),
+      cmocka_unit_test(test_all_scenes_finite),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
