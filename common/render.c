@@ -83,8 +83,6 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
   if (rc != PC_OK) return rc;
-  if (settings->method < PC_METHOD_PT || settings->method > PC_METHOD_PCBPT)
-    return pc_errf(e, PC_EUNSUPPORTED, "method %s is not implemented yet", pc_method_name(settings->method));
   if (threads < 0 || threads > 1024) return pc_errf(e, PC_EINVAL, "threads %d out of range 0..1024", threads);
   if (threads == 0) threads = pc_cpu_count();
   pc_renderer *r = calloc(1, sizeof *r);
