@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "bidir.h"
+#include "pcbpt.h"
 #include "thread_pool.h"
 
 #define TILE 16
@@ -29,6 +30,7 @@ struct pc_renderer {
   uint64_t n_light;       /* N_L */
   uint64_t light_first;   /* first light path of the light pass (the others are paired) */
   pc_path_vertex *verts;  /* per-thread sub-path buffers */
+  pc_pcbpt *pcbpt;        /* CBDPT/PCBPT per-iteration state */
 };
 
 void pc_render_settings_default(pc_render_settings *s) {
@@ -45,6 +47,11 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_k = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
+  /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
+   * every light vertex, so where the cached PMF is wrong (a vertex it thinks is dark is not)
+   * a sample's weight 1/(M p_conn) is at most V/(u M), 1/u = 10 times the uniform (CBDPT-like)
+   * weight: variance there is bounded by about 1/u times CBDPT's, while the interpolated PMF
+   * keeps 90% of the samples where it is right. */
   s->uniform_mix = 0.1f;
   s->mis_mode = PC_MIS_UPPER_BOUND;
   s->pmf_mode = PC_PMF_CACHED;
@@ -76,8 +83,6 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
   if (rc != PC_OK) return rc;
-  if (settings->method != PC_METHOD_PT && settings->method != PC_METHOD_LT && settings->method != PC_METHOD_BDPT)
-    return pc_errf(e, PC_EUNSUPPORTED, "method %s is not implemented yet", pc_method_name(settings->method));
   if (threads < 0 || threads > 1024) return pc_errf(e, PC_EINVAL, "threads %d out of range 0..1024", threads);
   if (threads == 0) threads = pc_cpu_count();
   pc_renderer *r = calloc(1, sizeof *r);
@@ -116,6 +121,19 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->tctx[i].max_segments = max_seg;
     r->tctx[i].film = &r->scratch;
     r->tctx[i].splat = &r->splat[i];
+    r->tctx[i].thread = i;
+  }
+  if (settings->method == PC_METHOD_CBDPT || settings->method == PC_METHOD_PCBPT) {
+    rc = pc_pcbpt_create(settings, threads, &r->pcbpt, e);
+    if (rc != PC_OK) {
+      pc_renderer_destroy(r);
+      return rc;
+    }
+    for (int i = 0; i < threads; i++) {
+      r->tctx[i].pcbpt = r->pcbpt;
+      /* Correlated inner strategies count 1 (upper-bound weights, DESIGN.md §4.3) or M. */
+      if (settings->mis_mode == PC_MIS_STANDARD) r->tctx[i].counts.n_inner = (float)settings->pcbpt_m;
+    }
   }
   *out = r;
   return PC_OK;
@@ -130,6 +148,7 @@ void pc_renderer_destroy(pc_renderer *r) {
   free(r->splat);
   free(r->tctx);
   free(r->verts);
+  pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
   free(r);
 }
@@ -147,7 +166,8 @@ static void eye_tile(void *arg, int thread, int item) {
   int y1 = (ty + 1) * TILE < r->set.height ? (ty + 1) * TILE : r->set.height;
   void (*pixel)(pc_tctx *, int, int) = r->set.method == PC_METHOD_LT ? pc_lt_pixel
                                        : r->set.method == PC_METHOD_BDPT ? pc_bdpt_pixel
-                                                                         : pc_pt_pixel;
+                                       : r->set.method == PC_METHOD_PT   ? pc_pt_pixel
+                                                                         : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
     for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
 }
@@ -192,6 +212,12 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
       r->tctx[i].rays = 0;
       r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
     }
+    double t_pmf = 0.0;
+    if (r->pcbpt) {
+      int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
+      if (rc != PC_OK) return rc;
+      t_pmf = now_seconds() - t0;
+    }
     pc_pool_run(r->pool, r->tiles_x * r->tiles_y, eye_tile, r);
     bool light = r->set.method != PC_METHOD_PT;
     if (light && r->n_light > r->light_first)
@@ -221,13 +247,14 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
         tl += r->tctx[i].t_lt;
         tc += r->tctx[i].t_connect;
       }
-      double busy = tp + tl + tc;
+      double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
+      stats->t_pmf += t_pmf;
       if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
-        stats->t_paths += t1 - t0;
+        stats->t_paths += span;
       } else {
-        stats->t_paths += (t1 - t0) * tp / busy;
-        stats->t_lt += (t1 - t0) * tl / busy;
-        stats->t_connect += (t1 - t0) * tc / busy;
+        stats->t_paths += span * tp / busy;
+        stats->t_lt += span * tl / busy;
+        stats->t_connect += span * tc / busy;
       }
       stats->t_total += now_seconds() - t0;
     }
