@@ -70,6 +70,9 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
+  if (s->method == PC_METHOD_PCBPT && s->pmf_mode == PC_PMF_CACHED && s->uniform_mix == 0.f)
+    return pc_errf(e, PC_EINVAL, "uniform-mix 0 with the cached PMF would be biased (a light vertex that no nearby "
+                                 "record sees could never be sampled): use a value > 0 or --pmf exact");
   return PC_OK;
 }
 
