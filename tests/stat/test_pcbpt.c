@@ -1,5 +1,5 @@
-/* test_pcbpt.c: CBDPT and PCBPT are unbiased. The white furnace's exact radiance is reproduced
- * (cached and exact PMF); on the Cornell box the strategies they share with BDPT (pt, nee, lt)
+/* test_pcbpt.c: CBDPT and PCBPT are unbiased (their furnace checks are in test_furnace.c). On
+ * the Cornell box the strategies they share with BDPT (pt, nee, lt)
  * are bit-identical to BDPT's for the same seed (same streams, same upper-bound counts), and
  * the inner layer's block means of BDPT, CBDPT, PCBPT (cached, exact, --mis standard) and
  * PCBPT with a uniform PMF and K about V (M = 20 paths, ~60 vertices) agree within 4.5
@@ -30,35 +30,6 @@ static pc_render_request request(pc_method method, int res, int depth) {
   req.set.pcbpt_k = 2;
   req.set.cache_fraction = 0.05f;
   return req;
-}
-
-static void furnace(pc_method method, pc_pmf_mode pmf, int depth) {
-  pc_render_request req = request(method, 16, depth);
-  req.set.pmf_mode = pmf;
-  pc_scene scene = {0};
-  assert_int_equal(stat_load("furnace", &req, &scene), 0);
-  double le = scene.lights[0].radiance.x, a = scene.materials[scene.shapes[scene.lights[0].shape].material].reflectance.value.x;
-  double exact = 0, ak = 1;
-  int d = depth < 0 ? 100000 : depth;
-  for (int i = 0; i < d && ak > 1e-12; i++, ak *= a) exact += le * ak;
-  stat_blocks st;
-  assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, 24, -1, 16, &st), 0);
-  double mean = stat_mean(&st, 0), se = stat_se(&st, 0), err = fabs(mean - exact);
-  printf("furnace %-5s pmf %d maxDepth %2d: mean %.6f exact %.6f err %.2e se %.2e\n", pc_method_name(method), (int)pmf,
-         depth, mean, exact, err, se);
-  assert_true(err <= fmax(4 * se, 1e-5 * exact));
-  assert_true(err <= 0.015 * exact);
-  stat_free(&st);
-  pc_scene_free(&scene);
-}
-
-static void test_furnace(void **state) {
-  (void)state;
-  furnace(PC_METHOD_CBDPT, PC_PMF_CACHED, 3);
-  furnace(PC_METHOD_CBDPT, PC_PMF_CACHED, -1);
-  furnace(PC_METHOD_PCBPT, PC_PMF_CACHED, 3);
-  furnace(PC_METHOD_PCBPT, PC_PMF_CACHED, -1);
-  furnace(PC_METHOD_PCBPT, PC_PMF_EXACT, -1);
 }
 
 #define RES 24
@@ -180,7 +151,6 @@ static void test_all_scenes_finite(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_furnace),
       cmocka_unit_test(test_shared_layers_equal_bdpt),
       cmocka_unit_test(test_inner_agrees),
       cmocka_unit_test(test_all_scenes_finite),
