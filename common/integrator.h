@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "film.h"
+#include "path_vertex.h"
 #include "render.h"
 #include "rng.h"
 #include "scene.h"
@@ -21,9 +22,16 @@ typedef struct pc_tctx {
   const pc_render_settings *set;
   int max_segments;     /* maxDepth resolved: PC_MAX_SEGMENTS when infinite */
   uint64_t iteration;
+  uint64_t n_light;     /* N_L: light paths per iteration */
+  pc_mis_counts counts; /* MIS sample counts of the method */
+  bool weighted;        /* false: every strategy weight 1 (debug, per-strategy tests) */
   pc_film *film;        /* the iteration's eye-side film (shared; pixels are disjoint) */
   pc_film *splat;       /* this thread's light-splat film */
   uint64_t rays;
+  pc_path_vertex *light_path, *eye_path; /* sub-path buffers, PC_MAX_SEGMENTS + 2 vertices each */
+  double t_paths, t_lt, t_connect;       /* thread-seconds per phase, for pc_render_stats */
+  int thread;                            /* this context's pool thread */
+  struct pc_pcbpt *pcbpt;                /* CBDPT/PCBPT: the iteration's stored light vertices and records */
 } pc_tctx;
 
 /* MIS weight of a strategy with pdf a against the others' summed (already heuristic-mapped)
@@ -43,5 +51,18 @@ static inline pc_shading pc_shading_from_hit(const pc_hit *h) {
 
 /* Unidirectional path tracer with next-event estimation (strategies s=0 and s=1). */
 void pc_pt_pixel(pc_tctx *c, int x, int y);
+
+/* Bidirectional path tracing for pixel (x,y): its eye sub-path, the s=0, s=1 and inner
+ * strategies with light path (pixel index mod N_L), and that light path's light tracing (t=1)
+ * when the pixel index is below N_L. */
+void pc_bdpt_pixel(pc_tctx *c, int x, int y);
+/* Light tracing of light path `index` (t=1 splats into c->splat); used for the light paths
+ * that no pixel is paired with, and by the lt method for all. */
+void pc_lt_light_path(pc_tctx *c, uint64_t index);
+/* Eye pass of the lt method: the camera ray of pixel (x,y) and s=0 for emitters seen directly. */
+void pc_lt_pixel(pc_tctx *c, int x, int y);
+/* CBDPT and PCBPT for pixel (x,y): BDPT's s=0, s=1 and t=1, and the inner strategies through
+ * the iteration's stored light vertices (c->pcbpt, prepared before the eye pass). */
+void pc_pcbpt_pixel(pc_tctx *c, int x, int y);
 
 #endif

@@ -1,17 +1,22 @@
 /* render.c: the renderer: a thread pool bound to a scene and settings, and the iteration loop
  * that every front end (standalone render, farm worker, tests) calls. One iteration renders the
  * whole image into a scratch film that is added to the caller's film only when complete, so a
- * cancelled call never leaves a partial iteration behind. */
+ * cancelled call never leaves a partial iteration behind. An iteration is an eye pass over
+ * pixel tiles (pt, lt's s=0, or BDPT with its paired light paths) and, for lt and bdpt, a light
+ * pass over the light paths no pixel is paired with; the threads' light splats are then merged
+ * and the light layers count N_L light paths. */
 #include "render.h"
 
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include "integrator.h"
+#include "bidir.h"
+#include "pcbpt.h"
 #include "thread_pool.h"
 
 #define TILE 16
+#define LIGHT_CHUNK 1024 /* light paths per work item of the light pass */
 
 struct pc_renderer {
   const pc_scene *scene;
@@ -22,6 +27,10 @@ struct pc_renderer {
   pc_tctx *tctx;       /* one per thread */
   atomic_bool *cancel;
   int tiles_x, tiles_y;
+  uint64_t n_light;       /* N_L */
+  uint64_t light_first;   /* first light path of the light pass (the others are paired) */
+  pc_path_vertex *verts;  /* per-thread sub-path buffers */
+  pc_pcbpt *pcbpt;        /* CBDPT/PCBPT per-iteration state */
 };
 
 void pc_render_settings_default(pc_render_settings *s) {
@@ -38,6 +47,11 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_k = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
+  /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
+   * every light vertex, so where the cached PMF is wrong (a vertex it thinks is dark is not)
+   * a sample's weight 1/(M p_conn) is at most V/(u M), 1/u = 10 times the uniform (CBDPT-like)
+   * weight: variance there is bounded by about 1/u times CBDPT's, while the interpolated PMF
+   * keeps 90% of the samples where it is right. */
   s->uniform_mix = 0.1f;
   s->mis_mode = PC_MIS_UPPER_BOUND;
   s->pmf_mode = PC_PMF_CACHED;
@@ -56,6 +70,9 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
+  if (s->method == PC_METHOD_PCBPT && s->pmf_mode == PC_PMF_CACHED && s->uniform_mix == 0.f)
+    return pc_errf(e, PC_EINVAL, "uniform-mix 0 with the cached PMF would be biased (a light vertex that no nearby "
+                                 "record sees could never be sampled): use a value > 0 or --pmf exact");
   return PC_OK;
 }
 
@@ -69,8 +86,6 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
   if (rc != PC_OK) return rc;
-  if (settings->method != PC_METHOD_PT)
-    return pc_errf(e, PC_EUNSUPPORTED, "method %s is not implemented yet", pc_method_name(settings->method));
   if (threads < 0 || threads > 1024) return pc_errf(e, PC_EINVAL, "threads %d out of range 0..1024", threads);
   if (threads == 0) threads = pc_cpu_count();
   pc_renderer *r = calloc(1, sizeof *r);
@@ -84,7 +99,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
     r->tctx = calloc((size_t)threads, sizeof(pc_tctx));
-    if (!r->splat || !r->tctx) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+    r->verts = calloc((size_t)threads * 2 * (PC_MAX_SEGMENTS + 2), sizeof(pc_path_vertex));
+    if (!r->splat || !r->tctx || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
   for (int i = 0; rc == PC_OK && i < threads; i++)
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
@@ -93,12 +109,34 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     return rc;
   }
   int max_seg = settings->max_depth < 0 ? PC_MAX_SEGMENTS : settings->max_depth;
+  uint64_t npix = (uint64_t)settings->width * (uint64_t)settings->height;
+  r->n_light = settings->light_paths ? settings->light_paths : npix;
+  r->light_first = settings->method == PC_METHOD_LT ? 0 : npix;
   for (int i = 0; i < threads; i++) {
+    pc_path_vertex *v = r->verts + (size_t)i * 2 * (PC_MAX_SEGMENTS + 2);
+    r->tctx[i].light_path = v;
+    r->tctx[i].eye_path = v + PC_MAX_SEGMENTS + 2;
+    r->tctx[i].n_light = r->n_light;
+    r->tctx[i].counts = pc_mis_counts_bdpt(settings, r->n_light);
+    r->tctx[i].weighted = !settings->unweighted;
     r->tctx[i].scene = scene;
     r->tctx[i].set = &r->set;
     r->tctx[i].max_segments = max_seg;
     r->tctx[i].film = &r->scratch;
     r->tctx[i].splat = &r->splat[i];
+    r->tctx[i].thread = i;
+  }
+  if (settings->method == PC_METHOD_CBDPT || settings->method == PC_METHOD_PCBPT) {
+    rc = pc_pcbpt_create(settings, threads, &r->pcbpt, e);
+    if (rc != PC_OK) {
+      pc_renderer_destroy(r);
+      return rc;
+    }
+    for (int i = 0; i < threads; i++) {
+      r->tctx[i].pcbpt = r->pcbpt;
+      /* Correlated inner strategies count 1 (upper-bound weights, DESIGN.md §4.3) or M. */
+      if (settings->mis_mode == PC_MIS_STANDARD) r->tctx[i].counts.n_inner = (float)settings->pcbpt_m;
+    }
   }
   *out = r;
   return PC_OK;
@@ -112,6 +150,8 @@ void pc_renderer_destroy(pc_renderer *r) {
     for (int i = 0; i < n; i++) pc_film_free(&r->splat[i]);
   free(r->splat);
   free(r->tctx);
+  free(r->verts);
+  pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
   free(r);
 }
@@ -127,8 +167,36 @@ static void eye_tile(void *arg, int thread, int item) {
   int tx = item % r->tiles_x, ty = item / r->tiles_x;
   int x1 = (tx + 1) * TILE < r->set.width ? (tx + 1) * TILE : r->set.width;
   int y1 = (ty + 1) * TILE < r->set.height ? (ty + 1) * TILE : r->set.height;
+  void (*pixel)(pc_tctx *, int, int) = r->set.method == PC_METHOD_LT ? pc_lt_pixel
+                                       : r->set.method == PC_METHOD_BDPT ? pc_bdpt_pixel
+                                       : r->set.method == PC_METHOD_PT   ? pc_pt_pixel
+                                                                         : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
-    for (int x = tx * TILE; x < x1; x++) pc_pt_pixel(c, x, y);
+    for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
+}
+
+static void light_chunk(void *arg, int thread, int item) {
+  pc_renderer *r = arg;
+  if (cancelled(r)) return;
+  uint64_t a = r->light_first + (uint64_t)item * LIGHT_CHUNK;
+  uint64_t b = a + LIGHT_CHUNK < r->n_light ? a + LIGHT_CHUNK : r->n_light;
+  for (uint64_t i = a; i < b; i++) pc_lt_light_path(&r->tctx[thread], i);
+}
+
+/* Adds the light layers of every thread's splat film into the scratch film and clears them. */
+static void merge_splats(pc_renderer *r) {
+  size_t n = (size_t)r->set.width * (size_t)r->set.height * 3;
+  for (int t = 0; t < pc_pool_size(r->pool); t++) {
+    pc_film *f = &r->splat[t];
+    for (int i = 0; i < f->nlayers; i++) {
+      if (f->layers[i].norm != PC_NORM_LIGHT) continue;
+      double *d = r->scratch.layers[i].sum, *src = f->layers[i].sum;
+      for (size_t j = 0; j < n; j++) d[j] += src[j];
+      memset(src, 0, n * sizeof(double));
+    }
+    r->scratch.dropped_nonfinite += f->dropped_nonfinite;
+    f->dropped_nonfinite = 0;
+  }
 }
 
 int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film *film, pc_render_stats *stats,
@@ -145,19 +213,52 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
     for (int i = 0; i < nthreads; i++) {
       r->tctx[i].iteration = first + k;
       r->tctx[i].rays = 0;
+      r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
+    }
+    double t_pmf = 0.0;
+    if (r->pcbpt) {
+      int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
+      if (rc != PC_OK) return rc;
+      t_pmf = now_seconds() - t0;
     }
     pc_pool_run(r->pool, r->tiles_x * r->tiles_y, eye_tile, r);
-    if (cancelled(r)) return pc_errf(e, PC_ECANCELED, "render cancelled");
+    bool light = r->set.method != PC_METHOD_PT;
+    if (light && r->n_light > r->light_first)
+      pc_pool_run(r->pool, (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK), light_chunk, r);
+    if (cancelled(r)) {
+      for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
+      return pc_errf(e, PC_ECANCELED, "render cancelled");
+    }
     double t1 = now_seconds();
-    for (int i = 0; i < r->scratch.nlayers; i++)
+    if (light) merge_splats(r);
+    for (int i = 0; i < r->scratch.nlayers; i++) {
       if (r->scratch.layers[i].norm == PC_NORM_EYE) r->scratch.layers[i].count = 1;
+      else if (light) r->scratch.layers[i].count = r->n_light;
+    }
     int rc = pc_film_add(film, &r->scratch, e);
     if (rc != PC_OK) return rc;
     if (stats) {
       stats->iterations++;
       stats->eye_paths += npix;
-      for (int i = 0; i < nthreads; i++) stats->rays += r->tctx[i].rays;
-      stats->t_paths += t1 - t0;
+      if (light) stats->light_paths += r->n_light;
+      /* The phases interleave on every thread: split the iteration's render time by the
+       * threads' summed time per phase. */
+      double tp = 0, tl = 0, tc = 0;
+      for (int i = 0; i < nthreads; i++) {
+        stats->rays += r->tctx[i].rays;
+        tp += r->tctx[i].t_paths;
+        tl += r->tctx[i].t_lt;
+        tc += r->tctx[i].t_connect;
+      }
+      double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
+      stats->t_pmf += t_pmf;
+      if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
+        stats->t_paths += span;
+      } else {
+        stats->t_paths += span * tp / busy;
+        stats->t_lt += span * tl / busy;
+        stats->t_connect += span * tc / busy;
+      }
       stats->t_total += now_seconds() - t0;
     }
     if (progress) progress(user, k + 1);

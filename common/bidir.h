@@ -1,0 +1,66 @@
+/* bidir.h: the building blocks every bidirectional method shares: tracing light and eye
+ * sub-paths into pc_path_vertex arrays (with their MIS quantities), the one connection routine
+ * (any light vertex with any eye vertex, the camera included), and the weight of an eye
+ * sub-path that hits an emitter (s=0). LT, BDPT, and later CBDPT/PCBPT differ only in which
+ * vertices they connect and with what counts. */
+#ifndef PC_BIDIR_H
+#define PC_BIDIR_H
+
+#include "integrator.h"
+#include "path_vertex.h"
+
+/* Counts of this render: n_lt = N_L / (W*H), n_inner = 1, heuristic from the settings. */
+pc_mis_counts pc_mis_counts_bdpt(const pc_render_settings *set, uint64_t n_light);
+
+/* Traces light sub-path `index` of the iteration (stream PC_STREAM_LIGHT/index) into v: v[0] is
+ * the point on the light (depth 1), at most c->max_segments vertices. Returns the count. */
+int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path_vertex *v);
+
+/* Called for every eye vertex that lies on an emitter: t = v->depth, s = 0; `le` the emitted
+ * radiance toward the previous vertex (already checked non-zero). */
+typedef void (*pc_emitter_hit_fn)(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le);
+
+/* Traces the eye sub-path of pixel (x,y) with the pixel's stream `rng` (PC_STREAM_EYE): v[0] is
+ * the camera (depth 1), at most max_vertices (<= c->max_segments + 1) vertices. Emitter hits are
+ * reported to `hit` (may be NULL). Returns the count. */
+int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_vertices, pc_path_vertex *v,
+                   pc_emitter_hit_fn hit, void *user);
+
+/* MIS weight of the s=0 strategy for eye vertex v on light `light`. */
+float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light);
+
+/* A light vertex for next-event estimation (s=1) and for the start of light sub-paths: a point
+ * on a light chosen by power, uniform by area, from four uniform numbers. */
+void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0, float u1, float u2, float u3,
+                            pc_path_vertex *out);
+
+typedef struct pc_connection {
+  vec3 f;          /* unweighted contribution (path throughput / pdf) */
+  float weight;    /* MIS weight of strategy (s,t) */
+  float px, py;    /* t = 1: raster position of the splat */
+} pc_connection;
+
+/* Connects light vertex lv (s = lv->depth) to eye vertex ev (t = ev->depth; the camera when
+ * t = 1): evaluates both ends, the geometry term, the MIS weight (1 if !weighted), and last the
+ * visibility. Returns false when the contribution is zero (delta endpoint, back side, outside
+ * the image, occluded ...). The caller checks the path length against maxDepth. */
+bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
+                pc_connection *out);
+
+/* Adds to the layer of the strategy class and, with --strategy-layers, to layer s%dt%d. */
+void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
+
+/* Light tracing: connects light vertices v[0..nl-1] to the camera, splats into c->splat. */
+void pc_lt_splat(pc_tctx *c, const pc_path_vertex *v, int nl);
+
+/* The pixel an eye sub-path belongs to; pc_emitter_hit (a pc_emitter_hit_fn taking one as
+ * `user`) adds the weighted s=0 contribution to layer pt. */
+typedef struct pc_pixel_target {
+  int x, y;
+} pc_pixel_target;
+void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le);
+
+/* Monotonic clock in seconds, for the per-thread time split. */
+double pc_seconds(void);
+
+#endif

@@ -1,0 +1,113 @@
+/* connect.c: the one connection routine of the bidirectional methods (any light vertex with any
+ * eye vertex, the camera included: s=1, t=1 and inner strategies alike), the s=0 weight of an
+ * eye sub-path that hits an emitter, and the strategy-layer film helper. The MIS weight uses the
+ * per-vertex quantities of path_vertex.h: O(1) per connection. */
+#include <time.h>
+
+#include "bidir.h"
+
+double pc_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v) {
+  pc_film_add_sample(f, layer, x, y, v);
+  if (strategy_layers > 0 && s + t - 1 <= strategy_layers) {
+    int l = pc_film_strategy_layer(f, s, t);
+    if (l >= 0) pc_film_add_sample(f, l, x, y, v);
+  }
+}
+
+/* Weight of strategy (s,t) given the sums of the strategies on the light side (sl) and on the
+ * eye side (se) of its connection, each relative to its pdf. */
+static float weight_of(const pc_mis_counts *n, int s, int t, float sl, float se) {
+  float own = pc_mis(n, pc_mis_count(n, s, t));
+  float w = own / (own + sl + se);
+  return w > 0.f && w <= 1.f ? w : 0.f; /* sl or se overflowed to Inf (or NaN): weight 0 */
+}
+
+float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light) {
+  const pc_light *l = &s->lights[light];
+  /* The light side would have sampled v as x_0 (choice by power, point by area) and emitted
+   * toward v's predecessor with the cosine-weighted direction pdf. */
+  float p_area = pc_light_choose_pdf(s, light) / l->area;
+  float pdf_emit = fmaxf(0.f, v3_dot(v->ng, v->wo)) * PC_INV_PI;
+  int t = v->depth;
+  float se = pc_mis_side(n, v, p_area, pdf_emit, pc_mis_count(n, 1, t - 1));
+  return weight_of(n, 0, t, 0.f, se);
+}
+
+bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
+                pc_connection *out) {
+  if (lv->delta || ev->delta) return false;
+  const pc_scene *s = c->scene;
+  vec3 d = v3_sub(ev->p, lv->p);
+  float d2 = v3_len2(d);
+  if (!(d2 > 0.f)) return false;
+  vec3 w = v3_scale(d, 1.f / sqrtf(d2)); /* light vertex -> eye vertex */
+  vec3 we = v3_neg(w);
+
+  /* Light end: emission or importance-transport BSDF, times the cosine; pdfs of continuing the
+   * light sub-path toward ev (fwd) and of the reverse (toward lv's predecessor, given w). */
+  vec3 fl;
+  float cos_l, pdf_l_fwd, pdf_l_rev = 0.f;
+  if (lv->kind == PC_VTX_LIGHT) {
+    const pc_light *l = &s->lights[lv->light];
+    if (l->type == PC_LIGHT_POINT) {
+      fl = v3s(1.f);
+      cos_l = 0.f; /* cannot be hit: no s=0 strategy */
+      pdf_l_fwd = 0.25f * PC_INV_PI;
+    } else {
+      cos_l = v3_dot(lv->ng, w);
+      if (!(cos_l > 0.f)) return false; /* back side or edge-on */
+      fl = v3s(cos_l);
+      pdf_l_fwd = cos_l * PC_INV_PI;
+    }
+  } else {
+    const pc_material *m = &s->materials[lv->material];
+    fl = v3_scale(pc_bsdf_eval(m, s->textures, &lv->sh, lv->wo, w, PC_IMPORTANCE), v3_absdot(w, lv->sh.sh.n));
+    if (v3_is_zero(fl)) return false;
+    cos_l = v3_absdot(w, lv->ng);
+    pdf_l_fwd = pc_bsdf_pdf(m, s->textures, &lv->sh, lv->wo, w) * lv->q;
+    pdf_l_rev = pc_bsdf_pdf(m, s->textures, &lv->sh, w, lv->wo) * lv->q;
+  }
+
+  /* Eye end: the camera (t=1: We * cos = its direction pdf) or a radiance-transport BSDF. */
+  vec3 fe;
+  float cos_e, pdf_e_fwd, pdf_e_rev = 0.f;
+  if (ev->kind == PC_VTX_CAMERA) {
+    const pc_camera *cam = &s->camera;
+    if (!pc_camera_raster(cam, we, &out->px, &out->py)) return false;
+    float cz = v3_dot(we, cam->dir);
+    pdf_e_fwd = 1.f / (cam->image_area * cz * cz * cz);
+    fe = v3s(pdf_e_fwd);
+    cos_e = 0.f; /* the pinhole cannot be hit */
+  } else {
+    const pc_material *m = &s->materials[ev->material];
+    fe = v3_scale(pc_bsdf_eval(m, s->textures, &ev->sh, ev->wo, we, PC_RADIANCE), v3_absdot(w, ev->sh.sh.n));
+    if (v3_is_zero(fe)) return false;
+    cos_e = v3_absdot(w, ev->ng);
+    pdf_e_fwd = pc_bsdf_pdf(m, s->textures, &ev->sh, ev->wo, we) * ev->q;
+    pdf_e_rev = pc_bsdf_pdf(m, s->textures, &ev->sh, we, ev->wo) * ev->q;
+  }
+
+  vec3 f = v3_scale(v3_mul(v3_mul(lv->beta, fl), v3_mul(fe, ev->beta)), 1.f / d2);
+  if (v3_is_zero(f) || !v3_is_finite(f)) return false;
+  float weight = 1.f;
+  if (weighted) {
+    int sl = lv->depth, tl = ev->depth;
+    /* Strategies with fewer light vertices: ev would sample lv (area pdf pdf_e_fwd cos_l / d2);
+     * with more: lv would sample ev. */
+    float sum_l = pc_mis_side(n, lv, pdf_e_fwd * cos_l / d2, pdf_l_rev, pc_mis_count(n, sl - 1, tl + 1));
+    float sum_e = pc_mis_side(n, ev, pdf_l_fwd * cos_e / d2, pdf_e_rev, pc_mis_count(n, sl + 1, tl - 1));
+    weight = weight_of(n, sl, tl, sum_l, sum_e);
+    if (weight == 0.f) return false;
+  }
+  c->rays++;
+  if (!pc_scene_visible(s, lv->p, lv->ng, ev->p, ev->ng)) return false;
+  out->f = f;
+  out->weight = weight;
+  return true;
+}

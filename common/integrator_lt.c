@@ -1,0 +1,50 @@
+/* integrator_lt.c: light tracing (t=1): every light vertex is connected to the camera and
+ * splatted into the thread's splat film (layer lt), counted per light path. The lt method uses
+ * it for every light path and adds s=0 for emitters seen directly, since path length 1 (the
+ * emitter itself) is the one length light tracing shares with another strategy: those two are
+ * combined by the balance/power heuristic with their counts (n=1 for s=0, n_lt for t=1); longer
+ * light-traced paths have weight 1. BDPT uses the same splats with its full MIS weights. */
+#include "bidir.h"
+
+void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl) {
+  const pc_camera *cam = &c->scene->camera;
+  pc_path_vertex eye = {0};
+  eye.kind = PC_VTX_CAMERA;
+  eye.p = cam->pos;
+  eye.beta = v3s(1.f);
+  eye.depth = 1;
+  eye.material = eye.light = -1;
+  bool lt_method = c->set->method == PC_METHOD_LT;
+  for (int i = 0; i < nl; i++) {
+    /* The lt method weighs only path length 1 (against s=0); BDPT weighs every length. */
+    bool weighted = c->weighted && (!lt_method || lv[i].depth == 1);
+    pc_connection k;
+    if (!pc_connect(c, &c->counts, &lv[i], &eye, weighted, &k)) continue;
+    pc_film_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
+                         v3_scale(k.f, k.weight));
+  }
+}
+
+void pc_lt_light_path(pc_tctx *c, uint64_t index) {
+  double t0 = pc_seconds();
+  int nl = pc_light_subpath(c, &c->counts, index, c->light_path);
+  double t1 = pc_seconds();
+  pc_lt_splat(c, c->light_path, nl);
+  c->t_paths += t1 - t0;
+  c->t_lt += pc_seconds() - t1;
+}
+
+void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le) {
+  const pc_pixel_target *h = user;
+  float w = c->weighted ? pc_mis_weight_hit(c->scene, &c->counts, v, light) : 1.f;
+  pc_film_add_strategy(c->film, c->set->strategy_layers, PC_LAYER_PT, 0, v->depth, h->x, h->y,
+                       v3_scale(v3_mul(v->beta, le), w));
+}
+
+void pc_lt_pixel(pc_tctx *c, int x, int y) {
+  double t0 = pc_seconds();
+  pc_rng rng = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_EYE, (uint64_t)y * (uint64_t)c->set->width + (uint64_t)x);
+  pc_pixel_target h = {x, y};
+  pc_eye_subpath(c, &c->counts, &rng, x, y, 2, c->eye_path, pc_emitter_hit, &h);
+  c->t_paths += pc_seconds() - t0;
+}

@@ -1,0 +1,150 @@
+/* subpath.c: light and eye sub-paths as pc_path_vertex arrays carrying their recursive MIS
+ * quantities (path_vertex.h). Both sides share one random walk; Russian roulette uses the local
+ * continuation probability q and folds it into the forward and reverse pdfs. */
+#include "bidir.h"
+
+pc_mis_counts pc_mis_counts_bdpt(const pc_render_settings *set, uint64_t n_light) {
+  pc_mis_counts n;
+  n.n_lt = (float)((double)n_light / ((double)set->width * (double)set->height));
+  n.n_inner = 1.f;
+  n.power = set->mis_heuristic == PC_MIS_POWER;
+  return n;
+}
+
+/* Extends the sub-path v[0..nv-1] by tracing `dir` from its last vertex, whose sampling of dir
+ * had pdfs pdf_fwd/pdf_rev (q included) and cosine cos_out; `beta` is the throughput carried
+ * along dir. Stops at max_vertices. */
+static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex *v, int nv, int max_vertices,
+                bool light_side, vec3 dir, vec3 beta, float pdf_fwd, float pdf_rev, bool delta, float cos_out,
+                pc_emitter_hit_fn hit, void *user) {
+  const pc_scene *s = c->scene;
+  pc_transport mode = light_side ? PC_IMPORTANCE : PC_RADIANCE;
+  while (nv < max_vertices) {
+    const pc_path_vertex *prev = &v[nv - 1];
+    vec3 o = v3_is_zero(prev->ng) ? prev->p : pc_offset_origin(s, prev->p, prev->ng, dir);
+    pc_hit h;
+    c->rays++;
+    if (!pc_scene_intersect(s, o, dir, INFINITY, &h)) break;
+    /* The ray left from an offset origin: the MIS pdfs and the vertex's wo use the direction
+     * between the stored vertices, as every connection to them does. */
+    vec3 e = v3_sub(h.p, prev->p);
+    float d2 = v3_len2(e);
+    if (!(d2 > 0.f)) break;
+    vec3 da = v3_scale(e, 1.f / sqrtf(d2));
+    float cos_in = v3_absdot(h.ng, da);
+    /* A grazing hit has no usable area pdf (its reverse strategies would divide by ~0). */
+    if (!(cos_in > 1e-6f)) break;
+    if (prev->kind == PC_VTX_SURFACE) {
+      cos_out = v3_absdot(prev->ng, da);
+      if (!delta) {
+        const pc_material *pm = &s->materials[prev->material];
+        pdf_fwd = pc_bsdf_pdf(pm, s->textures, &prev->sh, prev->wo, da) * prev->q;
+        pdf_rev = pc_bsdf_pdf(pm, s->textures, &prev->sh, da, prev->wo) * prev->q;
+        if (!(pdf_fwd > 0.f)) break;
+      }
+    } else if (prev->kind == PC_VTX_LIGHT && cos_out > 0.f) {
+      cos_out = v3_dot(prev->ng, da);
+      pdf_fwd = cos_out * PC_INV_PI;
+      if (!(pdf_fwd > 0.f)) break;
+    }
+    const pc_shape *shape = &s->shapes[h.shape];
+    const pc_material *m = &s->materials[shape->material];
+    pc_path_vertex *cur = &v[nv];
+    cur->kind = PC_VTX_SURFACE;
+    cur->p = h.p;
+    cur->ng = h.ng;
+    cur->sh = pc_shading_from_hit(&h);
+    cur->wo = v3_neg(da);
+    cur->beta = beta;
+    cur->material = shape->material;
+    cur->light = shape->light;
+    cur->depth = nv + 1;
+    cur->q = pc_bsdf_continuation(m, s->textures, &cur->sh);
+    cur->delta = pc_bsdf_is_delta(m);
+    pc_mis_extend(mc, prev, light_side, cur, pdf_fwd, pdf_rev, delta, cos_out, cos_in, d2);
+    nv++;
+    if (hit && cur->light >= 0) {
+      vec3 le = pc_light_le(&s->lights[cur->light], cur->ng, cur->wo);
+      if (!v3_is_zero(le)) hit(c, user, cur, cur->light, le);
+    }
+    if (nv >= max_vertices) break;
+    float q = cur->q;
+    if (!(q > 0.f) || pc_rng_f(rng) >= q) break;
+    pc_bsdf_sampled bs;
+    float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
+    if (!pc_bsdf_sample(m, s->textures, &cur->sh, cur->wo, u0, u1, u2, mode, &bs)) break;
+    if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
+    beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, cur->sh.sh.n) / (bs.pdf * q)));
+    if (!v3_is_finite(beta) || v3_is_zero(beta)) break;
+    /* Delta lobes keep the sampled lobe probabilities; smooth ones are re-evaluated along the
+     * actual edge once it is known. */
+    pdf_fwd = bs.pdf * q;
+    pdf_rev = bs.pdf_rev * q;
+    delta = bs.is_delta;
+    dir = bs.wi;
+  }
+  return nv;
+}
+
+void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0, float u1, float u2, float u3,
+                            pc_path_vertex *out) {
+  float pick;
+  int li = pc_light_choose(s, u0, &pick);
+  const pc_light *l = &s->lights[li];
+  pc_light_point lp;
+  pc_light_sample_point(s, l, u1, u2, u3, &lp);
+  float pa = pick * lp.pdf_area; /* area pdf (point lights: the choice, the delta cancels) */
+  out->kind = PC_VTX_LIGHT;
+  out->p = lp.p;
+  out->ng = lp.n;
+  out->wo = v3s(0.f);
+  out->beta = v3_scale(l->type == PC_LIGHT_POINT ? l->intensity : l->radiance, 1.f / pa);
+  out->material = -1;
+  out->light = li;
+  out->depth = 1;
+  out->q = 1.f;
+  out->delta = false;
+  out->mis_near = pc_mis(n, 1.f / pa);
+  out->mis_far = 0.f;
+}
+
+int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path_vertex *v) {
+  const pc_scene *s = c->scene;
+  pc_rng rng = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_LIGHT, index);
+  float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng), u3 = pc_rng_f(&rng);
+  pc_light_vertex_sample(s, n, u0, u1, u2, u3, &v[0]);
+  const pc_light *l = &s->lights[v[0].light];
+  float pdf_dir;
+  u0 = pc_rng_f(&rng);
+  u1 = pc_rng_f(&rng);
+  vec3 dir = pc_light_sample_dir(l, v[0].ng, u0, u1, &pdf_dir);
+  if (!(pdf_dir > 0.f) || c->max_segments < 2) return 1;
+  /* A point light cannot be hit by an eye path: cos_out 0 removes the s=0 strategy. */
+  float cos_out = l->type == PC_LIGHT_POINT ? 0.f : v3_dot(v[0].ng, dir);
+  vec3 beta = v3_scale(v[0].beta, (l->type == PC_LIGHT_POINT ? 1.f : cos_out) / pdf_dir);
+  return walk(c, n, &rng, v, 1, c->max_segments, true, dir, beta, pdf_dir, 0.f, false, cos_out, NULL, NULL);
+}
+
+int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_vertices, pc_path_vertex *v,
+                   pc_emitter_hit_fn hit, void *user) {
+  const pc_camera *cam = &c->scene->camera;
+  float px = (float)x + pc_rng_f(rng), py = (float)y + pc_rng_f(rng);
+  vec3 d = pc_camera_ray_dir(cam, px, py);
+  pc_path_vertex *v0 = &v[0];
+  v0->kind = PC_VTX_CAMERA;
+  v0->p = cam->pos;
+  v0->ng = v3s(0.f);
+  v0->wo = v3s(0.f);
+  v0->beta = v3s(1.f); /* We cos / pdf, per pixel */
+  v0->material = -1;
+  v0->light = -1;
+  v0->depth = 1;
+  v0->q = 1.f;
+  v0->delta = false;
+  v0->mis_near = v0->mis_far = 0.f;
+  float cz = v3_dot(d, cam->dir);
+  float pdf = 1.f / (cam->image_area * cz * cz * cz);
+  if (!(pdf > 0.f) || !isfinite(pdf)) return 1;
+  /* The pinhole cannot be hit: cos_out 0. */
+  return walk(c, n, rng, v, 1, max_vertices, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);
+}

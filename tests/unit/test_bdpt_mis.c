@@ -1,0 +1,336 @@
+/* test_bdpt_mis.c: the recursive MIS weights of the bidirectional integrators against a brute
+ * force. Random light and eye sub-paths are traced in scenes/glossy-glass (its glass sphere made
+ * a perfect mirror, so delta vertices occur and their lobe probabilities are known; optionally a
+ * point light added); every connection the integrator makes (s=0 hits, s=1, t=1 and inner) gives
+ * a complete path whose strategies' pdfs are then evaluated explicitly, vertex by vertex, in
+ * double precision, with Russian roulette, sample counts and the heuristic. The weight the
+ * integrator computed must equal the explicit one, and re-deriving the weight of every other
+ * strategy of the same path through the production routines (pc_mis_extend, pc_connect,
+ * pc_mis_weight_hit) must give the explicit weights too, summing to 1. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bidir.h"
+
+#define MAXV 12
+#define MAX_SEGMENTS 8
+
+typedef struct fixture {
+  pc_scene scene;
+  pc_render_settings set;
+  pc_tctx c;
+  pc_path_vertex *lbuf, *ebuf;
+  int checked, strategies_checked;
+} fixture;
+
+static void load(fixture *f, bool point_light) {
+  const char *src = getenv("PCBPT_SOURCE_DIR");
+  char path[4096];
+  snprintf(path, sizeof path, "%s/scenes/glossy-glass/scene.xml", src ? src : ".");
+  pc_err e = {0};
+  memset(&f->scene, 0, sizeof f->scene);
+  assert_int_equal(pc_scene_load(path, &f->scene, &e), PC_OK);
+  int mirrors = 0;
+  for (int i = 0; i < f->scene.nmaterials; i++) {
+    pc_material *m = &f->scene.materials[i];
+    if (m->type != PC_MAT_DIELECTRIC) continue;
+    memset(m, 0, sizeof *m);
+    m->type = PC_MAT_CONDUCTOR;
+    assert_true(pc_conductor_ior("none", &m->eta, &m->k));
+    m->specular.tex = -1;
+    m->specular.value = v3s(1.f);
+    mirrors++;
+  }
+  assert_int_equal(mirrors, 1);
+  if (point_light) {
+    pc_scene *s = &f->scene;
+    s->lights = realloc(s->lights, sizeof(pc_light) * (size_t)(s->nlights + 1));
+    pc_light *l = &s->lights[s->nlights++];
+    memset(l, 0, sizeof *l);
+    l->type = PC_LIGHT_POINT;
+    l->intensity = v3s(30.f);
+    l->shape = -1;
+    l->position = v3_add(s->scene_center, v3(0.3f, 0.2f, 0.1f));
+  }
+  f->scene.camera.width = f->scene.camera.height = 32;
+  assert_int_equal(pc_scene_build(&f->scene, &e), PC_OK);
+  if (point_light) { /* scene_center is known only after the build: move the light inside */
+    f->scene.lights[f->scene.nlights - 1].position = v3_add(f->scene.scene_center, v3(0.3f, 0.2f, 0.1f));
+  }
+  pc_render_settings_default(&f->set);
+  f->set.method = PC_METHOD_BDPT;
+  f->set.width = f->set.height = 32;
+  f->set.max_depth = MAX_SEGMENTS;
+  f->lbuf = calloc(MAXV, sizeof(pc_path_vertex));
+  f->ebuf = calloc(MAXV, sizeof(pc_path_vertex));
+  memset(&f->c, 0, sizeof f->c);
+  f->c.scene = &f->scene;
+  f->c.set = &f->set;
+  f->c.max_segments = MAX_SEGMENTS;
+  f->c.light_path = f->lbuf;
+  f->c.eye_path = f->ebuf;
+  f->c.weighted = true;
+}
+
+static void unload(fixture *f) {
+  free(f->lbuf);
+  free(f->ebuf);
+  pc_scene_free(&f->scene);
+}
+
+/* ---- The explicit evaluation. A complete path x_0 (light) .. x_k (camera). ---- */
+
+typedef struct fpath {
+  int k;
+  pc_path_vertex x[2 * MAXV]; /* x[0]: kind LIGHT (p, ng, light); others SURFACE or CAMERA */
+} fpath;
+
+static bool is_delta(const fpath *fp, int i) { return i > 0 && i < fp->k && fp->x[i].delta; }
+
+static double qv(const fixture *f, const fpath *fp, int i) {
+  const pc_path_vertex *v = &fp->x[i];
+  return pc_bsdf_continuation(&f->scene.materials[v->material], f->scene.textures, &v->sh);
+}
+
+static vec3 unit(vec3 a, vec3 b) { return v3_norm(v3_sub(b, a)); }
+
+/* Solid-angle pdf of scattering at x_i from `from` toward `to` (q included). */
+static double dir_pdf(const fixture *f, const fpath *fp, int i, int from, int to) {
+  const pc_path_vertex *v = &fp->x[i];
+  if (is_delta(fp, i)) return qv(f, fp, i); /* mirror: lobe probability 1, Dirac dropped */
+  const pc_material *m = &f->scene.materials[v->material];
+  return pc_bsdf_pdf(m, f->scene.textures, &v->sh, unit(v->p, fp->x[from].p), unit(v->p, fp->x[to].p)) * qv(f, fp, i);
+}
+
+static double geo(const fpath *fp, int from, int to) { /* |cos at to| / d^2 */
+  vec3 d = v3_sub(fp->x[to].p, fp->x[from].p);
+  double d2 = v3_len2(d);
+  return fabs((double)v3_dot(fp->x[to].ng, d)) / sqrt(d2) / d2;
+}
+
+static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, double *w) {
+  int k = fp->k;
+  const pc_scene *s = &f->scene;
+  const pc_light *l = &s->lights[fp->x[0].light];
+  bool point = l->type == PC_LIGHT_POINT;
+  double fwd[2 * MAXV], bwd[2 * MAXV];
+  /* Area pdfs from the light side. */
+  fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) / (point ? 1.0 : l->area);
+  for (int i = 1; i <= k; i++) {
+    double pd;
+    if (i - 1 == 0) {
+      vec3 d = unit(fp->x[0].p, fp->x[1].p);
+      pd = point ? 0.25 / M_PI : fmax(0.0, v3_dot(fp->x[0].ng, d)) / M_PI;
+    } else {
+      pd = dir_pdf(f, fp, i - 1, i - 2, i);
+    }
+    fwd[i] = pd * (i == k ? 1.0 : geo(fp, i - 1, i));
+  }
+  /* Area pdfs from the eye side. */
+  bwd[k] = 1.0;
+  for (int i = k - 1; i >= 0; i--) {
+    double pd;
+    if (i + 1 == k) {
+      const pc_camera *cam = &s->camera;
+      double cz = v3_dot(unit(cam->pos, fp->x[i].p), cam->dir);
+      pd = 1.0 / (cam->image_area * cz * cz * cz);
+    } else {
+      pd = dir_pdf(f, fp, i + 1, i + 2, i);
+    }
+    bwd[i] = pd * geo(fp, i + 1, i);
+  }
+  if (point) bwd[0] = 0.0;
+  double beta = n->power ? 2.0 : 1.0, sum = 0.0;
+  for (int j = 0; j <= k; j++) {
+    double p = 1.0;
+    for (int i = 0; i < j; i++) p *= fwd[i];
+    for (int i = j; i <= k; i++) p *= bwd[i];
+    if ((j >= 1 && is_delta(fp, j - 1)) || is_delta(fp, j)) p = 0.0;
+    int t = k + 1 - j;
+    double cnt = t == 1 ? n->n_lt : (j <= 1 ? 1.0 : n->n_inner);
+    w[j] = pow(cnt * p, beta);
+    sum += w[j];
+  }
+  for (int j = 0; j <= k; j++) w[j] /= sum;
+}
+
+/* ---- Re-deriving strategy j of the path through the production routines. ---- */
+
+static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc_path_vertex *sub, int u, bool light_side,
+                   int ifrom2, int ifrom, int ito) {
+  /* sub[u-1] is x[ifrom] (reached from x[ifrom2], or an endpoint if ifrom2 < 0); sub[u] is x[ito]. */
+  const pc_path_vertex *a = &fp->x[ifrom];
+  pc_path_vertex *v = &sub[u];
+  *v = fp->x[ito];
+  v->kind = fp->x[ito].kind == PC_VTX_CAMERA ? PC_VTX_CAMERA : PC_VTX_SURFACE;
+  v->wo = unit(v->p, a->p);
+  v->depth = u + 1;
+  v->beta = v3s(1.f);
+  vec3 dir = unit(a->p, v->p);
+  float d2 = v3_len2(v3_sub(v->p, a->p));
+  float pf, pr, cos_out;
+  bool delta = false;
+  if (ifrom2 < 0) {
+    if (a->kind == PC_VTX_CAMERA) {
+      float cz = v3_dot(dir, f->scene.camera.dir);
+      pf = 1.f / (f->scene.camera.image_area * cz * cz * cz);
+      cos_out = 0.f;
+    } else {
+      bool point = f->scene.lights[a->light].type == PC_LIGHT_POINT;
+      pf = point ? 0.25f * PC_INV_PI : v3_dot(a->ng, dir) * PC_INV_PI;
+      cos_out = point ? 0.f : v3_dot(a->ng, dir);
+    }
+    pr = 0.f;
+  } else {
+    delta = is_delta(fp, ifrom);
+    pf = (float)dir_pdf(f, fp, ifrom, ifrom2, ito);
+    pr = (float)dir_pdf(f, fp, ifrom, ito, ifrom2);
+    cos_out = v3_absdot(a->ng, dir);
+  }
+  pc_mis_extend(n, &sub[u - 1], light_side, v, pf, pr, delta, cos_out, v3_absdot(v->ng, dir), d2);
+}
+
+static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j) {
+  int k = fp->k;
+  pc_path_vertex lv[2 * MAXV], ev[2 * MAXV];
+  if (j >= 1) {
+    float pick = pc_light_choose_pdf(&f->scene, fp->x[0].light);
+    const pc_light *l = &f->scene.lights[fp->x[0].light];
+    lv[0] = fp->x[0];
+    lv[0].kind = PC_VTX_LIGHT;
+    lv[0].depth = 1;
+    lv[0].beta = v3s(1.f);
+    lv[0].delta = false;
+    lv[0].mis_near = pc_mis(n, 1.f / (pick * (l->type == PC_LIGHT_POINT ? 1.f : 1.f / l->area)));
+    lv[0].mis_far = 0.f;
+    for (int i = 1; i < j; i++) extend(f, n, fp, lv, i, true, i - 2, i - 1, i);
+  }
+  ev[0] = fp->x[k];
+  ev[0].depth = 1;
+  ev[0].mis_near = ev[0].mis_far = 0.f;
+  for (int u = 1; u <= k - j; u++) extend(f, n, fp, ev, u, false, u >= 2 ? k - u + 2 : -1, k - u + 1, k - u);
+  if (j == 0) {
+    if (f->scene.lights[fp->x[0].light].type == PC_LIGHT_POINT) return 0.0;
+    return pc_mis_weight_hit(&f->scene, n, &ev[k], fp->x[0].light);
+  }
+  pc_connection con;
+  if (!pc_connect(&f->c, n, &lv[j - 1], &ev[k - j], true, &con)) return 0.0;
+  return con.weight;
+}
+
+static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int s, double w_integrator) {
+  double w[2 * MAXV];
+  brute(f, n, fp, w);
+  double tol = 1e-4;
+  if (fabs(w_integrator - w[s]) > tol * w[s] + 1e-6) {
+    fprintf(stderr, "k=%d s=%d: integrator weight %.7g, explicit %.7g mats:", fp->k, s, w_integrator, w[s]);
+    for (int i = 0; i <= fp->k; i++) fprintf(stderr, " %d%s", fp->x[i].material >= 0 ? (int)f->scene.materials[fp->x[i].material].type : -1, fp->x[i].delta ? "D" : "");
+    fprintf(stderr, "\n");
+    fail();
+  }
+  double sum = 0.0;
+  for (int j = 0; j <= fp->k; j++) {
+    double r = replay(f, n, fp, j);
+    /* A strategy whose connection is occluded is impossible only in the replay: there is none,
+     * every edge of the path is visible. */
+    if (fabs(r - w[j]) > tol * w[j] + 1e-6) {
+      fprintf(stderr, "k=%d s=%d (path from s=%d): recursive %.7g, explicit %.7g\n", fp->k, j, s, r, w[j]);
+      fail();
+    }
+    sum += r;
+    f->strategies_checked++;
+  }
+  assert_true(fabs(sum - 1.0) < 1e-4);
+  f->checked++;
+}
+
+typedef struct hits {
+  const pc_mis_counts *counts;
+  int n;
+  int t[MAXV];
+  float w[MAXV];
+} hits;
+
+static void record_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le) {
+  (void)le;
+  hits *h = user;
+  h->t[h->n] = v->depth;
+  h->w[h->n++] = pc_mis_weight_hit(c->scene, h->counts, v, light);
+}
+
+static void run(fixture *f, pc_mis_counts n, int npaths) {
+  f->c.counts = n;
+  f->checked = f->strategies_checked = 0;
+  for (int it = 0; it < npaths; it++) {
+    f->c.iteration = (uint64_t)it;
+    int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
+    pc_rng rng = pc_rng_make(99, (uint64_t)it, PC_STREAM_EYE, 7);
+    int x = (int)(pc_rng_f(&rng) * 32), y = (int)(pc_rng_f(&rng) * 32);
+    hits h = {.counts = &n};
+    int ne = pc_eye_subpath(&f->c, &n, &rng, x, y, MAX_SEGMENTS + 1, f->ebuf, record_hit, &h);
+    assert_true(nl >= 1 && nl <= MAX_SEGMENTS && ne >= 1 && ne <= MAX_SEGMENTS + 1);
+    fpath fp;
+    /* s = 0: the eye sub-path reversed, x_0 the emitter point it hit. */
+    for (int i = 0; i < h.n; i++) {
+      int t = h.t[i];
+      fp.k = t - 1;
+      for (int u = 0; u < t; u++) fp.x[u] = f->ebuf[t - 1 - u];
+      fp.x[0].kind = PC_VTX_LIGHT;
+      check_path(f, &n, &fp, 0, h.w[i]);
+    }
+    /* s >= 1 with t >= 1, including s=1 with the light sub-path's own first vertex. */
+    for (int s = 1; s <= nl; s++)
+      for (int t = 1; t <= ne && s + t - 1 <= MAX_SEGMENTS; t++) {
+        pc_connection con;
+        if (!pc_connect(&f->c, &n, &f->lbuf[s - 1], &f->ebuf[t - 1], true, &con)) continue;
+        assert_true(v3_is_finite(con.f));
+        fp.k = s + t - 1;
+        for (int i = 0; i < s; i++) fp.x[i] = f->lbuf[i];
+        for (int u = 0; u < t; u++) fp.x[s + u] = f->ebuf[t - 1 - u];
+        check_path(f, &n, &fp, s, con.weight);
+      }
+  }
+  printf("counts n_lt %.3g n_inner %.3g %s: %d paths, %d strategy weights checked\n", n.n_lt, n.n_inner,
+         n.power ? "power" : "balance", f->checked, f->strategies_checked);
+  assert_true(f->checked > 50);
+}
+
+static void test_mis_balance(void **state) {
+  (void)state;
+  fixture f;
+  load(&f, false);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  unload(&f);
+}
+
+static void test_mis_power_nl(void **state) {
+  (void)state;
+  fixture f;
+  load(&f, false);
+  run(&f, (pc_mis_counts){0.37f, 1.f, true}, 400);
+  unload(&f);
+}
+
+static void test_mis_point_light_counts(void **state) {
+  (void)state;
+  fixture f;
+  load(&f, true);
+  run(&f, (pc_mis_counts){2.5f, 1.f, false}, 400);
+  run(&f, (pc_mis_counts){0.25f, 3.f, true}, 400);
+  unload(&f);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_mis_balance),
+      cmocka_unit_test(test_mis_power_nl),
+      cmocka_unit_test(test_mis_point_light_counts),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
