@@ -1,6 +1,6 @@
 # three_workers.sh: three worker processes render a job; its merged sums equal a single-process
 # render of the same iterations exactly (up to summation order: relative 1e-9 per layer total
-# and per pixel), on cornell-box (pt and nee layers) and on the white furnace, whose
+# and per pixel), on cornell-box with PT (pt and nee layers) and PCBPT (every layer) and on the white furnace, whose
 # image must also be L = 2 (maxDepth -1) within 1.5%.
 . "$(dirname "$0")/lib.inc"
 start_coord
@@ -19,5 +19,6 @@ run furnace 48 pt
 "$B/tests/farm_tool" mean "$(ckpt "$J")" 64 64 2 0.015 || fail "furnace mean is not 2 within 1.5%"
 "$B/pcbpt-coord" fetch "$J" --out "$T/out.exr" $H >/dev/null || fail "fetch"
 [ -s "$T/out.exr" ] || fail "empty image"
+run cornell-box 12 pcbpt
 for w in w1 w2 w3; do grep -q "range .* -> $w" "$T/coord.log" || fail "worker $w got no range"; done
 echo PASS
