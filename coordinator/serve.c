@@ -60,10 +60,13 @@ void pc_coord_buffered(pc_coord *c, long long n) {
   }
 }
 
-/* Drops the upload being assembled (after a refusal or when the peer goes). */
+/* Drops the upload being assembled (after a refusal or when the peer goes); its buffer is
+ * freed, so an idle peer holds no upload memory. */
 static void upload_reset(pc_peer *p) {
   pc_coord_buffered(p->coord, -(long long)p->up_len);
-  p->up_len = 0;
+  free(p->up_buf);
+  p->up_buf = NULL;
+  p->up_len = p->up_cap = 0;
   p->up_next = 0;
 }
 
@@ -624,8 +627,6 @@ static void on_closed(pc_conn *conn) {
     pc_sched_peer_gone(c, p);
   }
   upload_reset(p);
-  free(p->up_buf);
-  p->up_buf = NULL;
   if (p->bun_fd >= 0) close(p->bun_fd);
   if (p->bun_tmp[0]) unlink(p->bun_tmp);
   if (p->out.fd >= 0) close(p->out.fd);

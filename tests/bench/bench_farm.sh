@@ -3,7 +3,9 @@
 # two workers (one render thread each) and prints iterations/s and the speed-up (expect
 # >= 1.9x on an idle machine with two free cores), the coordinator's CPU time
 # (/proc/PID/stat utime+stime) and the bytes the workers sent per iteration (/proc/PID/io
-# wchar: uploads, heartbeats and requests). Usage:
+# wchar: uploads, heartbeats and requests), and iterations per worker CPU-second (equal for
+# 1 and 2 workers when the farm adds no work per iteration; on a busy machine the speed-up
+# is bounded by the free cores, this figure is not). Usage:
 #   tests/bench/bench_farm.sh [BUILD_DIR] [SPP] [SIZE]     (defaults: build 128 256)
 set -euo pipefail
 top=$(cd "$(dirname "$0")/../.." && pwd)
@@ -32,19 +34,19 @@ run() { # nworkers
     W+=($!); PIDS+=($!)
   done
   sleep 1
-  local c0 w0=0; c0=$(cpu_s "$C")
-  for p in "${W[@]}"; do w0=$((w0 + $(wchar "$p"))); done
+  local c0 w0=0 k0=0; c0=$(cpu_s "$C")
+  for p in "${W[@]}"; do w0=$((w0 + $(wchar "$p"))); k0=$(echo "$k0 + $(cpu_s "$p")" | bc); done
   local J; J=$("$B/pcbpt-coord" submit "$top/scenes/cornell-box/scene.xml" --method pt --spp "$SPP" --width "$SIZE" \
     --height "$SIZE" $H | tail -1)
   "$B/pcbpt-coord" wait "$J" $H >/dev/null 2>&1
   local el; el=$("$B/pcbpt-coord" status "$J" $H --json | python3 -c "import json,sys; print(json.load(sys.stdin)['elapsed'])")
-  local c1 w1=0; c1=$(cpu_s "$C")
-  for p in "${W[@]}"; do w1=$((w1 + $(wchar "$p"))); done
+  local c1 w1=0 k1=0; c1=$(cpu_s "$C")
+  for p in "${W[@]}"; do w1=$((w1 + $(wchar "$p"))); k1=$(echo "$k1 + $(cpu_s "$p")" | bc); done
   kill "$C" "${W[@]}"
   local ips; ips=$(awk -v s="$SPP" -v e="$el" 'BEGIN { printf "%.2f", s / e }')
-  printf "%d worker(s): %d iterations of %dx%d in %.2f s = %s it/s; coordinator CPU %.2f s (%.1f ms/iteration); workers sent %.0f KB/iteration\n" \
+  printf "%d worker(s): %d iterations of %dx%d in %.2f s = %s it/s; coordinator CPU %.2f s (%.1f ms/iteration); workers sent %.0f KB/iteration; %.2f iterations per worker CPU-second\n" \
     "$n" "$SPP" "$SIZE" "$SIZE" "$el" "$ips" "$(echo "$c1 - $c0" | bc)" "$(echo "($c1 - $c0) * 1000 / $SPP" | bc -l)" \
-    "$(echo "($w1 - $w0) / 1024 / $SPP" | bc -l)" >&2
+    "$(echo "($w1 - $w0) / 1024 / $SPP" | bc -l)" "$(echo "$SPP / ($k1 - $k0)" | bc -l)" >&2
   echo "$ips"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
