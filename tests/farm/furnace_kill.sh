@@ -1,19 +1,10 @@
 # furnace_kill.sh: the white furnace (L = 2 for maxDepth -1) rendered as one job over two
 # workers, one SIGKILLed after 3 seconds: the job finishes with exactly --spp 96 iterations and
-# its mean is 2 within 2%. Runs PCBPT when `render --method pcbpt` works (probed with a 1-iteration
-# 8x8 render), otherwise PT, and says which; METHOD=... forces a method.
+# its mean is 2 within 2%. The method is PCBPT (METHOD=... runs another one).
 . "$(dirname "$0")/lib.inc"
 SCENE="$S/scenes/furnace/scene.xml"
-if [ -z "${METHOD:-}" ]; then
-  if "$B/pcbpt-coord" render "$SCENE" --method pcbpt --spp 1 --width 8 --height 8 --threads 1 --quiet \
-       --out "$T/probe.exr" >"$T/probe.log" 2>&1; then
-    METHOD=pcbpt
-  else
-    METHOD=pt
-    echo "pcbpt not available, ran pt ($(tail -1 "$T/probe.log"))"
-  fi
-fi
-SIZE=${FK_SIZE:-$([ "$METHOD" = pt ] && echo 256 || echo 128)}
+METHOD=${METHOD:-pcbpt}
+SIZE=${FK_SIZE:-128}
 echo "method: $METHOD, ${SIZE}x${SIZE}, 96 iterations"
 start_coord
 start_worker w1; W1=$LAST
