@@ -320,6 +320,10 @@ int pc_cmd_render(int argc, char **argv) {
   printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
          pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
          threads ? (int)threads : pc_cpu_count(), dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
+  if (it > 0)
+    printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
+           1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
+           1e3 * attr_number(&img, "pcbpt.time_pmf") / it, 1e3 * attr_number(&img, "pcbpt.time_connect") / it);
   if (dropped > 0) fprintf(stderr, "pcbpt-coord render: warning: %.0f non-finite samples were dropped\n", dropped);
   status = 0;
   goto done;
