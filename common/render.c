@@ -252,6 +252,8 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
       }
       double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
       stats->t_pmf += t_pmf;
+      uint64_t pmf_bytes = r->pcbpt && r->pcbpt->store ? pc_irec_bytes(r->pcbpt->store) : 0;
+      if (pmf_bytes > stats->pmf_bytes) stats->pmf_bytes = pmf_bytes;
       if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
         stats->t_paths += span;
       } else {
