@@ -38,7 +38,7 @@ struct pc_irec_store {
 };
 
 static size_t per_record_bytes(void) {
-  return sizeof(pc_irec_record) + sizeof(vec3) + sizeof(vec3) + sizeof(int) + 1; /* + kd-tree */
+  return sizeof(pc_irec_record) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
 }
 
 static size_t fixed_bytes(const pc_irec_store *s) {

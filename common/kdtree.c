@@ -42,8 +42,10 @@ static void select_nth(pc_kdtree *t, int lo, int hi, int nth, int ax) {
   }
 }
 
+/* Splits [lo, hi) at its middle position along its widest axis until a range holds at most
+ * PC_KDTREE_LEAF points: [lo, mid) keys <= key(mid) <= [mid, hi) keys. */
 static void build_range(pc_kdtree *t, int lo, int hi) {
-  while (hi - lo > 1) {
+  while (hi - lo > PC_KDTREE_LEAF) {
     vec3 mn = t->pts[lo], mx = t->pts[lo];
     for (int i = lo + 1; i < hi; i++) {
       vec3 p = t->pts[i];
@@ -55,10 +57,10 @@ static void build_range(pc_kdtree *t, int lo, int hi) {
     int mid = lo + (hi - lo) / 2;
     select_nth(t, lo, hi, mid, ax);
     t->axis[mid] = (unsigned char)ax;
+    t->split[mid] = coord(t->pts[mid], ax); /* building [mid, hi) moves that point */
     build_range(t, lo, mid);
-    lo = mid + 1; /* the right half iteratively: recursion depth stays log2(n) */
+    lo = mid; /* the right half iteratively: recursion depth stays log2(n) */
   }
-  if (hi - lo == 1) t->axis[lo] = 0;
 }
 
 int pc_kdtree_build(pc_kdtree *t, const vec3 *pts, int n, pc_err *e) {
@@ -73,7 +75,9 @@ int pc_kdtree_build(pc_kdtree *t, const vec3 *pts, int n, pc_err *e) {
     if (ix) t->idx = ix;
     unsigned char *a = realloc(t->axis, (size_t)n);
     if (a) t->axis = a;
-    if (!p || !ix || !a) return pc_errf(e, PC_ENOMEM, "kd-tree: out of memory for %d points", n);
+    float *sp = realloc(t->split, (size_t)n * sizeof *sp);
+    if (sp) t->split = sp;
+    if (!p || !ix || !a || !sp) return pc_errf(e, PC_ENOMEM, "kd-tree: out of memory for %d points", n);
     t->cap = n;
   }
   for (int i = 0; i < n; i++) {
@@ -89,99 +93,85 @@ void pc_kdtree_free(pc_kdtree *t) {
   free(t->pts);
   free(t->idx);
   free(t->axis);
+  free(t->split);
   *t = (pc_kdtree){0};
 }
 
 size_t pc_kdtree_bytes(const pc_kdtree *t) {
-  return (size_t)t->cap * (sizeof(vec3) + sizeof(int) + 1);
+  return (size_t)t->cap * PC_KDTREE_POINT_BYTES;
 }
 
-/* A bounded max-heap of the best candidates so far, ordered by (d2, index): the root is the
- * worst kept candidate, the one a closer point replaces. */
-typedef struct knn_heap {
-  int k, n;
-  int *idx;
-  float *d2;
-} knn_heap;
-
-static inline int cand_worse(float da, int ia, float db, int ib) { return da > db || (da == db && ia > ib); }
-
-static void heap_sift_down(knn_heap *h, int i) {
-  for (;;) {
-    int l = 2 * i + 1, r = l + 1, w = i;
-    if (l < h->n && cand_worse(h->d2[l], h->idx[l], h->d2[w], h->idx[w])) w = l;
-    if (r < h->n && cand_worse(h->d2[r], h->idx[r], h->d2[w], h->idx[w])) w = r;
-    if (w == i) return;
-    float td = h->d2[i];
-    int ti = h->idx[i];
-    h->d2[i] = h->d2[w];
-    h->idx[i] = h->idx[w];
-    h->d2[w] = td;
-    h->idx[w] = ti;
-    i = w;
+/* Inserts candidate (d, i) into the list idx/d2 of m entries sorted by (d2, index), dropping
+ * the last entry when the list already holds k. The caller has checked that it beats that one. */
+static inline int insert_sorted(int *idx, float *d2, int m, int k, float d, int i) {
+  int pos = m < k ? m++ : k - 1;
+  while (pos > 0 && (d2[pos - 1] > d || (d2[pos - 1] == d && idx[pos - 1] > i))) {
+    d2[pos] = d2[pos - 1];
+    idx[pos] = idx[pos - 1];
+    pos--;
   }
+  d2[pos] = d;
+  idx[pos] = i;
+  return m;
 }
 
-static void heap_offer(knn_heap *h, float d2, int idx) {
-  if (h->n < h->k) {
-    int i = h->n++;
-    h->d2[i] = d2;
-    h->idx[i] = idx;
-    while (i > 0) {
-      int p = (i - 1) / 2;
-      if (!cand_worse(h->d2[i], h->idx[i], h->d2[p], h->idx[p])) break;
-      float td = h->d2[i];
-      int ti = h->idx[i];
-      h->d2[i] = h->d2[p];
-      h->idx[i] = h->idx[p];
-      h->d2[p] = td;
-      h->idx[p] = ti;
-      i = p;
-    }
-  } else if (cand_worse(h->d2[0], h->idx[0], d2, idx)) {
-    h->d2[0] = d2;
-    h->idx[0] = idx;
-    heap_sift_down(h, 0);
-  }
-}
+/* Squared length, the one expression for point distances and cell bounds alike: it is monotone
+ * in each |component| (float rounding is), so a bound from offsets no larger than a point's
+ * coordinate differences never exceeds that point's computed distance. */
+static inline float len2(float dx, float dy, float dz) { return dx * dx + dy * dy + dz * dz; }
 
-static void search(const pc_kdtree *t, vec3 q, int lo, int hi, knn_heap *h) {
-  while (lo < hi) {
-    int mid = lo + (hi - lo) / 2;
-    vec3 p = t->pts[mid];
-    float dx = q.x - p.x, dy = q.y - p.y, dz = q.z - p.z;
-    heap_offer(h, dx * dx + dy * dy + dz * dz, t->idx[mid]);
-    if (hi - lo == 1) return;
-    int ax = t->axis[mid];
-    float diff = coord(q, ax) - coord(p, ax);
-    int near_lo = diff < 0.f ? lo : mid + 1, near_hi = diff < 0.f ? mid : hi;
-    int far_lo = diff < 0.f ? mid + 1 : lo, far_hi = diff < 0.f ? hi : mid;
-    search(t, q, near_lo, near_hi, h);
-    /* Every point across the plane is at least |diff| away (float rounding is monotone, so
-     * this holds for the computed distances too). Equal distance must still be visited: a
-     * point there with a smaller index wins the tie. */
-    if (h->n == h->k && diff * diff > h->d2[0]) return;
-    lo = far_lo;
-    hi = far_hi;
-  }
-}
+/* A subtree still to visit: the query's offset from its cell per axis (0 inside the slab) and
+ * the squared distance they give, a lower bound for every point in it (Arya and Mount 1993). */
+typedef struct knn_frame {
+  int lo, hi;
+  float off[3], bound;
+} knn_frame;
 
 int pc_kdtree_knn(const pc_kdtree *t, vec3 q, int k, int *idx, float *d2) {
   if (k < 1 || k > PC_KDTREE_MAX_K) return 0;
-  knn_heap h = {k < t->n ? k : t->n, 0, idx, d2};
-  if (h.k == 0) return 0;
-  search(t, q, 0, t->n, &h);
-  /* Heap sort in place: repeatedly move the worst to the end. */
-  int n = h.n;
-  while (h.n > 1) {
-    int last = --h.n;
-    float td = h.d2[0];
-    int ti = h.idx[0];
-    h.d2[0] = h.d2[last];
-    h.idx[0] = h.idx[last];
-    h.d2[last] = td;
-    h.idx[last] = ti;
-    heap_sift_down(&h, 0);
+  if (k > t->n) k = t->n;
+  if (k == 0) return 0;
+  /* k is small, so a sorted array beats a heap. Depth-first, nearer child first: every descent
+   * pushes one far sibling per level, so the stack never holds more than the depth (< 32). */
+  knn_frame stack[64];
+  int sp = 0, m = 0;
+  float worst = INFINITY; /* d2 of the k-th candidate once there are k */
+  float qc[3] = {q.x, q.y, q.z};
+  stack[sp++] = (knn_frame){0, t->n, {0.f, 0.f, 0.f}, 0.f};
+  while (sp > 0) {
+    knn_frame f = stack[--sp];
+    /* A point exactly at the bound may still win its tie by a smaller index: prune only when
+     * strictly beyond it. */
+    if (f.bound > worst) continue;
+    int lo = f.lo, hi = f.hi;
+    while (hi - lo > PC_KDTREE_LEAF) {
+      int mid = lo + (hi - lo) / 2, ax = t->axis[mid];
+      /* Every point across the plane is at least |diff| away along ax, and no nearer along the
+       * other axes than the cell. */
+      float diff = qc[ax] - t->split[mid];
+      knn_frame far = f;
+      far.off[ax] = diff;
+      far.bound = len2(far.off[0], far.off[1], far.off[2]);
+      if (diff < 0.f) {
+        far.lo = mid;
+        far.hi = hi;
+        hi = mid;
+      } else {
+        far.lo = lo;
+        far.hi = mid;
+        lo = mid;
+      }
+      if (far.bound <= worst) stack[sp++] = far;
+    }
+    for (int i = lo; i < hi; i++) {
+      vec3 p = t->pts[i];
+      float d = len2(q.x - p.x, q.y - p.y, q.z - p.z);
+      if (d > worst) continue;
+      int id = t->idx[i];
+      if (m == k && d == worst && id > idx[k - 1]) continue;
+      m = insert_sorted(idx, d2, m, k, d, id);
+      if (m == k) worst = d2[k - 1];
+    }
   }
-  return n;
+  return m;
 }

@@ -1,7 +1,8 @@
 /* kdtree.h: a static 3-d kd-tree over a point set (PCBPT importance-record positions), built
  * once per iteration and queried for the k nearest neighbours. The tree is implicit: the
- * points are permuted so that every subrange [lo, hi) has its splitting point at its middle,
- * which keeps it in three flat arrays and lets a query run without allocating. Results are
+ * points are permuted so that every subrange [lo, hi) larger than a leaf splits at its middle
+ * position (the split plane through that point), which keeps it in four flat arrays and lets
+ * a query run without allocating; leaves of up to PC_KDTREE_LEAF points are scanned. Results are
  * deterministic: neighbours are ordered by (squared distance, point index), so equal distances
  * are broken by the smaller index, exactly as a brute-force scan would. */
 #ifndef PC_KDTREE_H
@@ -14,13 +15,16 @@
 
 /* Largest k a query accepts (callers keep k-sized arrays on the stack). */
 #define PC_KDTREE_MAX_K 64
+/* Points per leaf: a short linear scan is cheaper than descending further. */
+#define PC_KDTREE_LEAF 8
 
 typedef struct pc_kdtree {
   int n;
   int cap;              /* allocated entries; reused by the next build when large enough */
   vec3 *pts;            /* points in tree order */
   int *idx;             /* original index of each tree-order point */
-  unsigned char *axis;  /* split axis of the node whose point sits at this position */
+  unsigned char *axis;  /* split axis and coordinate of the inner node whose middle position */
+  float *split;         /* this is */
 } pc_kdtree;
 
 /* Builds (or rebuilds, reusing memory) the tree over pts[0..n). O(n log n) expected.
@@ -32,6 +36,9 @@ void pc_kdtree_free(pc_kdtree *t);
 /* The min(k, n) nearest points to q (1 <= k <= PC_KDTREE_MAX_K), ascending by (squared
  * distance, index), written to idx[] and d2[]; returns their number (0 if k is out of range). */
 int pc_kdtree_knn(const pc_kdtree *t, vec3 q, int k, int *idx, float *d2);
+
+/* Bytes the tree holds per point of capacity. */
+#define PC_KDTREE_POINT_BYTES (sizeof(vec3) + sizeof(int) + 1 + sizeof(float))
 
 /* Bytes held by the tree. */
 size_t pc_kdtree_bytes(const pc_kdtree *t);

@@ -13,8 +13,26 @@
  * scenes needed <= 50 MB at 820x512 and 200 MB at 1080p; 1 GiB leaves room for larger M. */
 #define PC_PCBPT_RECORD_BYTES ((size_t)1 << 30)
 
+/* A thread's vertices of the paths it traced in the current phase. */
+typedef struct pc_pcbpt_tbuf {
+  pc_path_vertex *v;
+  int n, cap;
+  bool oom;
+} pc_pcbpt_tbuf;
+
+/* Where path j's kept vertices are: tbuf[thread].v[offset .. offset+count). */
+typedef struct pc_pcbpt_slot {
+  int thread, offset, count;
+} pc_pcbpt_slot;
+
 typedef struct pc_pcbpt {
   int m;                  /* stored light paths */
+  int nthreads;
+  pc_pcbpt_tbuf *tbuf;    /* one per pool thread */
+  pc_pcbpt_slot *slots;   /* one per path of the phase */
+  int cap_slots;
+  int ncache;             /* cache eye paths of the iteration, and their pixel rotation */
+  float cache_rx, cache_ry;
   int nv, cap_v;          /* connectable light vertices: s >= 2, non-delta, non-zero throughput */
   pc_path_vertex *lv;
   int nr, cap_r;          /* cache eye vertices (t >= 2, non-delta), one record each */

@@ -53,6 +53,8 @@ typedef struct pc_render_stats {
   double t_lt;             /* light tracing splats */
   double t_pmf;            /* PCBPT importance records */
   double t_connect;        /* connections (inner strategies) incl. shadow rays */
+  uint64_t pmf_bytes;      /* PCBPT: most bytes the importance records (PMF/CMF, records, kd-tree)
+                              held in any iteration; merge by max */
 } pc_render_stats;
 
 typedef struct pc_renderer pc_renderer; /* thread pool + per-thread scratch for one scene */
