@@ -79,6 +79,19 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   return PC_OK;
 }
 
+void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src) {
+  dst->iterations += src->iterations;
+  dst->eye_paths += src->eye_paths;
+  dst->light_paths += src->light_paths;
+  dst->rays += src->rays;
+  dst->t_total += src->t_total;
+  dst->t_paths += src->t_paths;
+  dst->t_lt += src->t_lt;
+  dst->t_pmf += src->t_pmf;
+  dst->t_connect += src->t_connect;
+  if (src->pmf_bytes > dst->pmf_bytes) dst->pmf_bytes = src->pmf_bytes;
+}
+
 static double now_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);

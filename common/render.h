@@ -57,6 +57,9 @@ typedef struct pc_render_stats {
                               held in any iteration; merge by max */
 } pc_render_stats;
 
+/* Adds src's work into dst (times and counts add; pmf_bytes is a maximum). */
+void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src);
+
 typedef struct pc_renderer pc_renderer; /* thread pool + per-thread scratch for one scene */
 
 /* Creates a renderer for a built scene; threads = 0 uses every core. The film must have been

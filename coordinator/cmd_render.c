@@ -324,6 +324,8 @@ int pc_cmd_render(int argc, char **argv) {
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
            1e3 * attr_number(&img, "pcbpt.time_pmf") / it, 1e3 * attr_number(&img, "pcbpt.time_connect") / it);
+  double pmf_bytes = attr_number(&img, "pcbpt.pmf_bytes");
+  if (pmf_bytes > 0) printf("importance records: %.2f MiB\n", pmf_bytes / (1024.0 * 1024.0));
   if (dropped > 0) fprintf(stderr, "pcbpt-coord render: warning: %.0f non-finite samples were dropped\n", dropped);
   status = 0;
   goto done;

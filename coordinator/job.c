@@ -155,6 +155,7 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.time_lt", .type = PC_ATTR_DOUBLE, .d = st->t_lt},
     {.name = "pcbpt.time_pmf", .type = PC_ATTR_DOUBLE, .d = st->t_pmf},
     {.name = "pcbpt.time_connect", .type = PC_ATTR_DOUBLE, .d = st->t_connect},
+    {.name = "pcbpt.pmf_bytes", .type = PC_ATTR_DOUBLE, .d = (double)st->pmf_bytes},
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
   };
@@ -257,11 +258,7 @@ static void op_after(uv_work_t *w, int status) {
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
-      j->stats_merged.rays += op->stats.rays;
-      j->stats_merged.t_paths += op->stats.t_paths;
-      j->stats_merged.t_lt += op->stats.t_lt;
-      j->stats_merged.t_pmf += op->stats.t_pmf;
-      j->stats_merged.t_connect += op->stats.t_connect;
+      pc_render_stats_add(&j->stats_merged, &op->stats);
       j->light_per_iter = op->light_per_iter;
       j->dirty = true;
       pc_pending_ack *a = calloc(1, sizeof *a);

@@ -297,6 +297,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
         p->up_stats.t_lt = s->t_lt;
         p->up_stats.t_pmf = s->t_pmf;
         p->up_stats.t_connect = s->t_connect;
+        p->up_stats.pmf_bytes = s->pmf_bytes;
       }
     }
   } else if (u->job_id != p->up_job || u->range_id != p->up_range || u->first != p->up_first ||

@@ -18,7 +18,7 @@ static const char schema[] =
     " elapsed REAL NOT NULL DEFAULT 0, ckpt_gen INTEGER NOT NULL DEFAULT 0,"
     " light_per_iter INTEGER NOT NULL DEFAULT -1, error TEXT NOT NULL DEFAULT '',"
     " rays INTEGER NOT NULL DEFAULT 0, t_paths REAL NOT NULL DEFAULT 0, t_lt REAL NOT NULL DEFAULT 0,"
-    " t_pmf REAL NOT NULL DEFAULT 0, t_connect REAL NOT NULL DEFAULT 0);"
+    " t_pmf REAL NOT NULL DEFAULT 0, t_connect REAL NOT NULL DEFAULT 0, pmf_bytes INTEGER NOT NULL DEFAULT 0);"
     "CREATE TABLE IF NOT EXISTS ranges(id INTEGER PRIMARY KEY AUTOINCREMENT, job INTEGER NOT NULL,"
     " first INTEGER NOT NULL, count INTEGER NOT NULL, acked INTEGER NOT NULL DEFAULT 0,"
     " open INTEGER NOT NULL DEFAULT 1);"
@@ -100,7 +100,7 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   sqlite3_stmt *st;
   int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?,"
-                                "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+                                "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=?,pmf_bytes=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare update job");
   b |= sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
   b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
@@ -114,7 +114,8 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   b |= sqlite3_bind_double(st, 10, j->stats.t_lt);
   b |= sqlite3_bind_double(st, 11, j->stats.t_pmf);
   b |= sqlite3_bind_double(st, 12, j->stats.t_connect);
-  b |= sqlite3_bind_int64(st, 13, (sqlite3_int64)j->id);
+  b |= sqlite3_bind_int64(st, 13, (sqlite3_int64)j->stats.pmf_bytes);
+  b |= sqlite3_bind_int64(st, 14, (sqlite3_int64)j->id);
   return step_done(c, st, b, e, "update job");
 }
 
@@ -176,7 +177,7 @@ static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
 int pc_store_load(pc_coord *c, pc_err *e) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(c->db, "SELECT id,name,bundle,settings,halt_iterations,halt_seconds,priority,state,next_iter,"
-                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
+                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare load jobs");
   pc_job **tail = &c->jobs;
   int r, rc = 0;
@@ -205,6 +206,7 @@ int pc_store_load(pc_coord *c, pc_err *e) {
     j->stats.t_lt = sqlite3_column_double(st, 16);
     j->stats.t_pmf = sqlite3_column_double(st, 17);
     j->stats.t_connect = sqlite3_column_double(st, 18);
+    j->stats.pmf_bytes = (uint64_t)sqlite3_column_int64(st, 19);
     j->stats_merged = j->stats;
     *tail = j;
     tail = &j->next;

@@ -97,11 +97,7 @@ static void thread_main(void *arg) {
         if (w->pend_count == 0) w->pend_first = first + done;
         rc = pc_film_add(&w->pending, &ctx.work, &e);
         w->pend_count += got;
-        w->pend_stats.rays += st.rays;
-        w->pend_stats.t_paths += st.t_paths;
-        w->pend_stats.t_lt += st.t_lt;
-        w->pend_stats.t_pmf += st.t_pmf;
-        w->pend_stats.t_connect += st.t_connect;
+        pc_render_stats_add(&w->pend_stats, &st);
         w->rendered += got;
         if (dt > 0) w->rate = w->rate > 0 ? 0.5 * w->rate + 0.5 * (double)got / dt : (double)got / dt;
       }
