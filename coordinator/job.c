@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "coord.h"
+#include "file_read.h"
 #include "wire_film.h"
 #include "wire_log.h"
 
@@ -93,17 +94,6 @@ done:
   pc_film_free(&tmp);
 }
 
-static int write_all(int fd, const uint8_t *d, size_t n) {
-  while (n) {
-    ssize_t w = write(fd, d, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w < 0) return -1;
-    d += w;
-    n -= (size_t)w;
-  }
-  return 0;
-}
-
 static void ckpt_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
@@ -119,7 +109,7 @@ static void ckpt_work(uv_work_t *w) {
   if (op->rc) return;
   bool sync = !op->c->volatile_store;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0 || write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
+  if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
     op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
     if (fd >= 0) close(fd);
     free(z);
