@@ -51,10 +51,18 @@ void pc_render_settings_default(pc_render_settings *s) {
    * every light vertex, so where the cached PMF is wrong (a vertex it thinks is dark is not)
    * a sample's weight 1/(M p_conn) is at most V/(u M), 1/u times the uniform (CBDPT-like)
    * weight: variance there is bounded by about 1/u times CBDPT's, while the interpolated PMF
-   * keeps 1-u of the samples where it is right. The cached PMF misses near light vertices
-   * (its G term peaks at the records, not at the query): in 30 s equal-time runs against the
-   * 900 s BDPT reference, ajar-door's inner relMSE was 0.44 / 0.22 / 0.17 for u = 0.1 / 0.3
-   * / 0.5 (BDPT 0.29), while slit-room stayed at 0.09 for all three (BDPT 2.1). */
+   * keeps 1-u of the samples where it is right. In 30 s equal-time runs against the 900 s
+   * BDPT reference, ajar-door's inner relMSE was 0.44 / 0.22 / 0.17 for u = 0.1 / 0.3 / 0.5
+   * (BDPT 0.29), while slit-room stayed at 0.09 for all three (BDPT 2.1).
+   * What the interpolated PMF misses is not the 1/d^2 peak of the records' G term. Measured
+   * as inner relMSE x iterations (per-iteration variance, free of how many iterations the
+   * 30 s allowed), ajar-door gave 14.6 / 14.0 (seeds 99 / 7) at u = 0.5, and clamping d to
+   * >= 0.05 or 0.2 scene radii in the record importance, or dropping 1/d^2, changed that by
+   * < 1.5%. The exact PMF at the query reaches about 8, so interpolating the records costs
+   * ~1.8x. u = 0.7 / 0.85 / 1 gave 13.5 / 13.7 / 24 (seed 7: 13.2 / 13.2), but slit-room's
+   * 10.0 (seed 7: 28.3) at u = 0.5 went to 10.4 / 11.7 / 14 (seed 7, u = 0.7: 27.0 and 29.2
+   * in two runs differing only in iteration count), so 0.5 stays: the few per cent between
+   * 0.5 and 0.7 are within the run-to-run spread. */
   s->uniform_mix = 0.5f;
   s->mis_mode = PC_MIS_UPPER_BOUND;
   s->pmf_mode = PC_PMF_CACHED;
