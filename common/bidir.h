@@ -48,6 +48,10 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
                 pc_connection *out);
 
 /* Adds to the layer of the strategy class and, with --strategy-layers, to layer s%dt%d. */
+/* Strategy s=1 at eye vertex ev (its t): a fresh light sample from rng, connected and added to
+ * the nee layer of pixel (x,y). */
+void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_path_vertex *ev, int x, int y);
+
 void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
 
 /* Light tracing: connects light vertices v[0..nl-1] to the camera, splats into c->splat. */

@@ -15,6 +15,7 @@
 #include <zstd.h>
 
 #include "pcbpt.pb-c.h"
+#include "file_read.h"
 #include "wire_film.h"
 
 typedef struct refs {
@@ -207,17 +208,6 @@ static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *
   return remove(p);
 }
 
-static int write_all(int fd, const uint8_t *d, size_t n) {
-  while (n) {
-    ssize_t w = write(fd, d, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w < 0) return -1;
-    d += w;
-    n -= (size_t)w;
-  }
-  return 0;
-}
-
 /* Creates every parent directory of rel under root; rel is already checked safe. */
 static int make_parents(const char *root, const char *rel, pc_err *e) {
   char p[PATH_MAX];
@@ -285,7 +275,7 @@ int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE
     snprintf(p, sizeof p, "%s/%s", tmp, b->files[i]->path);
     int fd = open(p, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
     if (fd < 0) { rc = pc_errf(e, PC_EIO, "bundle: create %s: %s", p, strerror(errno)); break; }
-    if (write_all(fd, b->files[i]->data.data, b->files[i]->data.len) != 0 || close(fd) != 0)
+    if (pc_write_all(fd, b->files[i]->data.data, b->files[i]->data.len) != 0 || close(fd) != 0)
       rc = pc_errf(e, PC_EIO, "bundle: write %s: %s", p, strerror(errno));
   }
   if (!rc && rename(tmp, final) != 0) {

@@ -28,6 +28,15 @@ static float weight_of(const pc_mis_counts *n, int s, int t, float sl, float se)
   return w > 0.f && w <= 1.f ? w : 0.f; /* sl or se overflowed to Inf (or NaN): weight 0 */
 }
 
+void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_path_vertex *ev, int x, int y) {
+  pc_connection k;
+  pc_path_vertex lv;
+  float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng), u3 = pc_rng_f(rng);
+  pc_light_vertex_sample(c->scene, n, u0, u1, u2, u3, &lv);
+  if (pc_connect(c, n, &lv, ev, c->weighted, &k))
+    pc_film_add_strategy(c->film, c->set->strategy_layers, PC_LAYER_NEE, 1, ev->depth, x, y, v3_scale(k.f, k.weight));
+}
+
 float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light) {
   const pc_light *l = &s->lights[light];
   /* The light side would have sampled v as x_0 (choice by power, point by area) and emitted

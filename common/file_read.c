@@ -1,4 +1,4 @@
-/* file_read.c: whole-file reads with a size bound, for the scene and mesh parsers. */
+/* file_read.c: whole-file reads with a size bound (scene and mesh parsers) and complete writes. */
 #include "file_read.h"
 
 #include <errno.h>
@@ -52,5 +52,17 @@ int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err 
   buf[n] = 0;
   *data = buf;
   *len = n;
+  return 0;
+}
+
+int pc_write_all(int fd, const void *data, size_t n) {
+  const unsigned char *d = data;
+  while (n) {
+    ssize_t w = write(fd, d, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) return -1;
+    d += w;
+    n -= (size_t)w;
+  }
   return 0;
 }

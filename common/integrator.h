@@ -30,6 +30,8 @@ typedef struct pc_tctx {
   uint64_t rays;
   pc_path_vertex *light_path, *eye_path; /* sub-path buffers, PC_MAX_SEGMENTS + 2 vertices each */
   double t_paths, t_lt, t_connect;       /* thread-seconds per phase, for pc_render_stats */
+  int thread;                            /* this context's pool thread */
+  struct pc_pcbpt *pcbpt;                /* CBDPT/PCBPT: the iteration's stored light vertices and records */
 } pc_tctx;
 
 /* MIS weight of a strategy with pdf a against the others' summed (already heuristic-mapped)
@@ -59,5 +61,8 @@ void pc_bdpt_pixel(pc_tctx *c, int x, int y);
 void pc_lt_light_path(pc_tctx *c, uint64_t index);
 /* Eye pass of the lt method: the camera ray of pixel (x,y) and s=0 for emitters seen directly. */
 void pc_lt_pixel(pc_tctx *c, int x, int y);
+/* CBDPT and PCBPT for pixel (x,y): BDPT's s=0, s=1 and t=1, and the inner strategies through
+ * the iteration's stored light vertices (c->pcbpt, prepared before the eye pass). */
+void pc_pcbpt_pixel(pc_tctx *c, int x, int y);
 
 #endif

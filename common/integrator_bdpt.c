@@ -24,12 +24,8 @@ void pc_bdpt_pixel(pc_tctx *c, int x, int y) {
   for (int t = 2; t <= ne && t <= maxs; t++) {
     const pc_path_vertex *ev = &c->eye_path[t - 1];
     if (ev->delta) continue;
+    pc_connect_nee(c, n, &rng, ev, x, y);
     pc_connection k;
-    pc_path_vertex lv;
-    float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng), u3 = pc_rng_f(&rng);
-    pc_light_vertex_sample(c->scene, n, u0, u1, u2, u3, &lv);
-    if (pc_connect(c, n, &lv, ev, c->weighted, &k))
-      pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_NEE, 1, t, x, y, v3_scale(k.f, k.weight));
     for (int s = 2; s <= nl && s + t - 1 <= maxs; s++)
       if (pc_connect(c, n, &c->light_path[s - 1], ev, c->weighted, &k))
         pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_INNER, s, t, x, y, v3_scale(k.f, k.weight));

@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "bidir.h"
+#include "pcbpt.h"
 #include "thread_pool.h"
 
 #define TILE 16
@@ -29,6 +30,7 @@ struct pc_renderer {
   uint64_t n_light;       /* N_L */
   uint64_t light_first;   /* first light path of the light pass (the others are paired) */
   pc_path_vertex *verts;  /* per-thread sub-path buffers */
+  pc_pcbpt *pcbpt;        /* CBDPT/PCBPT per-iteration state */
 };
 
 void pc_render_settings_default(pc_render_settings *s) {
@@ -45,7 +47,23 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_k = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
-  s->uniform_mix = 0.1f;
+  /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
+   * every light vertex, so where the cached PMF is wrong (a vertex it thinks is dark is not)
+   * a sample's weight 1/(M p_conn) is at most V/(u M), 1/u times the uniform (CBDPT-like)
+   * weight: variance there is bounded by about 1/u times CBDPT's, while the interpolated PMF
+   * keeps 1-u of the samples where it is right. In 30 s equal-time runs against the 900 s
+   * BDPT reference, ajar-door's inner relMSE was 0.44 / 0.22 / 0.17 for u = 0.1 / 0.3 / 0.5
+   * (BDPT 0.29), while slit-room stayed at 0.09 for all three (BDPT 2.1).
+   * What the interpolated PMF misses is not the 1/d^2 peak of the records' G term. Measured
+   * as inner relMSE x iterations (per-iteration variance, free of how many iterations the
+   * 30 s allowed), ajar-door gave 14.6 / 14.0 (seeds 99 / 7) at u = 0.5, and clamping d to
+   * >= 0.05 or 0.2 scene radii in the record importance, or dropping 1/d^2, changed that by
+   * < 1.5%. The exact PMF at the query reaches about 8, so interpolating the records costs
+   * ~1.8x. u = 0.7 / 0.85 / 1 gave 13.5 / 13.7 / 24 (seed 7: 13.2 / 13.2), but slit-room's
+   * 10.0 (seed 7: 28.3) at u = 0.5 went to 10.4 / 11.7 / 14 (seed 7, u = 0.7: 27.0 and 29.2
+   * in two runs differing only in iteration count), so 0.5 stays: the few per cent between
+   * 0.5 and 0.7 are within the run-to-run spread. */
+  s->uniform_mix = 0.5f;
   s->mis_mode = PC_MIS_UPPER_BOUND;
   s->pmf_mode = PC_PMF_CACHED;
 }
@@ -63,7 +81,23 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
+  if (s->method == PC_METHOD_PCBPT && s->pmf_mode == PC_PMF_CACHED && s->uniform_mix == 0.f)
+    return pc_errf(e, PC_EINVAL, "uniform-mix 0 with the cached PMF would be biased (a light vertex that no nearby "
+                                 "record sees could never be sampled): use a value > 0 or --pmf exact");
   return PC_OK;
+}
+
+void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src) {
+  dst->iterations += src->iterations;
+  dst->eye_paths += src->eye_paths;
+  dst->light_paths += src->light_paths;
+  dst->rays += src->rays;
+  dst->t_total += src->t_total;
+  dst->t_paths += src->t_paths;
+  dst->t_lt += src->t_lt;
+  dst->t_pmf += src->t_pmf;
+  dst->t_connect += src->t_connect;
+  if (src->pmf_bytes > dst->pmf_bytes) dst->pmf_bytes = src->pmf_bytes;
 }
 
 static double now_seconds(void) {
@@ -76,8 +110,6 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
   if (rc != PC_OK) return rc;
-  if (settings->method != PC_METHOD_PT && settings->method != PC_METHOD_LT && settings->method != PC_METHOD_BDPT)
-    return pc_errf(e, PC_EUNSUPPORTED, "method %s is not implemented yet", pc_method_name(settings->method));
   if (threads < 0 || threads > 1024) return pc_errf(e, PC_EINVAL, "threads %d out of range 0..1024", threads);
   if (threads == 0) threads = pc_cpu_count();
   pc_renderer *r = calloc(1, sizeof *r);
@@ -116,6 +148,19 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->tctx[i].max_segments = max_seg;
     r->tctx[i].film = &r->scratch;
     r->tctx[i].splat = &r->splat[i];
+    r->tctx[i].thread = i;
+  }
+  if (settings->method == PC_METHOD_CBDPT || settings->method == PC_METHOD_PCBPT) {
+    rc = pc_pcbpt_create(settings, threads, &r->pcbpt, e);
+    if (rc != PC_OK) {
+      pc_renderer_destroy(r);
+      return rc;
+    }
+    for (int i = 0; i < threads; i++) {
+      r->tctx[i].pcbpt = r->pcbpt;
+      /* Correlated inner strategies count 1 (upper-bound weights, DESIGN.md §4.3) or M. */
+      if (settings->mis_mode == PC_MIS_STANDARD) r->tctx[i].counts.n_inner = (float)settings->pcbpt_m;
+    }
   }
   *out = r;
   return PC_OK;
@@ -130,6 +175,7 @@ void pc_renderer_destroy(pc_renderer *r) {
   free(r->splat);
   free(r->tctx);
   free(r->verts);
+  pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
   free(r);
 }
@@ -147,7 +193,8 @@ static void eye_tile(void *arg, int thread, int item) {
   int y1 = (ty + 1) * TILE < r->set.height ? (ty + 1) * TILE : r->set.height;
   void (*pixel)(pc_tctx *, int, int) = r->set.method == PC_METHOD_LT ? pc_lt_pixel
                                        : r->set.method == PC_METHOD_BDPT ? pc_bdpt_pixel
-                                                                         : pc_pt_pixel;
+                                       : r->set.method == PC_METHOD_PT   ? pc_pt_pixel
+                                                                         : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
     for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
 }
@@ -160,19 +207,56 @@ static void light_chunk(void *arg, int thread, int item) {
   for (uint64_t i = a; i < b; i++) pc_lt_light_path(&r->tctx[thread], i);
 }
 
-/* Adds the light layers of every thread's splat film into the scratch film and clears them. */
-static void merge_splats(pc_renderer *r) {
-  size_t n = (size_t)r->set.width * (size_t)r->set.height * 3;
-  for (int t = 0; t < pc_pool_size(r->pool); t++) {
-    pc_film *f = &r->splat[t];
-    for (int i = 0; i < f->nlayers; i++) {
-      if (f->layers[i].norm != PC_NORM_LIGHT) continue;
-      double *d = r->scratch.layers[i].sum, *src = f->layers[i].sum;
-      for (size_t j = 0; j < n; j++) d[j] += src[j];
-      memset(src, 0, n * sizeof(double));
+/* Folds a finished iteration into the caller's film, in parallel over bands of rows: each
+ * layer's scratch sums plus, for light layers, every thread's splats, which are zeroed on the
+ * way so the next iteration starts clean. Done serially this pass would cap the thread
+ * speed-up (it moves every layer of the image once per iteration). */
+#define FOLD_ROWS 8
+typedef struct fold_job {
+  pc_renderer *r;
+  pc_film *film;
+  bool light;
+} fold_job;
+
+static void fold_rows(void *arg, int thread, int item) {
+  (void)thread;
+  fold_job *j = arg;
+  pc_renderer *r = j->r;
+  size_t row = (size_t)r->set.width * 3;
+  size_t lo = (size_t)item * FOLD_ROWS * row;
+  size_t hi = lo + FOLD_ROWS * row;
+  size_t n = row * (size_t)r->set.height;
+  if (hi > n) hi = n;
+  int nthreads = pc_pool_size(r->pool);
+  for (int i = 0; i < r->scratch.nlayers; i++) {
+    double *d = j->film->layers[i].sum, *s = r->scratch.layers[i].sum;
+    if (j->light && r->scratch.layers[i].norm == PC_NORM_LIGHT)
+      for (int t = 0; t < nthreads; t++) {
+        double *p = r->splat[t].layers[i].sum;
+        for (size_t k = lo; k < hi; k++) {
+          s[k] += p[k];
+          p[k] = 0.0;
+        }
+      }
+    for (size_t k = lo; k < hi; k++) {
+      d[k] += s[k];
+      s[k] = 0.0;
     }
-    r->scratch.dropped_nonfinite += f->dropped_nonfinite;
-    f->dropped_nonfinite = 0;
+  }
+}
+
+static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
+  fold_job j = {r, film, light};
+  pc_pool_run(r->pool, (r->set.height + FOLD_ROWS - 1) / FOLD_ROWS, fold_rows, &j);
+  for (int i = 0; i < film->nlayers; i++) {
+    if (r->scratch.layers[i].norm == PC_NORM_EYE) film->layers[i].count += 1;
+    else if (light) film->layers[i].count += r->n_light;
+  }
+  film->dropped_nonfinite += r->scratch.dropped_nonfinite;
+  r->scratch.dropped_nonfinite = 0;
+  for (int t = 0; t < pc_pool_size(r->pool); t++) {
+    film->dropped_nonfinite += r->splat[t].dropped_nonfinite;
+    r->splat[t].dropped_nonfinite = 0;
   }
 }
 
@@ -184,30 +268,34 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
   r->cancel = cancel;
   int nthreads = pc_pool_size(r->pool);
   uint64_t npix = (uint64_t)r->set.width * (uint64_t)r->set.height;
+  for (int i = 0; i < film->nlayers; i++)
+    if (strcmp(film->layers[i].name, r->scratch.layers[i].name) != 0)
+      return pc_errf(e, PC_EINVAL, "film layer %d is '%s', the render writes '%s'", i, film->layers[i].name,
+                     r->scratch.layers[i].name);
   for (uint64_t k = 0; k < count; k++) {
     double t0 = now_seconds();
-    pc_film_clear(&r->scratch);
     for (int i = 0; i < nthreads; i++) {
       r->tctx[i].iteration = first + k;
       r->tctx[i].rays = 0;
       r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
+    }
+    double t_pmf = 0.0;
+    if (r->pcbpt) {
+      int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
+      if (rc != PC_OK) return rc;
+      t_pmf = now_seconds() - t0;
     }
     pc_pool_run(r->pool, r->tiles_x * r->tiles_y, eye_tile, r);
     bool light = r->set.method != PC_METHOD_PT;
     if (light && r->n_light > r->light_first)
       pc_pool_run(r->pool, (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK), light_chunk, r);
     if (cancelled(r)) {
+      pc_film_clear(&r->scratch);
       for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
       return pc_errf(e, PC_ECANCELED, "render cancelled");
     }
     double t1 = now_seconds();
-    if (light) merge_splats(r);
-    for (int i = 0; i < r->scratch.nlayers; i++) {
-      if (r->scratch.layers[i].norm == PC_NORM_EYE) r->scratch.layers[i].count = 1;
-      else if (light) r->scratch.layers[i].count = r->n_light;
-    }
-    int rc = pc_film_add(film, &r->scratch, e);
-    if (rc != PC_OK) return rc;
+    fold_iteration(r, film, light);
     if (stats) {
       stats->iterations++;
       stats->eye_paths += npix;
@@ -221,13 +309,16 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
         tl += r->tctx[i].t_lt;
         tc += r->tctx[i].t_connect;
       }
-      double busy = tp + tl + tc;
+      double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
+      stats->t_pmf += t_pmf;
+      uint64_t pmf_bytes = r->pcbpt && r->pcbpt->store ? pc_irec_bytes(r->pcbpt->store) : 0;
+      if (pmf_bytes > stats->pmf_bytes) stats->pmf_bytes = pmf_bytes;
       if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
-        stats->t_paths += t1 - t0;
+        stats->t_paths += span;
       } else {
-        stats->t_paths += (t1 - t0) * tp / busy;
-        stats->t_lt += (t1 - t0) * tl / busy;
-        stats->t_connect += (t1 - t0) * tc / busy;
+        stats->t_paths += span * tp / busy;
+        stats->t_lt += span * tl / busy;
+        stats->t_connect += span * tc / busy;
       }
       stats->t_total += now_seconds() - t0;
     }

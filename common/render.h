@@ -53,7 +53,12 @@ typedef struct pc_render_stats {
   double t_lt;             /* light tracing splats */
   double t_pmf;            /* PCBPT importance records */
   double t_connect;        /* connections (inner strategies) incl. shadow rays */
+  uint64_t pmf_bytes;      /* PCBPT: most bytes the importance records (PMF/CMF, records, kd-tree)
+                              held in any iteration; merge by max */
 } pc_render_stats;
+
+/* Adds src's work into dst (times and counts add; pmf_bytes is a maximum). */
+void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src);
 
 typedef struct pc_renderer pc_renderer; /* thread pool + per-thread scratch for one scene */
 

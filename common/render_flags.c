@@ -20,7 +20,7 @@ const char pc_render_flags_help[] =
     "  --pcbpt-k K           PCBPT connections per eye vertex (default 1)\n"
     "  --cache-fraction F    PCBPT importance-record paths as a fraction of W*H (0.004)\n"
     "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
-    "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.1)\n"
+    "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.5)\n"
     "  --mis MODE            PCBPT correlated MIS: upper-bound (default) or standard\n"
     "  --pmf MODE            PCBPT connection PMF: cached (default) or exact\n";
 

@@ -349,7 +349,7 @@ int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *
   return 0;
 }
 
-static int grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
+int pc_sx_grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
   if (need <= *cap) return 0;
   int nc = *cap ? 2 * *cap : 16;
   while (nc < need) nc *= 2;
@@ -363,7 +363,7 @@ static int grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
 int pc_sx_add_material(pc_sx *c, const pc_xml_node *n, const pc_material *m, int *index) {
   if (c->s->nmaterials >= PC_SCENE_MAX_MATERIALS)
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d BSDFs", c->file, n->line, PC_SCENE_MAX_MATERIALS);
-  int rc = grow(c, (void **)&c->s->materials, &c->cap_materials, c->s->nmaterials + 1, sizeof *m);
+  int rc = pc_sx_grow(c, (void **)&c->s->materials, &c->cap_materials, c->s->nmaterials + 1, sizeof *m);
   if (rc) return rc;
   *index = c->s->nmaterials;
   c->s->materials[c->s->nmaterials++] = *m;
@@ -373,7 +373,7 @@ int pc_sx_add_material(pc_sx *c, const pc_xml_node *n, const pc_material *m, int
 int pc_sx_add_texture(pc_sx *c, const pc_xml_node *n, const pc_texture *t, int *index) {
   if (c->s->ntextures >= PC_SCENE_MAX_TEXTURES)
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d textures", c->file, n->line, PC_SCENE_MAX_TEXTURES);
-  int rc = grow(c, (void **)&c->s->textures, &c->cap_textures, c->s->ntextures + 1, sizeof *t);
+  int rc = pc_sx_grow(c, (void **)&c->s->textures, &c->cap_textures, c->s->ntextures + 1, sizeof *t);
   if (rc) return rc;
   *index = c->s->ntextures;
   c->s->textures[c->s->ntextures++] = *t;

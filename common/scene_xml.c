@@ -13,17 +13,6 @@
 
 #define DISK_SEGMENTS 256
 
-static int grow(pc_sx *c, void **arr, int *cap, int need, size_t elem) {
-  if (need <= *cap) return 0;
-  int nc = *cap ? 2 * *cap : 16;
-  while (nc < need) nc *= 2;
-  void *q = realloc(*arr, (size_t)nc * elem);
-  if (!q) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
-  *arr = q;
-  *cap = nc;
-  return 0;
-}
-
 static int object_type(pc_sx *c, const pc_xml_node *n, bool id_ok, const char **type) {
   static const char *const with_id[] = {"type", "id", NULL};
   static const char *const no_id[] = {"type", NULL};
@@ -159,7 +148,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
 static int add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
   if (c->s->nshapes >= PC_SCENE_MAX_SHAPES)
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d shapes", c->file, n->line, PC_SCENE_MAX_SHAPES);
-  int rc = grow(c, (void **)&c->s->shapes, &c->cap_shapes, c->s->nshapes + 1, sizeof *sh);
+  int rc = pc_sx_grow(c, (void **)&c->s->shapes, &c->cap_shapes, c->s->nshapes + 1, sizeof *sh);
   if (rc) return rc;
   c->s->shapes[c->s->nshapes++] = *sh;
   return 0;
@@ -168,7 +157,7 @@ static int add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
 static int add_light(pc_sx *c, const pc_xml_node *n, const pc_light *l, int *index) {
   if (c->s->nlights >= PC_SCENE_MAX_LIGHTS)
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d emitters", c->file, n->line, PC_SCENE_MAX_LIGHTS);
-  int rc = grow(c, (void **)&c->s->lights, &c->cap_lights, c->s->nlights + 1, sizeof *l);
+  int rc = pc_sx_grow(c, (void **)&c->s->lights, &c->cap_lights, c->s->nlights + 1, sizeof *l);
   if (rc) return rc;
   *index = c->s->nlights;
   c->s->lights[c->s->nlights++] = *l;

@@ -79,6 +79,8 @@ int pc_sx_substitute(pc_sx *c, pc_xml_node *root);
 int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *rel, char **out);
 
 /* Appends to the scene arrays (bounded by PC_SCENE_MAX_*). */
+/* Grows *arr (capacity *cap elements of `elem` bytes) to hold `need` elements. */
+int pc_sx_grow(pc_sx *c, void **arr, int *cap, int need, size_t elem);
 int pc_sx_add_material(pc_sx *c, const pc_xml_node *n, const pc_material *m, int *index);
 int pc_sx_add_texture(pc_sx *c, const pc_xml_node *n, const pc_texture *t, int *index);
 

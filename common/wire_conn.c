@@ -82,6 +82,11 @@ int pc_conn_start(pc_conn *c) {
   return uv_read_start((uv_stream_t *)&c->tcp, alloc_cb, read_cb);
 }
 
+int pc_conn_pause(pc_conn *c, bool paused) {
+  if (c->closing) return 0;
+  return paused ? uv_read_stop((uv_stream_t *)&c->tcp) : uv_read_start((uv_stream_t *)&c->tcp, alloc_cb, read_cb);
+}
+
 static void write_bulk_next(pc_conn *c);
 
 static void write_cb(uv_write_t *req, int status) {

@@ -37,6 +37,8 @@ int pc_conn_init(uv_loop_t *loop, pc_conn *c, const pc_conn_cbs *cbs, void *data
 int pc_conn_start(pc_conn *c);
 int pc_conn_send(pc_conn *c, const Pcbpt__Envelope *env);
 int pc_conn_send_bulk(pc_conn *c, const Pcbpt__Envelope *env);
+/* Stops (paused true) or resumes reading: back-pressure while the reader cannot take more. */
+int pc_conn_pause(pc_conn *c, bool paused);
 /* Logs "peer: closing: reason" (when reason is non-NULL) and closes; idempotent. */
 void pc_conn_close(pc_conn *c, const char *reason);
 

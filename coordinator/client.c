@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "auth.h"
+#include "bundle.h"
 #include "wire_conn.h"
 
 int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e) {
@@ -68,6 +69,10 @@ void pc_client_close(pc_client *cl) {
 }
 
 int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e) {
+  return pc_client_connect_as(hostport, token_file, PCBPT__ROLE__ROLE_CLIENT, cl, e);
+}
+
+int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Role role, pc_client *cl, pc_err *e) {
   char host[256], portstr[16];
   int port;
   uint8_t key[PC_AUTH_KEY];
@@ -94,8 +99,8 @@ int pc_client_connect(const char *hostport, const char *token_file, pc_client *c
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Hello h = PCBPT__HELLO__INIT;
   h.protocol_version = PC_WIRE_PROTOCOL_VERSION;
-  h.role = PCBPT__ROLE__ROLE_CLIENT;
-  h.name = "client";
+  h.role = role;
+  h.name = role == PCBPT__ROLE__ROLE_CLIENT ? "client" : "test-worker";
   h.client_nonce.data = cn;
   h.client_nonce.len = PC_AUTH_NONCE;
   env.msg_case = PCBPT__ENVELOPE__MSG_HELLO;
@@ -128,5 +133,52 @@ fail:
   if (in) pcbpt__envelope__free_unpacked(in, NULL);
   sodium_memzero(key, sizeof key);
   pc_client_close(cl);
+  return rc;
+}
+
+int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const uint8_t *hash, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__BundleChunk bc = PCBPT__BUNDLE_CHUNK__INIT;
+  bc.hash.data = (uint8_t *)hash;
+  bc.hash.len = PC_BUNDLE_HASH;
+  bc.total = n;
+  env.msg_case = PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK;
+  env.bundle_chunk = &bc;
+  int rc = 0;
+  for (size_t off = 0; off < n && !rc; off += PC_WIRE_CHUNK) {
+    bc.offset = off;
+    bc.data.data = (uint8_t *)blob + off;
+    bc.data.len = n - off < PC_WIRE_CHUNK ? n - off : PC_WIRE_CHUNK;
+    rc = pc_client_send(cl, &env, e);
+  }
+  return rc;
+}
+
+int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *bytes, pc_err *e) {
+  char tmp[4096];
+  snprintf(tmp, sizeof tmp, "%s.part.%ld", out, (long)getpid());
+  FILE *f = fopen(tmp, "wb");
+  if (!f) return pc_errf(e, PC_EIO, "%s: cannot create: %s", tmp, strerror(errno));
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  Pcbpt__FetchRequest fr = PCBPT__FETCH_REQUEST__INIT;
+  fr.job_id = job;
+  env.msg_case = PCBPT__ENVELOPE__MSG_FETCH_REQUEST;
+  env.fetch_request = &fr;
+  uint64_t got = 0, total = 1;
+  int rc = pc_client_send(cl, &env, e);
+  while (!rc && got < total) {
+    if ((rc = pc_client_recv(cl, 60, &in, e)) != 0) break;
+    if (in->msg_case != PCBPT__ENVELOPE__MSG_FETCH_CHUNK || in->fetch_chunk->offset != got) rc = pc_errf(e, PC_EPARSE, "unexpected reply");
+    else {
+      total = in->fetch_chunk->total;
+      if (fwrite(in->fetch_chunk->data.data, 1, in->fetch_chunk->data.len, f) != in->fetch_chunk->data.len) rc = pc_errf(e, PC_EIO, "%s: write failed", tmp);
+      got += in->fetch_chunk->data.len;
+    }
+    pcbpt__envelope__free_unpacked(in, NULL);
+  }
+  if (fclose(f) != 0 && !rc) rc = pc_errf(e, PC_EIO, "%s: write failed", tmp);
+  if (!rc && rename(tmp, out) != 0) rc = pc_errf(e, PC_EIO, "%s: cannot rename into place: %s", out, strerror(errno));
+  if (rc) unlink(tmp);
+  *bytes = got;
   return rc;
 }

@@ -13,9 +13,16 @@ typedef struct pc_client {
 /* Connects to "HOST[:PORT]", says hello as a client and completes the challenge/response,
  * checking the coordinator's proof too. */
 int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e);
+/* The same with another role (the farm tests speak as a worker). */
+int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Role role, pc_client *cl, pc_err *e);
 int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e);
 /* Waits up to timeout_s for the next frame; an Error frame becomes PC_EINVAL with its reason. */
 int pc_client_recv(pc_client *cl, double timeout_s, Pcbpt__Envelope **out, pc_err *e);
 void pc_client_close(pc_client *cl);
+/* Sends a scene bundle (pc_bundle_create) in bounded chunks. */
+int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const uint8_t *hash, pc_err *e);
+/* Downloads a job's image to `out` (through a temporary file renamed into place); *bytes is
+ * its size. */
+int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *bytes, pc_err *e);
 
 #endif

@@ -90,20 +90,9 @@ int pc_cmd_submit(int argc, char **argv) {
   pc_client cl;
   int rc = connect_or_say("submit", &o, &cl);
   if (rc) { free(blob); return rc; }
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-  Pcbpt__BundleChunk bc = PCBPT__BUNDLE_CHUNK__INIT;
-  bc.hash.data = hash;
-  bc.hash.len = PC_BUNDLE_HASH;
-  bc.total = n;
-  env.msg_case = PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK;
-  env.bundle_chunk = &bc;
-  for (size_t off = 0; off < n && !rc; off += PC_WIRE_CHUNK) {
-    bc.offset = off;
-    bc.data.data = blob + off;
-    bc.data.len = n - off < PC_WIRE_CHUNK ? n - off : PC_WIRE_CHUNK;
-    rc = pc_client_send(&cl, &env, &e);
-  }
+  rc = pc_client_send_bundle(&cl, blob, n, hash, &e);
   free(blob);
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Settings ps;
   pc_wire_settings_to_proto(&req.set, &ps);
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
@@ -315,32 +304,11 @@ int pc_cmd_fetch(int argc, char **argv) {
   if (!o.out) { fprintf(stderr, "pcbpt-coord fetch: --out F.exr is required\n"); return 2; }
   pc_client cl;
   if ((rc = connect_or_say("fetch", &o, &cl)) != 0) return rc;
-  char tmp[4096];
-  snprintf(tmp, sizeof tmp, "%s.part.%ld", o.out, (long)getpid());
-  FILE *f = fopen(tmp, "wb");
-  if (!f) { fprintf(stderr, "pcbpt-coord fetch: %s: cannot create\n", tmp); pc_client_close(&cl); return 1; }
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
-  Pcbpt__FetchRequest fr = PCBPT__FETCH_REQUEST__INIT;
-  fr.job_id = job;
-  env.msg_case = PCBPT__ENVELOPE__MSG_FETCH_REQUEST;
-  env.fetch_request = &fr;
   pc_err e = {0};
-  uint64_t got = 0, total = 1;
-  rc = pc_client_send(&cl, &env, &e);
-  while (!rc && got < total) {
-    if ((rc = pc_client_recv(&cl, 60, &in, &e)) != 0) break;
-    if (in->msg_case != PCBPT__ENVELOPE__MSG_FETCH_CHUNK || in->fetch_chunk->offset != got) rc = pc_errf(&e, PC_EPARSE, "unexpected reply");
-    else {
-      total = in->fetch_chunk->total;
-      if (fwrite(in->fetch_chunk->data.data, 1, in->fetch_chunk->data.len, f) != in->fetch_chunk->data.len) rc = pc_errf(&e, PC_EIO, "%s: write failed", tmp);
-      got += in->fetch_chunk->data.len;
-    }
-    pcbpt__envelope__free_unpacked(in, NULL);
-  }
+  uint64_t got = 0;
+  rc = pc_client_fetch(&cl, job, o.out, &got, &e);
   pc_client_close(&cl);
-  if (fclose(f) != 0 && !rc) rc = pc_errf(&e, PC_EIO, "%s: write failed", tmp);
-  if (!rc && rename(tmp, o.out) != 0) rc = pc_errf(&e, PC_EIO, "%s: cannot rename into place", o.out);
-  if (rc) { unlink(tmp); fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg); return 1; }
+  if (rc) { fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg); return 1; }
   if (o.json) printf("{\"job\": %llu, \"out\": \"%s\", \"bytes\": %llu}\n", (unsigned long long)job, o.out, (unsigned long long)got);
   else printf("%s\n", o.out);
   return 0;

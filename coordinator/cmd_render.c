@@ -1,6 +1,8 @@
 /* cmd_render.c: `pcbpt-coord render`: renders a scene on this machine until an iteration count
  * or a time budget is reached, then writes the EXR (beauty + per-strategy layers + counts) and
- * an sRGB PNG preview, and prints one summary line. */
+ * an sRGB PNG preview, and prints one summary line. The render runs on an embedded farm
+ * (embedded.c): the scene is submitted as a job over the real protocol to a loopback
+ * coordinator with one local worker, and the merged image is fetched back. */
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -10,9 +12,13 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "film.h"
+#include "bundle.h"
+#include "client.h"
+#include "embedded.h"
 #include "image.h"
 #include "render.h"
+#include "thread_pool.h"
+#include "wire_settings.h"
 #include "render_flags.h"
 #include "scene.h"
 #include "verbs.h"
@@ -27,7 +33,8 @@ static const char render_help[] =
     "  --quiet               no progress bar\n"
     "Without --spp or --time, renders 64 iterations.\n";
 
-static atomic_bool g_interrupted; /* set by SIGINT: the render stops and writes what it has */
+static atomic_bool g_interrupted; /* set by SIGINT/SIGTERM: the render stops and writes what it has */
+/* Asynchronous-signal state must be global; this flag is the only such state. */
 
 static void on_sigint(int sig) {
   (void)sig;
@@ -79,15 +86,126 @@ typedef struct progress_state {
   uint64_t done_before;
 } progress_state;
 
-static void draw_progress(progress_state *p, uint64_t done) {
+static void draw_progress(progress_state *p, int fd, uint64_t done) {
   if (!p->show) return;
   double el = now_s() - p->t0;
   double frac = p->target ? (double)done / (double)p->target : (p->seconds > 0 ? el / p->seconds : 0);
   if (frac > 1) frac = 1;
   int bar = (int)(frac * 30);
-  fprintf(stderr, "\r[%.*s%*s] %3d%%  %llu it  %.1fs ", bar, "==============================", 30 - bar, "",
+  dprintf(fd, "\r[%.*s%*s] %3d%%  %llu it  %.1fs ", bar, "==============================", 30 - bar, "",
           (int)(frac * 100), (unsigned long long)done, el);
-  fflush(stderr);
+}
+
+static void sleep_s(double s) {
+  struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+  nanosleep(&ts, NULL);
+}
+
+/* Status of one job; *st is owned by *env. */
+static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt__JobStatus **st, pc_err *e) {
+  Pcbpt__Envelope q = PCBPT__ENVELOPE__INIT;
+  Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;
+  sr.job_id = job;
+  q.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REQUEST;
+  q.status_request = &sr;
+  int rc = pc_client_send(cl, &q, e);
+  if (!rc) rc = pc_client_recv(cl, 30, env, e);
+  if (rc) return rc;
+  if ((*env)->msg_case != PCBPT__ENVELOPE__MSG_STATUS_REPLY || (*env)->status_reply->n_jobs != 1) {
+    pcbpt__envelope__free_unpacked(*env, NULL);
+    *env = NULL;
+    return pc_errf(e, PC_EPARSE, "embedded farm: unexpected status reply");
+  }
+  *st = (*env)->status_reply->jobs[0];
+  return 0;
+}
+
+static int submit_job(pc_client *cl, const char *scene_path, const pc_render_request *req, uint64_t *job, pc_err *e) {
+  uint8_t *blob, hash[PC_BUNDLE_HASH];
+  size_t n;
+  int rc = pc_bundle_create(scene_path, &blob, &n, hash, e);
+  if (rc) return rc;
+  rc = pc_client_send_bundle(cl, blob, n, hash, e);
+  free(blob);
+  if (rc) return rc;
+  Pcbpt__Settings ps;
+  pc_wire_settings_to_proto(&req->set, &ps);
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  sub.name = (char *)scene_path;
+  sub.bundle_hash.data = hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = req->spp;
+  sub.halt_seconds = req->seconds;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = &sub;
+  if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 60, &in, e)) != 0) return rc;
+  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "embedded farm: unexpected reply to submit");
+  else *job = in->submit_reply->job_id;
+  pcbpt__envelope__free_unpacked(in, NULL);
+  return rc;
+}
+
+/* Asks the coordinator to finish the job with what is rendered (Ctrl-C). */
+static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  Pcbpt__CancelRequest cr = PCBPT__CANCEL_REQUEST__INIT;
+  cr.job_id = job;
+  cr.finish = true;
+  env.msg_case = PCBPT__ENVELOPE__MSG_CANCEL_REQUEST;
+  env.cancel_request = &cr;
+  int rc = pc_client_send(cl, &env, e);
+  if (!rc) rc = pc_client_recv(cl, 30, &in, e);
+  if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  return rc;
+}
+
+/* Submits the job to the embedded farm, shows progress until it ends and fetches the image to
+ * `out`. *secs is the wall time from submission to the end of the job. */
+static int run_job(pc_embedded *farm, int threads, const char *scene_path, const pc_render_request *req,
+                   const char *out, progress_state *prog, double *secs, pc_err *e) {
+  pc_client cl;
+  int rc = pc_client_connect(farm->hostport, farm->token, &cl, e);
+  if (rc) return rc;
+  uint64_t job = 0;
+  double t0 = now_s();
+  prog->t0 = t0;
+  bool halted = false;
+  rc = submit_job(&cl, scene_path, req, &job, e);
+  if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
+  while (!rc) {
+    Pcbpt__Envelope *env = NULL;
+    Pcbpt__JobStatus *st = NULL;
+    if ((rc = job_status(&cl, job, &env, &st, e)) != 0) break;
+    bool done = strcmp(st->state, "done") == 0;
+    if (done || strcmp(st->state, "failed") == 0 || strcmp(st->state, "cancelled") == 0) {
+      *secs = now_s() - t0;
+      if (!done) rc = pc_errf(e, PC_EIO, "%s", *st->error ? st->error : "the render was cancelled");
+      else if (st->iterations_done == 0) rc = pc_errf(e, PC_ECANCELED, "no iteration finished; nothing written");
+      pcbpt__envelope__free_unpacked(env, NULL);
+      break;
+    }
+    draw_progress(prog, farm->term_fd, st->iterations_done);
+    pcbpt__envelope__free_unpacked(env, NULL);
+    if (atomic_load(&g_interrupted) && !halted) {
+      halted = true;
+      if ((rc = halt_job(&cl, job, e)) != 0) break;
+      continue;
+    }
+    sleep_s(0.02);
+  }
+  uint64_t bytes;
+  if (!rc) rc = pc_client_fetch(&cl, job, out, &bytes, e);
+  pc_client_close(&cl);
+  return rc;
+}
+
+/* A numeric header attribute of an image written by the farm (0 when absent). */
+static double attr_number(const pc_exr_file *x, const char *name) {
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], name) == 0) return strtod(x->attr_values[i], NULL);
+  return 0;
 }
 
 int pc_cmd_render(int argc, char **argv) {
@@ -147,15 +265,23 @@ int pc_cmd_render(int argc, char **argv) {
 
   int status = 1;
   pc_scene scene = {0};
-  pc_renderer *rend = NULL;
-  pc_film film = {0};
+  pc_exr_file img = {0};
+  pc_embedded farm;
+  bool farm_up = false;
   char *out_owned = NULL, *png = NULL;
+  /* the scene is checked here so a bad one is one clear line, before any farm starts */
   if (pc_scene_load(scene_path, &scene, &err) != PC_OK) goto fail;
   pc_render_request_apply_scene(&req, &scene);
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
-  if (pc_film_init(&film, req.set.width, req.set.height, req.set.strategy_layers, &err) != PC_OK) goto fail;
-  if (pc_renderer_create(&scene, &req.set, (int)threads, &rend, &err) != PC_OK) goto fail;
+  {
+    /* settings the renderer refuses (e.g. a method not built in) are refused here too */
+    pc_renderer *probe = NULL;
+    if (pc_renderer_create(&scene, &req.set, 1, &probe, &err) != PC_OK) goto fail;
+    pc_renderer_destroy(probe);
+  }
+  pc_scene_free(&scene);
+  memset(&scene, 0, sizeof scene);
   if (!out) out = out_owned = default_out(scene_path);
   png = out ? preview_path(out) : NULL;
   if (!out || !png) {
@@ -166,73 +292,48 @@ int pc_cmd_render(int argc, char **argv) {
   struct sigaction sa = {0};
   sa.sa_handler = on_sigint;
   sigemptyset(&sa.sa_mask);
-  if (sigaction(SIGINT, &sa, NULL) != 0) perror("pcbpt-coord render: sigaction");
+  /* SIGTERM too: the render finishes with what it has and removes its temporary farm */
+  if (sigaction(SIGINT, &sa, NULL) != 0 || sigaction(SIGTERM, &sa, NULL) != 0) perror("pcbpt-coord render: sigaction");
 
   progress_state prog = {.show = !quiet && isatty(STDERR_FILENO), .target = req.spp, .seconds = req.seconds, .t0 = now_s()};
-  pc_render_stats stats = {0};
-  uint64_t it = 0;
-  double t0 = now_s();
-  while (!atomic_load(&g_interrupted)) {
-    if (req.spp && it >= req.spp) break;
-    if (req.seconds > 0 && now_s() - t0 >= req.seconds) break;
-    int rc = pc_render_iterations(rend, it, 1, &film, &stats, &g_interrupted, NULL, NULL, &err);
-    if (rc == PC_ECANCELED) break;
-    if (rc != PC_OK) goto fail;
-    it++;
-    draw_progress(&prog, it);
-  }
-  double secs = now_s() - t0;
+  if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
+  farm_up = true;
+  double secs = 0;
+  int rc = run_job(&farm, (int)threads, scene_path, &req, out, &prog, &secs, &err);
+  pc_embedded_stop(&farm);
+  farm_up = false;
   if (prog.show) fputc('\n', stderr);
-  if (it == 0) {
-    pc_errf(&err, PC_ECANCELED, "no iteration finished; nothing written");
+  if (rc != PC_OK) goto fail;
+
+  if (pc_exr_read_layers(out, &img, &err) != PC_OK) goto fail;
+  int beauty = -1;
+  for (int i = 0; i < img.nlayers; i++)
+    if (img.names[i][0] == '\0') beauty = i;
+  if (beauty < 0) {
+    pc_errf(&err, PC_EPARSE, "%s: the farm's image has no beauty layer", out);
     goto fail;
   }
-
-  char version[64];
-  snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
-  char seed[32];
-  snprintf(seed, sizeof seed, "%llu", (unsigned long long)req.set.seed);
-  pc_exr_attr attrs[] = {
-      {.name = "pcbpt.method", .type = PC_ATTR_STRING, .s = pc_method_name(req.set.method)},
-      {.name = "pcbpt.iterations", .type = PC_ATTR_DOUBLE, .d = (double)it},
-      {.name = "pcbpt.seed", .type = PC_ATTR_STRING, .s = seed},
-      {.name = "pcbpt.max_depth", .type = PC_ATTR_DOUBLE, .d = req.set.max_depth},
-      {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = secs},
-      {.name = "pcbpt.rays", .type = PC_ATTR_DOUBLE, .d = (double)stats.rays},
-      {.name = "pcbpt.time_paths", .type = PC_ATTR_DOUBLE, .d = stats.t_paths},
-      {.name = "pcbpt.time_lt", .type = PC_ATTR_DOUBLE, .d = stats.t_lt},
-      {.name = "pcbpt.time_pmf", .type = PC_ATTR_DOUBLE, .d = stats.t_pmf},
-      {.name = "pcbpt.time_connect", .type = PC_ATTR_DOUBLE, .d = stats.t_connect},
-      {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = scene_path},
-      {.name = "software", .type = PC_ATTR_STRING, .s = version},
-  };
-  if (pc_film_write_exr(&film, out, attrs, (int)(sizeof attrs / sizeof attrs[0]), &err) != PC_OK) goto fail;
-  {
-    size_t n = (size_t)film.w * film.h * 3;
-    float *beauty = malloc(n * sizeof(float));
-    if (!beauty) {
-      pc_errf(&err, PC_ENOMEM, "out of memory for the preview");
-      goto fail;
-    }
-    pc_film_beauty(&film, beauty);
-    int rc = pc_png_write_preview(png, film.w, film.h, beauty, (float)exposure, &err);
-    free(beauty);
-    if (rc != PC_OK) goto fail;
-  }
-  double samples = (double)it * film.w * film.h;
-  printf("%s: %llu iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
-         pc_method_name(req.set.method), (unsigned long long)it, secs, samples / secs, (double)stats.rays / secs * 1e-6,
-         pc_renderer_threads(rend), film.dropped_nonfinite ? " (non-finite samples dropped)" : "", out, png);
-  if (film.dropped_nonfinite)
-    fprintf(stderr, "pcbpt-coord render: warning: %llu non-finite samples were dropped\n",
-            (unsigned long long)film.dropped_nonfinite);
+  if (pc_png_write_preview(png, img.w, img.h, img.layers[beauty].rgb, (float)exposure, &err) != PC_OK) goto fail;
+  double it = attr_number(&img, "pcbpt.iterations"), rays = attr_number(&img, "pcbpt.rays");
+  double dropped = attr_number(&img, "pcbpt.dropped_nonfinite");
+  double samples = it * img.w * img.h;
+  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
+         pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
+         threads ? (int)threads : pc_cpu_count(), dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
+  if (it > 0)
+    printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
+           1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
+           1e3 * attr_number(&img, "pcbpt.time_pmf") / it, 1e3 * attr_number(&img, "pcbpt.time_connect") / it);
+  double pmf_bytes = attr_number(&img, "pcbpt.pmf_bytes");
+  if (pmf_bytes > 0) printf("importance records: %.2f MiB\n", pmf_bytes / (1024.0 * 1024.0));
+  if (dropped > 0) fprintf(stderr, "pcbpt-coord render: warning: %.0f non-finite samples were dropped\n", dropped);
   status = 0;
   goto done;
 fail:
+  if (farm_up) pc_embedded_stop(&farm);
   fprintf(stderr, "pcbpt-coord render: %s\n", err.msg[0] ? err.msg : pc_strerror(err.code));
 done:
-  pc_renderer_destroy(rend);
-  pc_film_free(&film);
+  pc_exr_file_free(&img);
   pc_scene_free(&scene);
   free(out_owned);
   free(png);

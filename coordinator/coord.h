@@ -62,6 +62,9 @@ typedef struct pc_job {
   pc_pending_ack *acks;      /* merged, waiting for a commit */
   bool dirty;                /* merged > acked somewhere */
   bool finishing;            /* the final image is being written */
+  int failures;              /* ranges workers reported they could not render */
+  pc_render_stats stats;        /* work behind the committed iterations (stored) */
+  pc_render_stats stats_merged; /* ... and behind everything merged */
   struct pc_job *next;
 } pc_job;
 
@@ -89,6 +92,8 @@ struct pc_peer {
   uint32_t up_next, up_nchunks;
   uint64_t up_job, up_range, up_first, up_count, up_raw;
   bool up_final;
+  pc_render_stats up_stats;
+  bool paused;               /* not read from until upload memory is freed */
   /* bundle being received from a client */
   int bun_fd; char bun_tmp[640]; uint64_t bun_off, bun_total; uint8_t bun_hash[PC_BUNDLE_HASH];
   pc_stream_out out;
@@ -106,8 +111,16 @@ struct pc_coord {
   pc_job *jobs;
   pc_peer *peers;
   int bound_port;            /* after listen (for --listen HOST:0) */
+  uv_async_t wake;           /* pc_coord_stop from another thread */
+  bool stopping;
+  double last_tick;
+  /* upload bytes held (being assembled or waiting to merge), over all peers: above
+   * max_buffered, peers sending uploads are paused so memory does not grow with them */
+  size_t buffered, max_buffered;
   /* tunables */
   double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;
+  int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
+  bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
 };
 
 double pc_coord_now(void);
@@ -132,11 +145,13 @@ int pc_store_load(pc_coord *c, pc_err *e);
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
 void pc_job_cancel(pc_coord *c, pc_job *j);
+/* Stops handing out work and finishes the job with what its workers have rendered. */
+void pc_job_halt(pc_coord *c, pc_job *j);
 void pc_job_tick(pc_coord *c, pc_job *j, double dt);
 void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out, size_t n);
 /* Queues a merge of a received upload (takes buf). */
 void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
-                  uint64_t first, uint64_t count, bool final);
+                  uint64_t first, uint64_t count, bool final, const pc_render_stats *stats);
 void pc_job_free(pc_job *j);
 
 /* sched.c: handing out ranges and taking them back. */
@@ -150,5 +165,7 @@ void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const c
 void pc_peer_send_cancel(pc_peer *p, uint64_t job, uint64_t range, bool upload_partial);
 void pc_peer_ref(pc_peer *p);
 void pc_peer_unref(pc_peer *p);
+/* Upload memory: account bytes taken (n > 0) or released (n < 0); resumes paused peers. */
+void pc_coord_buffered(pc_coord *c, long long n);
 
 #endif

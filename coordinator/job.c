@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "coord.h"
+#include "file_read.h"
 #include "wire_film.h"
 #include "wire_log.h"
 
@@ -28,6 +29,7 @@ struct pc_op {
   uint8_t *buf;
   size_t len;
   int64_t light_per_iter;
+  pc_render_stats stats;     /* merge: the upload's; checkpoint: the job's merged total */
   /* checkpoint */
   uint64_t gen;
   bool write_exr;
@@ -92,17 +94,6 @@ done:
   pc_film_free(&tmp);
 }
 
-static int write_all(int fd, const uint8_t *d, size_t n) {
-  while (n) {
-    ssize_t w = write(fd, d, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w < 0) return -1;
-    d += w;
-    n -= (size_t)w;
-  }
-  return 0;
-}
-
 static void ckpt_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
@@ -116,8 +107,9 @@ static void ckpt_work(uv_work_t *w) {
   op->rc = pc_wire_compress(raw, n, &z, &zn, &op->err);
   free(raw);
   if (op->rc) return;
+  bool sync = !op->c->volatile_store;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0 || write_all(fd, z, zn) != 0 || fsync(fd) != 0) {
+  if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
     op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
     if (fd >= 0) close(fd);
     free(z);
@@ -128,20 +120,34 @@ static void ckpt_work(uv_work_t *w) {
     op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
     return;
   }
-  int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
-  if (dfd >= 0) close(dfd);
+  if (sync) {
+    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
+    if (dfd >= 0) close(dfd);
+  }
   if (op->rc || !op->write_exr) return;
-  char img[600], idbuf[32], iters[32];
+  /* the same header as a standalone `render` writes, plus the job id */
+  char img[600], idbuf[32], seed[32], version[64];
   snprintf(img, sizeof img, "%s/image.exr", dir);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
-  snprintf(iters, sizeof iters, "%llu", (unsigned long long)j->film.layers[0].count);
+  snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
+  snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
+  const pc_render_stats *st = &op->stats;
   pc_exr_attr attrs[] = {
     {.name = "pcbpt.job", .type = PC_ATTR_STRING, .s = idbuf},
     {.name = "pcbpt.method", .type = PC_ATTR_STRING, .s = pc_method_name(j->set.method)},
-    {.name = "pcbpt.iterations", .type = PC_ATTR_STRING, .s = iters},
-    {.name = "pcbpt.seed", .type = PC_ATTR_DOUBLE, .d = (double)j->set.seed},
-    {.name = "pcbpt.elapsed", .type = PC_ATTR_DOUBLE, .d = j->elapsed},
+    {.name = "pcbpt.iterations", .type = PC_ATTR_DOUBLE, .d = (double)j->film.layers[PC_LAYER_PT].count},
+    {.name = "pcbpt.seed", .type = PC_ATTR_STRING, .s = seed},
+    {.name = "pcbpt.max_depth", .type = PC_ATTR_DOUBLE, .d = j->set.max_depth},
+    {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = j->elapsed},
+    {.name = "pcbpt.rays", .type = PC_ATTR_DOUBLE, .d = (double)st->rays},
+    {.name = "pcbpt.time_paths", .type = PC_ATTR_DOUBLE, .d = st->t_paths},
+    {.name = "pcbpt.time_lt", .type = PC_ATTR_DOUBLE, .d = st->t_lt},
+    {.name = "pcbpt.time_pmf", .type = PC_ATTR_DOUBLE, .d = st->t_pmf},
+    {.name = "pcbpt.time_connect", .type = PC_ATTR_DOUBLE, .d = st->t_connect},
+    {.name = "pcbpt.pmf_bytes", .type = PC_ATTR_DOUBLE, .d = (double)st->pmf_bytes},
+    {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
+    {.name = "software", .type = PC_ATTR_STRING, .s = version},
   };
   op->rc = pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err);
 }
@@ -198,14 +204,17 @@ static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
     }
   }
   uint64_t old_gen = j->ckpt_gen;
+  pc_render_stats old_stats = j->stats;
   j->ckpt_gen = op->gen;
   j->done += added;
+  j->stats = op->stats;
   if (!rc) rc = pc_store_update_job(c, j, &e);
   if (!rc) rc = pc_store_commit(c, &e);
   if (rc) {
     pc_store_rollback(c);
     j->ckpt_gen = old_gen;
     j->done -= added;
+    j->stats = old_stats;
     pc_job_fail(c, j, e.msg);
     return;
   }
@@ -239,6 +248,7 @@ static void op_after(uv_work_t *w, int status) {
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
+      pc_render_stats_add(&j->stats_merged, &op->stats);
       j->light_per_iter = op->light_per_iter;
       j->dirty = true;
       pc_pending_ack *a = calloc(1, sizeof *a);
@@ -253,6 +263,7 @@ static void op_after(uv_work_t *w, int status) {
     }
     pc_peer_unref(op->peer);
     free(op->buf);
+    pc_coord_buffered(c, -(long long)op->len);
   } else {
     if (op->rc) pc_job_fail(c, j, op->err.msg);
     else {
@@ -299,9 +310,15 @@ static void op_start(pc_job *j) {
 }
 
 void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
-                  uint64_t first, uint64_t count, bool final) {
+                  uint64_t first, uint64_t count, bool final, const pc_render_stats *stats) {
   pc_op *op = calloc(1, sizeof *op);
-  if (!op) { free(buf); pc_peer_send_ack(p, r->id, 0, "coordinator out of memory"); return; }
+  if (!op) {
+    free(buf);
+    pc_coord_buffered(c, -(long long)len);
+    pc_peer_send_ack(p, r->id, 0, "coordinator out of memory");
+    return;
+  }
+  op->stats = *stats;
   op->c = c;
   op->j = j;
   op->is_merge = true;
@@ -337,6 +354,7 @@ static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
     op->nsnap++;
   }
   op->acks = j->acks;
+  op->stats = j->stats_merged;
   j->acks = NULL;
   j->dirty = false;
   queue_op(j, op);
@@ -410,17 +428,25 @@ void pc_job_cancel(pc_coord *c, pc_job *j) {
   pc_wire_log("job %llu: cancelled", (unsigned long long)j->id);
 }
 
+void pc_job_halt(pc_coord *c, pc_job *j) {
+  if (j->state == PC_JOB_QUEUED) {
+    pc_job_cancel(c, j);
+    return;
+  }
+  if (j->state != PC_JOB_RUNNING) return;
+  j->state = PC_JOB_STOPPING;
+  j->stopping_since = pc_coord_now();
+  for (pc_range *r = j->ranges; r; r = r->next)
+    if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, r->id, true);
+  pc_wire_log("job %llu: halting; collecting what is rendered", (unsigned long long)j->id);
+}
+
 void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
   if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) return;
   double now = pc_coord_now();
   if (j->state == PC_JOB_RUNNING) {
     j->elapsed += dt;
-    if (j->halt_seconds > 0 && j->elapsed >= j->halt_seconds) {
-      j->state = PC_JOB_STOPPING;
-      j->stopping_since = now;
-      for (pc_range *r = j->ranges; r; r = r->next)
-        if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, r->id, true);
-    }
+    if (j->halt_seconds > 0 && j->elapsed >= j->halt_seconds) pc_job_halt(c, j);
   }
   if (j->state == PC_JOB_STOPPING) {
     /* ranges nobody will finish are closed at what is merged */

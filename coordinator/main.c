@@ -1,4 +1,5 @@
 /* main.c: pcbpt-coord: dispatches to the verbs (render, compare, and the farm's verbs). */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -30,6 +31,8 @@ static void usage(FILE *f) {
 }
 
 int main(int argc, char **argv) {
+  /* a peer that goes away mid-write must be an error return, not a fatal signal */
+  if (signal(SIGPIPE, SIG_IGN) == SIG_ERR) perror("signal");
   if (argc < 2) {
     usage(stderr);
     return 2;

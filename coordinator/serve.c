@@ -21,8 +21,8 @@
 #include "wire_log.h"
 #include "wire_settings.h"
 
-#define TICK_MS 250
 #define HANDSHAKE_TIMEOUT 10.0
+#define MAX_BUFFERED ((size_t)64 << 20)
 
 double pc_coord_now(void) {
   struct timespec ts;
@@ -47,6 +47,27 @@ pc_job *pc_coord_job(pc_coord *c, uint64_t id) {
 void pc_peer_ref(pc_peer *p) { p->refs++; }
 void pc_peer_unref(pc_peer *p) {
   if (--p->refs == 0) free(p);
+}
+
+void pc_coord_buffered(pc_coord *c, long long n) {
+  c->buffered = n < 0 && (size_t)-n > c->buffered ? 0 : (size_t)((long long)c->buffered + n);
+  if (n >= 0 || c->buffered > c->max_buffered) return;
+  for (pc_peer *p = c->peers; p; p = p->next) {
+    if (!p->paused) continue;
+    p->paused = false;
+    int r = pc_conn_pause(&p->conn, false);
+    if (r) pc_conn_close(&p->conn, uv_strerror(r));
+  }
+}
+
+/* Drops the upload being assembled (after a refusal or when the peer goes); its buffer is
+ * freed, so an idle peer holds no upload memory. */
+static void upload_reset(pc_peer *p) {
+  pc_coord_buffered(p->coord, -(long long)p->up_len);
+  free(p->up_buf);
+  p->up_buf = NULL;
+  p->up_len = p->up_cap = 0;
+  p->up_next = 0;
 }
 
 void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const char *refused) {
@@ -162,6 +183,27 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_peer_send_cancel(p, h->job_id, h->range_id, false);
 }
 
+#define MAX_RANGE_FAILURES 3
+
+static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
+  pc_coord *c = p->coord;
+  pc_job *j = pc_coord_job(c, f->job_id);
+  pc_range *r = j ? pc_sched_find_range(j, f->range_id) : NULL;
+  if (!r || r->owner != p) return;
+  char why[300];
+  snprintf(why, sizeof why, "%s", f->reason ? f->reason : "");
+  for (char *s = why; *s; s++)
+    if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
+  r->owner = NULL;
+  r->orphan_since = 1; /* to another worker at once */
+  pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
+  if (++j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
+    char msg[400];
+    snprintf(msg, sizeof msg, "render failed on worker %s: %s", p->name, why);
+    pc_job_fail(c, j, msg);
+  }
+}
+
 static void stream_next(pc_peer *p) {
   pc_stream_out *o = &p->out;
   if (o->fd < 0) return;
@@ -235,7 +277,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   }
   pc_job *j = pc_coord_job(c, u->job_id);
   if (u->index == 0) {
-    p->up_len = 0;
+    upload_reset(p);
     p->up_job = u->job_id;
     p->up_range = u->range_id;
     p->up_first = u->first;
@@ -243,6 +285,21 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     p->up_raw = u->raw_size;
     p->up_nchunks = u->nchunks;
     p->up_final = u->final;
+    memset(&p->up_stats, 0, sizeof p->up_stats);
+    if (u->stats) {
+      const Pcbpt__RenderStats *s = u->stats;
+      /* informational only, but never let a peer put NaN or nonsense into a header */
+      bool ok = s->t_paths >= 0 && s->t_paths < 1e9 && s->t_lt >= 0 && s->t_lt < 1e9 && s->t_pmf >= 0 && s->t_pmf < 1e9 &&
+                s->t_connect >= 0 && s->t_connect < 1e9;
+      if (ok) {
+        p->up_stats.rays = s->rays;
+        p->up_stats.t_paths = s->t_paths;
+        p->up_stats.t_lt = s->t_lt;
+        p->up_stats.t_pmf = s->t_pmf;
+        p->up_stats.t_connect = s->t_connect;
+        p->up_stats.pmf_bytes = s->pmf_bytes;
+      }
+    }
   } else if (u->job_id != p->up_job || u->range_id != p->up_range || u->first != p->up_first ||
              u->count != p->up_count || u->raw_size != p->up_raw || u->nchunks != p->up_nchunks) {
     drop(p, "upload chunk %u does not match the upload it continues", u->index);
@@ -264,8 +321,17 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   }
   memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
   p->up_len += u->data.len;
+  pc_coord_buffered(c, (long long)u->data.len);
   p->up_next = u->index + 1;
-  if (p->up_next < p->up_nchunks) return;
+  if (p->up_next < p->up_nchunks) {
+    /* back-pressure, but only while a merge is pending that will free memory (no deadlock) */
+    if (c->buffered > c->max_buffered && c->buffered > p->up_len && !p->paused) {
+      int r = pc_conn_pause(&p->conn, true);
+      if (r) { drop(p, "pause: %s", uv_strerror(r)); return; }
+      p->paused = true;
+    }
+    return;
+  }
   p->up_next = 0;
 
   const char *refuse = NULL;
@@ -281,10 +347,12 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     pc_wire_log("job %llu: refused upload from %s for range %llu: %s", (unsigned long long)p->up_job, p->conn.peer,
                 (unsigned long long)p->up_range, refuse);
     pc_peer_send_ack(p, p->up_range, 0, refuse);
+    upload_reset(p);
     return;
   }
   if (!r->owner) { r->owner = p; r->orphan_since = 0; }
   if (end <= r->first + r->merged) {
+    upload_reset(p);
     /* a re-sent upload already counted: acknowledge, never add twice */
     if (end <= r->first + r->acked) pc_peer_send_ack(p, r->id, r->first + r->acked, NULL);
     else {
@@ -305,13 +373,15 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
              (unsigned long long)p->up_first, (unsigned long long)(r->first + r->merged));
     pc_wire_log("job %llu: refused upload from %s: %s", (unsigned long long)j->id, p->conn.peer, why);
     pc_peer_send_ack(p, r->id, 0, why);
+    upload_reset(p);
     return;
   }
+  /* the bytes stay accounted in c->buffered until the merge frees them */
   uint8_t *buf = p->up_buf;
   size_t len = p->up_len;
   p->up_buf = NULL;
   p->up_len = p->up_cap = 0;
-  pc_job_merge(c, j, p, r, buf, len, p->up_raw, p->up_first, p->up_count, p->up_final);
+  pc_job_merge(c, j, p, r, buf, len, p->up_raw, p->up_first, p->up_count, p->up_final, &p->up_stats);
 }
 
 /* ---- client messages ---- */
@@ -444,8 +514,12 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_iterations = j->halt_iterations;
     s->halt_seconds = j->halt_seconds;
     s->elapsed = j->elapsed;
-    for (pc_range *r = j->ranges; r; r = r->next)
-      if (r->owner) { s->workers++; s->iterations_per_second += r->owner->rate; }
+    for (pc_range *r = j->ranges; r; r = r->next) {
+      /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
+      bool seen = false;
+      for (pc_range *q = j->ranges; q != r && !seen; q = q->next) seen = q->owner == r->owner;
+      if (r->owner && !seen) { s->workers++; s->iterations_per_second += r->owner->rate; }
+    }
     if (j->state == PC_JOB_RUNNING) {
       double eta_i = j->halt_iterations && s->iterations_per_second > 0
                          ? (double)(j->halt_iterations - (j->done < j->halt_iterations ? j->done : j->halt_iterations)) / s->iterations_per_second
@@ -511,8 +585,14 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
   }
   if (p->role == PCBPT__ROLE__ROLE_WORKER) {
     switch (kind) {
-    case PCBPT__ENVELOPE__MSG_WORK_REQUEST: pc_sched_request(p->coord, p); return;
+    case PCBPT__ENVELOPE__MSG_WORK_REQUEST: {
+      double rate = env->work_request->iterations_per_second;
+      if (rate > 0 && rate < 1e9) p->rate = rate;
+      pc_sched_request(p->coord, p);
+      return;
+    }
     case PCBPT__ENVELOPE__MSG_HEARTBEAT: on_heartbeat(p, env->heartbeat); return;
+    case PCBPT__ENVELOPE__MSG_RANGE_FAILED: on_range_failed(p, env->range_failed); return;
     case PCBPT__ENVELOPE__MSG_BUNDLE_REQUEST: on_bundle_request(p, env->bundle_request); return;
     case PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK: on_upload(p, env->upload_chunk); return;
     default: break;
@@ -525,7 +605,8 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
     case PCBPT__ENVELOPE__MSG_CANCEL_REQUEST: {
       pc_job *j = pc_coord_job(p->coord, env->cancel_request->job_id);
       if (!j) { send_error(p, "cancel: no such job"); return; }
-      pc_job_cancel(p->coord, j);
+      if (env->cancel_request->finish) pc_job_halt(p->coord, j);
+      else pc_job_cancel(p->coord, j);
       send_status(p, j->id);
       return;
     }
@@ -546,8 +627,7 @@ static void on_closed(pc_conn *conn) {
     pc_wire_log("%s: worker '%s' left", conn->peer, p->name);
     pc_sched_peer_gone(c, p);
   }
-  free(p->up_buf);
-  p->up_buf = NULL;
+  upload_reset(p);
   if (p->bun_fd >= 0) close(p->bun_fd);
   if (p->bun_tmp[0]) unlink(p->bun_tmp);
   if (p->out.fd >= 0) close(p->out.fd);
@@ -575,9 +655,10 @@ static void on_connection(uv_stream_t *server, int status) {
 
 static void on_tick(uv_timer_t *t) {
   pc_coord *c = t->data;
-  double now = pc_coord_now();
+  double now = pc_coord_now(), dt = now - c->last_tick;
+  c->last_tick = now;
   for (pc_peer *p = c->peers; p; p = p->next) {
-    if (p->conn.closing) continue;
+    if (p->conn.closing || p->paused) continue; /* a paused peer is silent because we do not read */
     if (!p->authed && now - p->connected > HANDSHAKE_TIMEOUT) pc_conn_close(&p->conn, "no authentication within 10 s");
     else if (p->authed && p->role == PCBPT__ROLE__ROLE_WORKER && now - p->last_seen > c->heartbeat_timeout) {
       char why[80];
@@ -585,7 +666,27 @@ static void on_tick(uv_timer_t *t) {
       pc_conn_close(&p->conn, why);
     }
   }
-  for (pc_job *j = c->jobs; j; j = j->next) pc_job_tick(c, j, TICK_MS / 1000.0);
+  for (pc_job *j = c->jobs; j; j = j->next) pc_job_tick(c, j, dt);
+}
+
+static void close_handle(uv_handle_t *h) {
+  if (h->loop && !uv_is_closing(h)) uv_close(h, NULL);
+}
+
+static void on_wake(uv_async_t *a) {
+  pc_coord *c = a->data;
+  if (!c->stopping) return;
+  close_handle((uv_handle_t *)&c->listener);
+  close_handle((uv_handle_t *)&c->tick);
+  close_handle((uv_handle_t *)&c->wake);
+  close_handle((uv_handle_t *)&c->sigint);
+  close_handle((uv_handle_t *)&c->sigterm);
+  for (pc_peer *p = c->peers; p; p = p->next) pc_conn_close(&p->conn, NULL);
+}
+
+void pc_coord_stop(pc_coord *c) {
+  c->stopping = true;
+  uv_async_send(&c->wake);
 }
 
 static void on_signal(uv_signal_t *s, int signum) {
@@ -603,6 +704,8 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
   if (!c->range_seconds) c->range_seconds = 3;
   if (!c->ckpt_interval) c->ckpt_interval = 1;
   if (!c->exr_interval) c->exr_interval = 10;
+  if (!c->tick_ms) c->tick_ms = 250;
+  if (!c->max_buffered) c->max_buffered = MAX_BUFFERED;
   if ((size_t)snprintf(c->data_dir, sizeof c->data_dir, "%s", data_dir) >= sizeof c->data_dir)
     return pc_errf(e, PC_ELIMIT, "--data-dir: path too long");
   if (mkdir(data_dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", data_dir, strerror(errno));
@@ -642,7 +745,10 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
   c->bound_port = ntohs(bound.ss_family == AF_INET ? ((struct sockaddr_in *)&bound)->sin_port : ((struct sockaddr_in6 *)&bound)->sin6_port);
   if ((r = uv_timer_init(loop, &c->tick)) != 0) return pc_errf(e, PC_EIO, "timer: %s", uv_strerror(r));
   c->tick.data = c;
-  if ((r = uv_timer_start(&c->tick, on_tick, TICK_MS, TICK_MS)) != 0) return pc_errf(e, PC_EIO, "timer: %s", uv_strerror(r));
+  c->last_tick = pc_coord_now();
+  if ((r = uv_timer_start(&c->tick, on_tick, (uint64_t)c->tick_ms, (uint64_t)c->tick_ms)) != 0) return pc_errf(e, PC_EIO, "timer: %s", uv_strerror(r));
+  if ((r = uv_async_init(loop, &c->wake, on_wake)) != 0) return pc_errf(e, PC_EIO, "async: %s", uv_strerror(r));
+  c->wake.data = c;
   return 0;
 }
 
@@ -700,10 +806,8 @@ int pc_cmd_serve(int argc, char **argv) {
     return 1;
   }
   sodium_memzero(key, sizeof key);
-  uv_signal_init(loop, &c.sigint);
-  uv_signal_init(loop, &c.sigterm);
   c.sigint.data = c.sigterm.data = &c;
-  if (uv_signal_start(&c.sigint, on_signal, SIGINT) != 0 || uv_signal_start(&c.sigterm, on_signal, SIGTERM) != 0)
+  if (uv_signal_init(loop, &c.sigint) != 0 || uv_signal_init(loop, &c.sigterm) != 0 || uv_signal_start(&c.sigint, on_signal, SIGINT) != 0 || uv_signal_start(&c.sigterm, on_signal, SIGTERM) != 0)
     pc_wire_log("cannot install signal handlers");
   if (port_file) {
     FILE *f = fopen(port_file, "w");

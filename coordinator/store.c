@@ -16,7 +16,9 @@ static const char schema[] =
     " halt_seconds REAL NOT NULL, priority INTEGER NOT NULL, state TEXT NOT NULL,"
     " next_iter INTEGER NOT NULL DEFAULT 0, done INTEGER NOT NULL DEFAULT 0,"
     " elapsed REAL NOT NULL DEFAULT 0, ckpt_gen INTEGER NOT NULL DEFAULT 0,"
-    " light_per_iter INTEGER NOT NULL DEFAULT -1, error TEXT NOT NULL DEFAULT '');"
+    " light_per_iter INTEGER NOT NULL DEFAULT -1, error TEXT NOT NULL DEFAULT '',"
+    " rays INTEGER NOT NULL DEFAULT 0, t_paths REAL NOT NULL DEFAULT 0, t_lt REAL NOT NULL DEFAULT 0,"
+    " t_pmf REAL NOT NULL DEFAULT 0, t_connect REAL NOT NULL DEFAULT 0, pmf_bytes INTEGER NOT NULL DEFAULT 0);"
     "CREATE TABLE IF NOT EXISTS ranges(id INTEGER PRIMARY KEY AUTOINCREMENT, job INTEGER NOT NULL,"
     " first INTEGER NOT NULL, count INTEGER NOT NULL, acked INTEGER NOT NULL DEFAULT 0,"
     " open INTEGER NOT NULL DEFAULT 1);"
@@ -36,7 +38,10 @@ int pc_store_open(pc_coord *c, pc_err *e) {
     return rc;
   }
   char *msg = NULL;
-  if (sqlite3_busy_timeout(c->db, 5000) != SQLITE_OK || sqlite3_exec(c->db, schema, NULL, NULL, &msg) != SQLITE_OK) {
+  /* a throw-away store needs no durability; the rest of the schema is the same */
+  const char *sync = c->volatile_store ? "PRAGMA synchronous=OFF;" : "";
+  if (sqlite3_busy_timeout(c->db, 5000) != SQLITE_OK || sqlite3_exec(c->db, schema, NULL, NULL, &msg) != SQLITE_OK ||
+      sqlite3_exec(c->db, sync, NULL, NULL, &msg) != SQLITE_OK) {
     int rc = pc_errf(e, PC_EIO, "store %s: schema: %s", path, msg ? msg : sqlite3_errmsg(c->db));
     sqlite3_free(msg);
     sqlite3_close(c->db);
@@ -59,7 +64,14 @@ int pc_store_begin(pc_coord *c, pc_err *e) { return exec(c, "BEGIN IMMEDIATE", e
 int pc_store_commit(pc_coord *c, pc_err *e) { return exec(c, "COMMIT", e); }
 void pc_store_rollback(pc_coord *c) { sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL); }
 
-static int step_done(pc_coord *c, sqlite3_stmt *st, pc_err *e, const char *what) {
+/* Steps a statement to completion; `bound` is the OR of its sqlite3_bind_* results (SQLITE_OK
+ * is 0), so a failed bind is reported instead of running with a NULL parameter. */
+static int step_done(pc_coord *c, sqlite3_stmt *st, int bound, pc_err *e, const char *what) {
+  if (bound != SQLITE_OK) {
+    int rc = db_err(c, e, what);
+    sqlite3_finalize(st);
+    return rc;
+  }
   int r = sqlite3_step(st);
   int rc = r == SQLITE_DONE ? 0 : db_err(c, e, what);
   sqlite3_finalize(st);
@@ -68,58 +80,68 @@ static int step_done(pc_coord *c, sqlite3_stmt *st, pc_err *e, const char *what)
 
 int pc_store_insert_job(pc_coord *c, pc_job *j, pc_err *e) {
   sqlite3_stmt *st;
+  int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "INSERT INTO jobs(name,bundle,settings,halt_iterations,halt_seconds,priority,state)"
                                 " VALUES(?,?,?,?,?,?,?)", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare insert job");
-  sqlite3_bind_text(st, 1, j->name, -1, SQLITE_TRANSIENT);
-  sqlite3_bind_blob(st, 2, j->bundle, PC_BUNDLE_HASH, SQLITE_TRANSIENT);
-  sqlite3_bind_blob(st, 3, j->settings_blob, (int)j->settings_len, SQLITE_TRANSIENT);
-  sqlite3_bind_int64(st, 4, (sqlite3_int64)j->halt_iterations);
-  sqlite3_bind_double(st, 5, j->halt_seconds);
-  sqlite3_bind_int(st, 6, j->priority);
-  sqlite3_bind_text(st, 7, pc_job_state_name(j->state), -1, SQLITE_STATIC);
-  int rc = step_done(c, st, e, "insert job");
+  b |= sqlite3_bind_text(st, 1, j->name, -1, SQLITE_TRANSIENT);
+  b |= sqlite3_bind_blob(st, 2, j->bundle, PC_BUNDLE_HASH, SQLITE_TRANSIENT);
+  b |= sqlite3_bind_blob(st, 3, j->settings_blob, (int)j->settings_len, SQLITE_TRANSIENT);
+  b |= sqlite3_bind_int64(st, 4, (sqlite3_int64)j->halt_iterations);
+  b |= sqlite3_bind_double(st, 5, j->halt_seconds);
+  b |= sqlite3_bind_int(st, 6, j->priority);
+  b |= sqlite3_bind_text(st, 7, pc_job_state_name(j->state), -1, SQLITE_STATIC);
+  int rc = step_done(c, st, b, e, "insert job");
   if (!rc) j->id = (uint64_t)sqlite3_last_insert_rowid(c->db);
   return rc;
 }
 
 int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   sqlite3_stmt *st;
-  if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?"
-                                " WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+  int b = SQLITE_OK;
+  if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?,"
+                                "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=?,pmf_bytes=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare update job");
-  sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
-  sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
-  sqlite3_bind_int64(st, 3, (sqlite3_int64)j->done);
-  sqlite3_bind_double(st, 4, j->elapsed);
-  sqlite3_bind_int64(st, 5, (sqlite3_int64)j->ckpt_gen);
-  sqlite3_bind_int64(st, 6, j->light_per_iter);
-  sqlite3_bind_text(st, 7, j->error, -1, SQLITE_TRANSIENT);
-  sqlite3_bind_int64(st, 8, (sqlite3_int64)j->id);
-  return step_done(c, st, e, "update job");
+  b |= sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
+  b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
+  b |= sqlite3_bind_int64(st, 3, (sqlite3_int64)j->done);
+  b |= sqlite3_bind_double(st, 4, j->elapsed);
+  b |= sqlite3_bind_int64(st, 5, (sqlite3_int64)j->ckpt_gen);
+  b |= sqlite3_bind_int64(st, 6, j->light_per_iter);
+  b |= sqlite3_bind_text(st, 7, j->error, -1, SQLITE_TRANSIENT);
+  b |= sqlite3_bind_int64(st, 8, (sqlite3_int64)j->stats.rays);
+  b |= sqlite3_bind_double(st, 9, j->stats.t_paths);
+  b |= sqlite3_bind_double(st, 10, j->stats.t_lt);
+  b |= sqlite3_bind_double(st, 11, j->stats.t_pmf);
+  b |= sqlite3_bind_double(st, 12, j->stats.t_connect);
+  b |= sqlite3_bind_int64(st, 13, (sqlite3_int64)j->stats.pmf_bytes);
+  b |= sqlite3_bind_int64(st, 14, (sqlite3_int64)j->id);
+  return step_done(c, st, b, e, "update job");
 }
 
 int pc_store_insert_range(pc_coord *c, uint64_t job, uint64_t first, uint64_t count, uint64_t *id, pc_err *e) {
   sqlite3_stmt *st;
+  int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "INSERT INTO ranges(job,first,count) VALUES(?,?,?)", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare insert range");
-  sqlite3_bind_int64(st, 1, (sqlite3_int64)job);
-  sqlite3_bind_int64(st, 2, (sqlite3_int64)first);
-  sqlite3_bind_int64(st, 3, (sqlite3_int64)count);
-  int rc = step_done(c, st, e, "insert range");
+  b |= sqlite3_bind_int64(st, 1, (sqlite3_int64)job);
+  b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)first);
+  b |= sqlite3_bind_int64(st, 3, (sqlite3_int64)count);
+  int rc = step_done(c, st, b, e, "insert range");
   if (!rc) *id = (uint64_t)sqlite3_last_insert_rowid(c->db);
   return rc;
 }
 
 int pc_store_update_range(pc_coord *c, const pc_range *r, bool open, pc_err *e) {
   sqlite3_stmt *st;
+  int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "UPDATE ranges SET count=?,acked=?,open=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare update range");
-  sqlite3_bind_int64(st, 1, (sqlite3_int64)r->count);
-  sqlite3_bind_int64(st, 2, (sqlite3_int64)r->acked);
-  sqlite3_bind_int(st, 3, open ? 1 : 0);
-  sqlite3_bind_int64(st, 4, (sqlite3_int64)r->id);
-  return step_done(c, st, e, "update range");
+  b |= sqlite3_bind_int64(st, 1, (sqlite3_int64)r->count);
+  b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)r->acked);
+  b |= sqlite3_bind_int(st, 3, open ? 1 : 0);
+  b |= sqlite3_bind_int64(st, 4, (sqlite3_int64)r->id);
+  return step_done(c, st, b, e, "update range");
 }
 
 static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
@@ -127,7 +149,11 @@ static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
   if (sqlite3_prepare_v2(c->db, "SELECT id,first,count,acked FROM ranges WHERE job=? AND open=1 ORDER BY id", -1, &st,
                          NULL) != SQLITE_OK)
     return db_err(c, e, "prepare load ranges");
-  sqlite3_bind_int64(st, 1, (sqlite3_int64)j->id);
+  if (sqlite3_bind_int64(st, 1, (sqlite3_int64)j->id) != SQLITE_OK) {
+    int rc = db_err(c, e, "bind load ranges");
+    sqlite3_finalize(st);
+    return rc;
+  }
   pc_range **tail = &j->ranges;
   int r, rc = 0;
   double now = pc_coord_now();
@@ -151,7 +177,7 @@ static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
 int pc_store_load(pc_coord *c, pc_err *e) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(c->db, "SELECT id,name,bundle,settings,halt_iterations,halt_seconds,priority,state,next_iter,"
-                                "done,elapsed,ckpt_gen,light_per_iter,error FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
+                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare load jobs");
   pc_job **tail = &c->jobs;
   int r, rc = 0;
@@ -175,6 +201,13 @@ int pc_store_load(pc_coord *c, pc_err *e) {
     j->ckpt_gen = (uint64_t)sqlite3_column_int64(st, 11);
     j->light_per_iter = sqlite3_column_int64(st, 12);
     snprintf(j->error, sizeof j->error, "%s", (const char *)sqlite3_column_text(st, 13));
+    j->stats.rays = (uint64_t)sqlite3_column_int64(st, 14);
+    j->stats.t_paths = sqlite3_column_double(st, 15);
+    j->stats.t_lt = sqlite3_column_double(st, 16);
+    j->stats.t_pmf = sqlite3_column_double(st, 17);
+    j->stats.t_connect = sqlite3_column_double(st, 18);
+    j->stats.pmf_bytes = (uint64_t)sqlite3_column_int64(st, 19);
+    j->stats_merged = j->stats;
     *tail = j;
     tail = &j->next;
     if (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING || j->state == PC_JOB_QUEUED)

@@ -6,7 +6,7 @@ top=$(cd "$(dirname "$0")/.." && pwd)
 "$top/deploy/install-deps.sh"
 cmake -S "$top" -B "$top/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$top/build" -j"$(nproc)"
-"$top/build/pcbpt-coord" render "$top/scenes/cornell-box/scene.xml" --method pt --spp "${PCBPT_SPP:-64}" \
+"$top/build/pcbpt-coord" render "$top/scenes/cornell-box/scene.xml" --spp "${PCBPT_SPP:-64}" \
   --out "$top/build/cornell-box.exr"
 echo "image:   $top/build/cornell-box.exr"
 echo "preview: $top/build/cornell-box.png"

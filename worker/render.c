@@ -78,7 +78,9 @@ static void thread_main(void *arg) {
     }
     uint64_t done = 0;
     while (!rc && done < count && !atomic_load(&w->cancel)) {
+      uv_mutex_lock(&w->mu);
       double rate = w->rate;
+      uv_mutex_unlock(&w->mu);
       uint64_t batch = rate > 0 ? (uint64_t)(rate * 0.5) : 1;
       if (batch < 1) batch = 1;
       if (batch > count - done) batch = count - done;
@@ -95,6 +97,7 @@ static void thread_main(void *arg) {
         if (w->pend_count == 0) w->pend_first = first + done;
         rc = pc_film_add(&w->pending, &ctx.work, &e);
         w->pend_count += got;
+        pc_render_stats_add(&w->pend_stats, &st);
         w->rendered += got;
         if (dt > 0) w->rate = w->rate > 0 ? 0.5 * w->rate + 0.5 * (double)got / dt : (double)got / dt;
       }
@@ -160,6 +163,7 @@ int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t firs
     w->set = *s;
     snprintf(w->scene_path, sizeof w->scene_path, "%s", scene_path);
     w->rendered = w->pend_count = 0;
+    memset(&w->pend_stats, 0, sizeof w->pend_stats);
     w->pend_first = first;
     w->failed = false;
     w->range_done = false;

@@ -1,5 +1,6 @@
-/* worker.h: pcbpt-worker's shared state: the range being rendered, shared between the
- * protocol (loop thread) and the render thread under one mutex. */
+/* worker.h: the farm worker, used by pcbpt-worker and by the embedded farm of
+ * `pcbpt-coord render`: pc_worker runs the protocol on its own libuv loop; pc_wrender is the
+ * range being rendered, shared between that loop and the render thread under one mutex. */
 #ifndef PC_WORKER_H
 #define PC_WORKER_H
 
@@ -28,6 +29,7 @@ typedef struct pc_wrender {
   pc_film pending;         /* rendered, not yet taken for upload */
   bool pending_ready;
   uint64_t pend_first, pend_count;
+  pc_render_stats pend_stats; /* work behind `pending` */
   double rate;             /* iterations per second */
   char error[512];
 } pc_wrender;
@@ -37,5 +39,24 @@ void pc_wrender_stop(pc_wrender *w);
 /* Starts a range (the thread must be idle). */
 int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
                       const pc_render_settings *s, const char *scene_path, pc_err *e);
+
+/* A worker connected to one coordinator (reconnecting with backoff while it is away). */
+typedef struct pc_worker pc_worker;
+typedef struct pc_worker_opts {
+  const char *host;
+  int port;
+  const uint8_t *key;      /* PC_AUTH_KEY bytes, copied */
+  int threads;             /* render threads, 0 = every core */
+  const char *name;        /* NULL: host-pid */
+  const char *cache_dir;   /* scene bundles by hash (created) */
+  bool handle_signals;     /* SIGINT/SIGTERM stop the worker (the standalone process) */
+} pc_worker_opts;
+
+int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);
+/* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals). */
+void pc_worker_run(pc_worker *w);
+/* Thread-safe: makes pc_worker_run return. */
+void pc_worker_stop(pc_worker *w);
+void pc_worker_destroy(pc_worker *w);
 
 #endif

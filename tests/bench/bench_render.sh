@@ -16,7 +16,7 @@ for m in $methods; do
     line=$("$build/pcbpt-coord" render "$top/scenes/cornell-box/scene.xml" --method "$m" --max-depth 10 \
       --width 512 --height 512 --spp "$spp" --threads "$t" --quiet --out "$tmp/b.exr")
     echo "$line"
-    rate[$t]=$(echo "$line" | sed -E 's/.* ([0-9]+) samples\/s.*/\1/')
+    rate[$t]=$(echo "$line" | head -1 | sed -E 's/.* ([0-9]+) samples\/s.*/\1/')
   done
   awk -v a="${rate[1]}" -v b="${rate[2]}" -v m="$m" 'BEGIN { printf "%s: speed-up 1 -> 2 threads: %.2fx\n", m, b / a }'
 done

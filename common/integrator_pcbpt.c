@@ -1,0 +1,77 @@
+/* integrator_pcbpt.c: CBDPT and PCBPT pixels (DESIGN.md §4.4; Popov et al. 2015, Alg. 1).
+ * Strategies s=0, s=1 and t=1 are BDPT's, drawn from the same streams, so those layers equal
+ * BDPT's for the same seed. The inner strategies (s>=2, t>=2) connect each non-delta eye vertex
+ * to the M stored light paths: CBDPT to every stored vertex, adding w f / (p M); PCBPT to K
+ * vertices drawn from p_conn, adding (1/K) sum w f / (p M p_conn). The weights use the
+ * method's counts (render.c): inner strategies count 1 (upper-bound weights, eqs. 16-17), or
+ * M with --mis standard. Connection draws use the pixel's PC_STREAM_CONNECT stream. */
+#include "bidir.h"
+#include "pcbpt.h"
+
+static void add_inner(pc_tctx *c, int x, int y, const pc_path_vertex *lv, const pc_path_vertex *ev, float scale) {
+  pc_connection k;
+  if (lv->depth + ev->depth - 1 > c->max_segments) return;
+  if (pc_connect(c, &c->counts, lv, ev, c->weighted, &k))
+    pc_film_add_strategy(c->film, c->set->strategy_layers, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
+                         v3_scale(k.f, k.weight * scale));
+}
+
+static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev) {
+  const pc_pcbpt *p = c->pcbpt;
+  const pc_render_settings *set = c->set;
+  float inv_m = 1.f / (float)p->m;
+  if (p->nv == 0) return; /* no connectable vertex: the sum over the stored paths is 0 */
+  if (set->method == PC_METHOD_CBDPT) {
+    for (int v = 0; v < p->nv; v++) add_inner(c, x, y, &p->lv[v], ev, inv_m);
+    return;
+  }
+  pc_irec_site z = {ev->p, ev->sh.sh.n, ev->wo, ev};
+  pc_irec_lookup L;
+  if (set->pmf_mode == PC_PMF_EXACT) {
+    if (pc_irec_lookup_exact(p->store, c->thread, &z, pc_pcbpt_importance, c->pcbpt, set->uniform_mix, &L, NULL) != PC_OK)
+      return;
+  } else {
+    pc_irec_lookup_cached(p->store, &z, set->knn, set->uniform_mix, &L);
+  }
+  for (int k = 0; k < set->pcbpt_k; k++) {
+    int v;
+    double pconn;
+    if (!pc_irec_sample(&L, crng, &v, &pconn)) return; /* u = 0 and no PMF here: reported as no sample */
+    add_inner(c, x, y, &p->lv[v], ev, (float)(1.0 / ((double)set->pcbpt_k * p->m * pconn)));
+  }
+}
+
+/* Reading the clock around every phase of every pixel costs a few per cent: one pixel in
+ * TIMED_EVERY is timed and counts that many times (the stats only split the render time by the
+ * phases' proportions). A prime, so the timed pixels do not line up in columns. */
+#define TIMED_EVERY 17
+
+static inline double stamp(bool timed) { return timed ? pc_seconds() : 0.0; }
+
+void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
+  const pc_render_settings *set = c->set;
+  const pc_mis_counts *n = &c->counts;
+  uint64_t j = (uint64_t)y * (uint64_t)set->width + (uint64_t)x;
+  bool timed = j % TIMED_EVERY == 0;
+  double t0 = stamp(timed);
+  int nl = j < c->n_light ? pc_light_subpath(c, n, j, c->light_path) : 0;
+  double t1 = stamp(timed);
+  if (nl > 0) pc_lt_splat(c, c->light_path, nl);
+  double t2 = stamp(timed);
+  pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, j);
+  pc_rng crng = pc_rng_make(set->seed, c->iteration, PC_STREAM_CONNECT, j);
+  pc_pixel_target h = {x, y};
+  int ne = pc_eye_subpath(c, n, &rng, x, y, c->max_segments + 1, c->eye_path, pc_emitter_hit, &h);
+  double t3 = stamp(timed);
+  for (int t = 2; t <= ne && t <= c->max_segments; t++) {
+    const pc_path_vertex *ev = &c->eye_path[t - 1];
+    if (ev->delta) continue;
+    pc_connect_nee(c, n, &rng, ev, x, y);
+    connect_stored(c, x, y, &crng, ev);
+  }
+  if (timed) {
+    c->t_paths += TIMED_EVERY * ((t1 - t0) + (t3 - t2));
+    c->t_lt += TIMED_EVERY * (t2 - t1);
+    c->t_connect += TIMED_EVERY * (pc_seconds() - t3);
+  }
+}

@@ -1,0 +1,371 @@
+/* irec.c: see irec.h. The PMF and CMF rows are built so that sampling never returns a light
+ * vertex with zero probability: a row's CMF is the running sum of its (already rounded) float
+ * PMF, so a zero PMF entry leaves the CMF exactly unchanged, and a binary search that stops
+ * where the interpolated CMF rises has found an entry whose interpolated PMF is > 0. */
+#include "irec.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct pc_irec_record {
+  pc_irec_site site;
+  size_t offset; /* PMF at mass[offset .. offset+V), CMF right after it */
+  double total;  /* unnormalized importance sum; 0: sees no light vertex */
+} pc_irec_record;
+
+/* The first bad callback value a thread met during a build (record < 0: none). */
+typedef struct thread_err {
+  int record, v;
+  float value;
+} thread_err;
+
+struct pc_irec_store {
+  int nthreads;
+  size_t max_bytes;
+  int R, V;
+  pc_irec_record *rec;
+  vec3 *pos;            /* record positions, the kd-tree's input */
+  size_t rec_cap;
+  float *mass;          /* all PMFs and CMFs: 2*R*V floats */
+  size_t mass_cap;
+  float *scratch;       /* exact mode: 2*V floats per thread */
+  size_t scratch_cap;
+  pc_kdtree tree;
+  thread_err *terr;
+};
+
+static size_t per_record_bytes(void) {
+  return sizeof(pc_irec_record) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
+}
+
+static size_t fixed_bytes(const pc_irec_store *s) {
+  return sizeof *s + (size_t)s->nthreads * sizeof(thread_err);
+}
+
+/* Bytes for the given capacities, or SIZE_MAX on overflow. */
+static size_t bytes_for(const pc_irec_store *s, size_t rec, size_t mass, size_t scratch) {
+  if (rec > SIZE_MAX / per_record_bytes() || mass > SIZE_MAX / 8 || scratch > SIZE_MAX / 8) return SIZE_MAX;
+  size_t a = rec * per_record_bytes(), b = mass * sizeof(float), c = scratch * sizeof(float);
+  size_t f = fixed_bytes(s);
+  if (a > SIZE_MAX - b || a + b > SIZE_MAX - c || a + b + c > SIZE_MAX - f) return SIZE_MAX;
+  return a + b + c + f;
+}
+
+/* Floats of PMF+CMF and of scratch a build needs, or SIZE_MAX on overflow. */
+static size_t mass_floats(int R, int V) {
+  if (R > 0 && (size_t)V > SIZE_MAX / 2 / (size_t)R) return SIZE_MAX;
+  return 2 * (size_t)R * (size_t)V;
+}
+
+int pc_irec_create(int nthreads, size_t max_bytes, pc_irec_store **out, pc_err *e) {
+  *out = NULL;
+  if (nthreads < 1 || nthreads > 4096) return pc_errf(e, PC_EINVAL, "importance records: thread count %d out of range 1..4096", nthreads);
+  pc_irec_store *s = calloc(1, sizeof *s);
+  if (s) s->terr = calloc((size_t)nthreads, sizeof *s->terr);
+  if (!s || !s->terr) {
+    free(s);
+    return pc_errf(e, PC_ENOMEM, "importance records: out of memory");
+  }
+  s->nthreads = nthreads;
+  s->max_bytes = max_bytes;
+  *out = s;
+  return PC_OK;
+}
+
+static void release_buffers(pc_irec_store *s) {
+  free(s->rec);
+  free(s->pos);
+  free(s->mass);
+  free(s->scratch);
+  pc_kdtree_free(&s->tree);
+  s->rec = NULL;
+  s->pos = NULL;
+  s->mass = NULL;
+  s->scratch = NULL;
+  s->rec_cap = s->mass_cap = s->scratch_cap = 0;
+}
+
+void pc_irec_destroy(pc_irec_store *s) {
+  if (!s) return;
+  release_buffers(s);
+  free(s->terr);
+  free(s);
+}
+
+size_t pc_irec_bytes(const pc_irec_store *s) {
+  return bytes_for(s, s->rec_cap, s->mass_cap, s->scratch_cap);
+}
+
+size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight) {
+  if (nrecords < 0 || nlight < 0) return SIZE_MAX;
+  size_t mass = mass_floats(nrecords, nlight), scratch = mass_floats(s->nthreads, nlight);
+  if (mass == SIZE_MAX || scratch == SIZE_MAX) return SIZE_MAX;
+  return bytes_for(s, (size_t)nrecords, mass, scratch);
+}
+
+int pc_irec_count(const pc_irec_store *s) { return s->R; }
+int pc_irec_light_count(const pc_irec_store *s) { return s->V; }
+const float *pc_irec_pmf(const pc_irec_store *s, int r) { return s->mass + s->rec[r].offset; }
+const float *pc_irec_cmf(const pc_irec_store *s, int r) { return s->mass + s->rec[r].offset + (size_t)s->V; }
+double pc_irec_total(const pc_irec_store *s, int r) { return s->rec[r].total; }
+
+/* Fills one PMF/CMF row for the eye vertex z. Returns the importance sum, or -1 after noting
+ * the first bad value in *te. */
+static double fill_row(pc_irec_importance_fn fn, void *user, int thread, const pc_irec_site *z, int V, float *pmf,
+                       float *cmf, int record, thread_err *te) {
+  double total = 0.0;
+  for (int v = 0; v < V; v++) {
+    float x = fn(user, thread, z, v);
+    if (!(x >= 0.f) || !isfinite(x)) {
+      if (te->record < 0) *te = (thread_err){record, v, x};
+      return -1.0;
+    }
+    pmf[v] = x;
+    total += x;
+  }
+  if (total == 0.0) {
+    memset(cmf, 0, (size_t)V * sizeof *cmf);
+    return 0.0;
+  }
+  /* The CMF sums the rounded PMF, so zero entries stay flat, and is divided by its own total
+   * so it ends at exactly 1. */
+  double sum = 0.0;
+  for (int v = 0; v < V; v++) {
+    pmf[v] = (float)(pmf[v] / total);
+    sum += pmf[v];
+  }
+  double run = 0.0;
+  for (int v = 0; v < V; v++) {
+    run += pmf[v];
+    cmf[v] = (float)(run / sum);
+  }
+  return total;
+}
+
+typedef struct build_job {
+  pc_irec_store *s;
+  pc_irec_importance_fn fn;
+  void *user;
+} build_job;
+
+static void build_record(void *arg, int thread, int r) {
+  build_job *j = arg;
+  pc_irec_store *s = j->s;
+  pc_irec_record *rec = &s->rec[r];
+  float *pmf = s->mass + rec->offset;
+  rec->total = fill_row(j->fn, j->user, thread, &rec->site, s->V, pmf, pmf + s->V, r, &s->terr[thread]);
+}
+
+/* Grows the buffers to the build's needs, never past the limit: capacities kept from an
+ * earlier build count against it too, so when keeping them would not fit they are released. */
+static int reserve(pc_irec_store *s, int R, int V, pc_err *e) {
+  size_t need = pc_irec_bytes_needed(s, R, V);
+  if (need > s->max_bytes) {
+    double mib = 1.0 / (1024.0 * 1024.0);
+    return pc_errf(e, PC_ELIMIT,
+                   "importance records: %d records x %d light vertices need %.1f MiB (2*R*V floats of PMF and CMF),"
+                   " over the limit of %.1f MiB",
+                   R, V, need == SIZE_MAX ? INFINITY : (double)need * mib, (double)s->max_bytes * mib);
+  }
+  size_t want_rec = (size_t)R, want_mass = mass_floats(R, V), want_scratch = mass_floats(s->nthreads, V);
+  size_t keep_rec = want_rec > s->rec_cap ? want_rec : s->rec_cap;
+  size_t keep_mass = want_mass > s->mass_cap ? want_mass : s->mass_cap;
+  size_t keep_scratch = want_scratch > s->scratch_cap ? want_scratch : s->scratch_cap;
+  if (bytes_for(s, keep_rec, keep_mass, keep_scratch) > s->max_bytes) release_buffers(s);
+  if (want_rec > s->rec_cap) {
+    pc_irec_record *r = realloc(s->rec, want_rec * sizeof *r);
+    if (r) s->rec = r;
+    vec3 *p = realloc(s->pos, want_rec * sizeof *p);
+    if (p) s->pos = p;
+    if (!r || !p) return pc_errf(e, PC_ENOMEM, "importance records: out of memory for %d records", R);
+    s->rec_cap = want_rec;
+  }
+  if (want_mass > s->mass_cap) {
+    float *m = realloc(s->mass, want_mass * sizeof *m);
+    if (!m) return pc_errf(e, PC_ENOMEM, "importance records: out of memory for %zu PMF/CMF floats", want_mass);
+    s->mass = m;
+    s->mass_cap = want_mass;
+  }
+  if (want_scratch > s->scratch_cap) {
+    float *m = realloc(s->scratch, want_scratch * sizeof *m);
+    if (!m) return pc_errf(e, PC_ENOMEM, "importance records: out of memory for the exact-PMF scratch");
+    s->scratch = m;
+    s->scratch_cap = want_scratch;
+  }
+  return PC_OK;
+}
+
+int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int nlight, pc_irec_importance_fn fn,
+                  void *user, pc_pool *pool, pc_err *e) {
+  s->R = 0;
+  s->V = 0;
+  s->tree.n = 0;
+  if (nrecords < 0 || nlight < 0) return pc_errf(e, PC_EINVAL, "importance records: negative count (%d records, %d light vertices)", nrecords, nlight);
+  if (pool && pc_pool_size(pool) > s->nthreads)
+    return pc_errf(e, PC_EINVAL, "importance records: pool of %d threads, store made for %d", pc_pool_size(pool), s->nthreads);
+  int rc = reserve(s, nrecords, nlight, e);
+  if (rc != PC_OK) return rc;
+  for (int r = 0; r < nrecords; r++) {
+    s->rec[r].site = sites[r];
+    s->rec[r].offset = 2 * (size_t)r * (size_t)nlight;
+    s->rec[r].total = 0.0;
+    s->pos[r] = sites[r].p;
+  }
+  rc = pc_kdtree_build(&s->tree, s->pos, nrecords, e);
+  if (rc != PC_OK) return rc;
+  for (int t = 0; t < s->nthreads; t++) s->terr[t].record = -1;
+  s->V = nlight;
+  build_job job = {s, fn, user};
+  if (nlight > 0) {
+    if (pool) pc_pool_run(pool, nrecords, build_record, &job);
+    else
+      for (int r = 0; r < nrecords; r++) build_record(&job, 0, r);
+  }
+  /* Report the lowest bad record, so the message does not depend on thread timing. */
+  const thread_err *bad = NULL;
+  for (int t = 0; t < s->nthreads; t++)
+    if (s->terr[t].record >= 0 && (!bad || s->terr[t].record < bad->record)) bad = &s->terr[t];
+  if (bad) {
+    s->V = 0;
+    s->tree.n = 0;
+    return pc_errf(e, PC_ENUMERIC, "importance records: importance of light vertex %d for record %d is %g (must be finite and >= 0)",
+                   bad->v, bad->record, (double)bad->value);
+  }
+  s->R = nrecords;
+  return PC_OK;
+}
+
+/* Keeps the entries with positive weight and normalizes them. If none has one, the records
+ * near z all face another way (often the other side of a thin wall, with a PMF of another
+ * room): p_conn falls back to the uniform PMF (u = 1) rather than trust them. */
+static void normalize_weights(pc_irec_lookup *L) {
+  double sum = 0.0;
+  int m = 0;
+  for (int j = 0; j < L->n; j++) {
+    if (!(L->w[j] > 0.0)) continue;
+    L->w[m] = L->w[j];
+    L->pmf[m] = L->pmf[j];
+    L->cmf[m] = L->cmf[j];
+    sum += L->w[m++];
+  }
+  if (m == 0) {
+    L->n = 0;
+    L->u = 1.f;
+    return;
+  }
+  L->n = m;
+  for (int j = 0; j < m; j++) L->w[j] /= sum;
+}
+
+void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int knn, float uniform_mix,
+                           pc_irec_lookup *L) {
+  L->V = s->V;
+  L->u = uniform_mix;
+  L->n = 0;
+  if (s->V == 0 || s->R == 0) return;
+  if (knn < 1) knn = 1;
+  if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
+  int idx[PC_IREC_MAX_KNN];
+  float d2[PC_IREC_MAX_KNN];
+  double d[PC_IREC_MAX_KNN], dsum = 0.0;
+  int k = pc_kdtree_knn(&s->tree, z->p, knn, idx, d2);
+  for (int j = 0; j < k; j++) {
+    d[j] = sqrt((double)d2[j]);
+    dsum += d[j];
+  }
+  for (int j = 0; j < k; j++) {
+    const pc_irec_record *rec = &s->rec[idx[j]];
+    if (rec->total <= 0.0) continue; /* no distribution to contribute */
+    double cn = v3_dot(z->n, rec->site.n), cw = v3_dot(z->wi, rec->site.wi);
+    double w = 0.0;
+    /* The distance factor ranks records against each other; a lone record keeps factor 1. */
+    if (cn > 0.0 && cw > 0.0) w = cn * cw * (k > 1 && dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);
+    L->w[L->n] = w;
+    L->pmf[L->n] = s->mass + rec->offset;
+    L->cmf[L->n] = s->mass + rec->offset + (size_t)s->V;
+    L->n++;
+  }
+  if (L->n > 0) normalize_weights(L);
+}
+
+int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc_irec_importance_fn fn, void *user,
+                         float uniform_mix, pc_irec_lookup *L, pc_err *e) {
+  L->V = s->V;
+  L->u = uniform_mix;
+  L->n = 0;
+  if (thread < 0 || thread >= s->nthreads) return pc_errf(e, PC_EINVAL, "importance records: thread %d out of range", thread);
+  if (s->V == 0) return PC_OK;
+  float *pmf = s->scratch + 2 * (size_t)thread * (size_t)s->V, *cmf = pmf + s->V;
+  thread_err te = {-1, 0, 0.f};
+  double total = fill_row(fn, user, thread, z, s->V, pmf, cmf, 0, &te);
+  if (total < 0.0)
+    return pc_errf(e, PC_ENUMERIC, "exact PMF: importance of light vertex %d is %g (must be finite and >= 0)", te.v, (double)te.value);
+  if (total > 0.0) {
+    L->n = 1;
+    L->w[0] = 1.0;
+    L->pmf[0] = pmf;
+    L->cmf[0] = cmf;
+  }
+  return PC_OK;
+}
+
+double pc_irec_interp_pmf(const pc_irec_lookup *L, int i) {
+  double p = 0.0;
+  for (int j = 0; j < L->n; j++) p += L->w[j] * (double)L->pmf[j][i];
+  return p;
+}
+
+double pc_irec_interp_cmf(const pc_irec_lookup *L, int i) {
+  double c = 0.0;
+  for (int j = 0; j < L->n; j++) c += L->w[j] * (double)L->cmf[j][i];
+  return c;
+}
+
+/* Each record's CMF is non-decreasing and the weights are >= 0, so the weighted sum (in a
+ * fixed order; rounding is monotone) is too, and binary search equals a linear scan. */
+int pc_irec_interp_sample(const pc_irec_lookup *L, double xi) {
+  double target = xi * pc_irec_interp_cmf(L, L->V - 1);
+  int lo = 0, hi = L->V - 1;
+  while (lo < hi) {
+    int mid = lo + (hi - lo) / 2;
+    if (pc_irec_interp_cmf(L, mid) > target) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
+}
+
+double pc_irec_pconn(const pc_irec_lookup *L, int v) {
+  if (L->V <= 0 || v < 0 || v >= L->V) return 0.0;
+  double uni = 1.0 / L->V;
+  if (L->n == 0) return L->u > 0.f ? uni : 0.0;
+  return (1.0 - L->u) * pc_irec_interp_pmf(L, v) + L->u * uni;
+}
+
+/* Unbiased integer in [0, n) (Lemire 2019: multiply, reject the short interval). */
+static uint32_t rng_below(pc_rng *rng, uint32_t n) {
+  uint64_t m = (uint64_t)pc_rng_u32(rng) * n;
+  uint32_t low = (uint32_t)m;
+  if (low < n) {
+    uint32_t threshold = (uint32_t)(-n) % n;
+    while (low < threshold) {
+      m = (uint64_t)pc_rng_u32(rng) * n;
+      low = (uint32_t)m;
+    }
+  }
+  return (uint32_t)(m >> 32);
+}
+
+int pc_irec_sample(const pc_irec_lookup *L, pc_rng *rng, int *v, double *p_conn) {
+  if (L->V <= 0 || (L->n == 0 && !(L->u > 0.f))) return 0;
+  if (L->n == 0 || (L->u > 0.f && pc_rng_f(rng) < L->u)) {
+    *v = (int)rng_below(rng, (uint32_t)L->V);
+  } else {
+    double xi = (double)pc_rng_u32(rng) * 0x1p-32;
+    *v = pc_irec_interp_sample(L, xi);
+  }
+  *p_conn = pc_irec_pconn(L, *v);
+  return 1;
+}

@@ -1,0 +1,115 @@
+/* irec.h: PCBPT importance records (Popov et al. 2015, sect. 4.2 and 6) for one iteration and
+ * the connection PMF p_conn they define at any eye vertex.
+ *
+ * A record sits at a vertex z of a cache eye path and holds the PMF over the V connectable
+ * light vertices of the iteration's M stored light paths, proportional to
+ * luminance(light-subpath throughput x f_conn(y, z)), f_conn = rho_y * G * V * rho_z, and its
+ * CMF. All PMFs and CMFs live in one contiguous float array (2*R*V floats, bounded by a limit
+ * given at creation); records hold offsets into it. The importance of light vertex v seen
+ * from an eye vertex is computed by a caller-supplied callback, so this module knows nothing
+ * of the path-vertex type, BSDFs or ray casting.
+ *
+ * At an eye vertex, a lookup interpolates the knn nearest records (weighted by normal and
+ * incoming-direction similarity and distance) lazily: sampling is a binary search over the
+ * weighted sum of the records' CMFs evaluated only at the probed indices, and p_conn(v) is the
+ * same weighted sum of their PMFs. The result is blended with the uniform PMF:
+ *   p_conn(v) = (1 - u) * p_interp(v) + u / V.
+ * The exact mode (--pmf exact) computes the PMF at the eye vertex itself instead. */
+#ifndef PC_IREC_H
+#define PC_IREC_H
+
+#include <stddef.h>
+
+#include "error.h"
+#include "kdtree.h"
+#include "rng.h"
+#include "thread_pool.h"
+#include "vecmath.h"
+
+#define PC_IREC_MAX_KNN PC_KDTREE_MAX_K
+
+/* Where an eye vertex is, as far as caching is concerned. Records and lookups must use the same
+ * conventions: n the unit shading normal, wi the unit direction towards the previous vertex of
+ * the eye path. `vertex` is passed through untouched to the importance callback (the
+ * integrator's full path vertex: material, frame, throughput); it may be NULL. */
+typedef struct pc_irec_site {
+  vec3 p, n, wi;
+  const void *vertex;
+} pc_irec_site;
+
+/* Unnormalized connection importance of light vertex v (0 <= v < V) for the eye vertex z:
+ * luminance(throughput_y * rho_y * G * V * rho_z), visibility included. Must be finite and
+ * >= 0; called concurrently, `thread` is the calling pool thread (0..nthreads-1). */
+typedef float (*pc_irec_importance_fn)(void *user, int thread, const pc_irec_site *z, int v);
+
+typedef struct pc_irec_store pc_irec_store;
+
+/* nthreads: the most threads that will build or look up concurrently (per-thread scratch for
+ * the exact mode). max_bytes: hard limit on the memory the store may hold. */
+int pc_irec_create(int nthreads, size_t max_bytes, pc_irec_store **out, pc_err *e);
+void pc_irec_destroy(pc_irec_store *s);
+
+/* Builds the iteration's records: one per site (nrecords may be 0, e.g. in exact mode) over
+ * nlight light vertices, evaluating fn for every (record, light vertex) pair in parallel on
+ * `pool` (NULL: on the calling thread, as thread 0). Reuses the previous iteration's memory.
+ * Fails with PC_ELIMIT (naming the figures) when the records would exceed the store's limit,
+ * PC_ENUMERIC when fn returns a negative or non-finite value, PC_EINVAL on bad counts or a pool
+ * with more threads than the store was created for. On failure the store holds no records. */
+int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int nlight,
+                  pc_irec_importance_fn fn, void *user, pc_pool *pool, pc_err *e);
+
+/* Bytes held: 2*R*V floats of PMF/CMF plus the records, the kd-tree and the exact-mode
+ * scratch (capacity: a later smaller build keeps the larger allocation). */
+size_t pc_irec_bytes(const pc_irec_store *s);
+/* Bytes a build of R records over V light vertices needs (what the limit is checked against);
+ * SIZE_MAX when the figure overflows. */
+size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight);
+int pc_irec_count(const pc_irec_store *s);
+int pc_irec_light_count(const pc_irec_store *s);
+/* Record r's PMF and CMF (V floats each, inside the one shared array) and its unnormalized
+ * importance sum; a record with sum 0 sees no light vertex and holds zeros. */
+const float *pc_irec_pmf(const pc_irec_store *s, int r);
+const float *pc_irec_cmf(const pc_irec_store *s, int r);
+double pc_irec_total(const pc_irec_store *s, int r);
+
+/* The connection PMF at one eye vertex: valid until the next build. Plain data on the stack. */
+typedef struct pc_irec_lookup {
+  int V;
+  float u;                               /* uniform mix in [0, 1] */
+  int n;                                 /* distributions interpolated; 0: none (see below) */
+  double w[PC_IREC_MAX_KNN];             /* their weights, summing to 1 */
+  const float *pmf[PC_IREC_MAX_KNN], *cmf[PC_IREC_MAX_KNN];
+} pc_irec_lookup;
+
+/* Interpolates the knn (1..PC_IREC_MAX_KNN) nearest records. A record's weight is
+ * cos(n, n_q) * cos(wi, wi_q) * (1 - d_q / sum_j d_j) over the knn found records (Popov et
+ * al. sect. 6: product of the cosines, times the distance normalized over the selected
+ * records); records with a non-positive cosine or weight, and records that see no light
+ * vertex, are dropped. If every record with a PMF is dropped for its weight, p_conn falls
+ * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF, n = 0:
+ * p_conn is then the uniform PMF when u > 0, and undefined (pc_irec_sample draws nothing)
+ * when u == 0. */
+void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int knn, float uniform_mix,
+                           pc_irec_lookup *L);
+
+/* --pmf exact: evaluates fn over all V light vertices at z itself into `thread`'s scratch
+ * (valid until that thread's next exact lookup) and sets L to that PMF. PC_ENUMERIC when fn
+ * returns a negative or non-finite value. */
+int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc_irec_importance_fn fn,
+                         void *user, float uniform_mix, pc_irec_lookup *L, pc_err *e);
+
+/* Draws light vertex *v from p_conn with rng: with probability u from the uniform PMF,
+ * otherwise by inverting the interpolated CMF. Returns 1 and sets *v and *p_conn > 0, or 0
+ * when p_conn is undefined (V == 0, or n == 0 with u == 0). */
+int pc_irec_sample(const pc_irec_lookup *L, pc_rng *rng, int *v, double *p_conn);
+/* p_conn(v), 0 when undefined; > 0 for every v whenever u > 0 and V > 0, and for every v
+ * pc_irec_sample can return. */
+double pc_irec_pconn(const pc_irec_lookup *L, int v);
+
+/* The interpolated component alone (n > 0): its PMF and CMF at index i, and inversion of its
+ * CMF by binary search: the smallest i with cmf(i) > xi * cmf(V-1). Exposed for tests. */
+double pc_irec_interp_pmf(const pc_irec_lookup *L, int i);
+double pc_irec_interp_cmf(const pc_irec_lookup *L, int i);
+int pc_irec_interp_sample(const pc_irec_lookup *L, double xi);
+
+#endif

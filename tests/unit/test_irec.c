@@ -1,0 +1,364 @@
+/* test_irec.c: importance records and the connection PMF on a synthetic scene (random light
+ * vertices and records, an analytic importance luminance * cos * cos / d^2 with some zero
+ * throughputs and a "basement" that sees nothing; no Embree): rows are normalized, the lazily
+ * interpolated PMF is normalized and positive with uniform mixing, sampling follows p_conn
+ * (chi-square), the lazy binary search equals inversion of the materialised CMF, memory is
+ * 2*R*V floats plus little and the limit holds, and bad importances are reported. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "irec.h"
+
+typedef struct light_vertex {
+  vec3 p, n;
+  float lum; /* luminance of the light-subpath throughput */
+} light_vertex;
+
+typedef struct scene {
+  int V, R;
+  light_vertex *lv;
+  pc_irec_site *sites;
+  int nan_record; /* site (found by position: records copy sites) whose importance for light
+                   * vertex 3 is NaN (-1: none) */
+} scene;
+
+static float importance(void *user, int thread, const pc_irec_site *z, int v) {
+  (void)thread;
+  const scene *sc = user;
+  const light_vertex *y = &sc->lv[v];
+  if (sc->nan_record >= 0 && v == 3 && !memcmp(&z->p, &sc->sites[sc->nan_record].p, sizeof z->p)) return NAN;
+  if (z->p.z < 0.f) return 0.f; /* the basement: every connection occluded */
+  vec3 d = v3_sub(z->p, y->p);
+  float d2 = fmaxf(v3_len2(d), 1e-2f);
+  vec3 w = v3_norm(d);
+  float cy = fmaxf(0.f, v3_dot(y->n, w)), cz = fmaxf(0.f, -v3_dot(z->n, w));
+  return y->lum * cy * cz / d2;
+}
+
+static vec3 rand_dir(pc_rng *r) {
+  float z = 1.f - 2.f * pc_rng_f(r), phi = 2.f * PC_PI * pc_rng_f(r);
+  float s = sqrtf(fmaxf(0.f, 1.f - z * z));
+  return v3(s * cosf(phi), s * sinf(phi), z);
+}
+
+/* Directions around +z: records and eye vertices of one surface orientation, as in a scene,
+ * so most neighbours agree in normal and incoming direction. */
+static vec3 rand_dir_up(pc_rng *r) { return v3_norm(v3_add(rand_dir(r), v3(0, 0, 1.2f))); }
+
+static vec3 rand_point(pc_rng *r) { return v3(pc_rng_f(r), pc_rng_f(r), pc_rng_f(r)); }
+
+/* Light vertices on the cube's walls facing inwards-ish, every 7th with zero throughput;
+ * records inside, a tenth of them in the basement (z < 0). */
+static scene make_scene(int V, int R, uint64_t seed) {
+  scene sc = {V, R, calloc((size_t)V, sizeof(light_vertex)), calloc((size_t)R, sizeof(pc_irec_site)), -1};
+  pc_rng r = pc_rng_make(seed, 0, PC_STREAM_MISC, 0);
+  for (int v = 0; v < V; v++) {
+    sc.lv[v].p = rand_point(&r);
+    sc.lv[v].n = rand_dir(&r);
+    sc.lv[v].lum = v % 7 == 3 ? 0.f : 0.1f + 2.f * pc_rng_f(&r);
+  }
+  for (int i = 0; i < R; i++) {
+    sc.sites[i].p = rand_point(&r);
+    if (i % 10 == 9) sc.sites[i].p.z = -0.5f * pc_rng_f(&r) - 0.01f;
+    sc.sites[i].n = rand_dir_up(&r);
+    sc.sites[i].wi = rand_dir_up(&r);
+  }
+  return sc;
+}
+
+static void free_scene(scene *sc) {
+  free(sc->lv);
+  free(sc->sites);
+}
+
+static pc_irec_store *build(scene *sc, pc_pool *pool) {
+  pc_irec_store *s = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(4, 64u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc->sites, sc->R, sc->V, importance, sc, pool, &e), PC_OK);
+  return s;
+}
+
+/* Every non-empty record's PMF sums to 1 and its CMF rises to exactly 1, flat exactly where
+ * the importance is 0; the parallel build equals the serial one bit for bit. */
+static void test_record_rows(void **state) {
+  (void)state;
+  scene sc = make_scene(150, 400, 1);
+  pc_pool *pool = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_pool_create(2, &pool, &e), PC_OK);
+  pc_irec_store *s = build(&sc, NULL), *p = build(&sc, pool);
+  int empty = 0;
+  for (int r = 0; r < sc.R; r++) {
+    const float *pmf = pc_irec_pmf(s, r), *cmf = pc_irec_cmf(s, r);
+    assert_memory_equal(pmf, pc_irec_pmf(p, r), (size_t)sc.V * sizeof(float));
+    assert_memory_equal(cmf, pc_irec_cmf(p, r), (size_t)sc.V * sizeof(float));
+    assert_ptr_equal(cmf, pmf + sc.V); /* one contiguous array */
+    if (pc_irec_total(s, r) == 0.0) {
+      empty++;
+      for (int v = 0; v < sc.V; v++) assert_true(pmf[v] == 0.f && cmf[v] == 0.f);
+      continue;
+    }
+    double sum = 0.0;
+    for (int v = 0; v < sc.V; v++) {
+      float imp = importance(&sc, 0, &sc.sites[r], v);
+      assert_true((pmf[v] > 0.f) == (imp > 0.f));
+      assert_true(cmf[v] >= (v ? cmf[v - 1] : 0.f));
+      if (v) assert_true((cmf[v] > cmf[v - 1]) == (pmf[v] > 0.f));
+      sum += pmf[v];
+    }
+    assert_true(fabs(sum - 1.0) < 1e-5);
+    assert_true(cmf[sc.V - 1] == 1.f);
+  }
+  assert_true(empty >= sc.R / 10);
+  pc_irec_destroy(s);
+  pc_irec_destroy(p);
+  pc_pool_destroy(pool);
+  free_scene(&sc);
+}
+
+/* At random eye points the interpolated PMF sums to 1, p_conn sums to 1 and is > 0 for every
+ * light vertex when u > 0. */
+static void test_interpolated_pmf(void **state) {
+  (void)state;
+  scene sc = make_scene(120, 300, 2);
+  pc_irec_store *s = build(&sc, NULL);
+  pc_rng r = pc_rng_make(2, 0, PC_STREAM_MISC, 7);
+  int interpolated = 0, multi = 0;
+  for (int q = 0; q < 500; q++) {
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
+    pc_irec_lookup L;
+    pc_irec_lookup_cached(s, &z, 6, 0.1f, &L);
+    assert_true(L.n >= 0 && L.n <= 6);
+    double sp = 0.0, sc_ = 0.0, sw = 0.0;
+    for (int j = 0; j < L.n; j++) sw += L.w[j];
+    if (L.n > 0) {
+      interpolated++;
+      multi += L.n > 1;
+      assert_true(fabs(sw - 1.0) < 1e-12);
+      for (int v = 0; v < sc.V; v++) sp += pc_irec_interp_pmf(&L, v);
+      assert_true(fabs(sp - 1.0) < 1e-5);
+      assert_true(fabs(pc_irec_interp_cmf(&L, sc.V - 1) - 1.0) < 1e-6);
+    }
+    for (int v = 0; v < sc.V; v++) {
+      double pc = pc_irec_pconn(&L, v);
+      assert_true(pc >= 0.1 / sc.V * (1 - 1e-6));
+      sc_ += pc;
+    }
+    assert_true(fabs(sc_ - 1.0) < 1e-5);
+  }
+  assert_true(interpolated > 400);
+  assert_true(multi > 300);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+/* Chi-square of n samples against p_conn over the V bins (bins with expectation < 5 merged);
+ * asserts the statistic is within 5 standard deviations of its mean (df), deterministic by
+ * the fixed seed. Also checks every sample has p_conn > 0 and the returned p equals pconn. */
+static void chi_square(const pc_irec_lookup *L, int n, uint64_t seed) {
+  int V = L->V;
+  long *count = calloc((size_t)V, sizeof *count);
+  pc_rng r = pc_rng_make(seed, 0, PC_STREAM_CONNECT, 0);
+  for (int i = 0; i < n; i++) {
+    int v = -1;
+    double p = 0.0;
+    assert_int_equal(pc_irec_sample(L, &r, &v, &p), 1);
+    assert_true(v >= 0 && v < V);
+    assert_true(p > 0.0);
+    assert_true(p == pc_irec_pconn(L, v));
+    count[v]++;
+  }
+  double chi = 0.0, exp_acc = 0.0, obs_acc = 0.0;
+  int df = -1;
+  for (int v = 0; v < V; v++) {
+    double ex = n * pc_irec_pconn(L, v);
+    if (ex == 0.0) assert_int_equal(count[v], 0);
+    exp_acc += ex;
+    obs_acc += (double)count[v];
+    if (exp_acc >= 5.0 || v == V - 1) {
+      if (exp_acc > 0.0) {
+        chi += (obs_acc - exp_acc) * (obs_acc - exp_acc) / exp_acc;
+        df++;
+      }
+      exp_acc = obs_acc = 0.0;
+    }
+  }
+  assert_true(df >= 1);
+  assert_true(chi < df + 5.0 * sqrt(2.0 * df));
+  free(count);
+}
+
+static void test_sampling_matches_pconn(void **state) {
+  (void)state;
+  scene sc = make_scene(80, 200, 3);
+  pc_irec_store *s = build(&sc, NULL);
+  pc_err e = {0};
+  pc_irec_site z = {v3(0.5f, 0.4f, 0.6f), v3_norm(v3(0.2f, -0.3f, 1.f)), v3_norm(v3(0.3f, 0.1f, 1.f)), NULL};
+  pc_irec_lookup L;
+  const float mixes[] = {0.1f, 0.f, 0.5f, 1.f};
+  for (int m = 0; m < 4; m++) {
+    pc_irec_lookup_cached(s, &z, 6, mixes[m], &L);
+    assert_true(L.n > 0);
+    chi_square(&L, 200000, 10 + m);
+    assert_int_equal(pc_irec_lookup_exact(s, 1, &z, importance, &sc, mixes[m], &L, &e), PC_OK);
+    assert_int_equal(L.n, 1);
+    chi_square(&L, 200000, 20 + m);
+  }
+  /* The exact PMF is the normalized importance at z itself. */
+  assert_int_equal(pc_irec_lookup_exact(s, 0, &z, importance, &sc, 0.f, &L, &e), PC_OK);
+  double total = 0.0;
+  for (int v = 0; v < sc.V; v++) total += importance(&sc, 0, &z, v);
+  for (int v = 0; v < sc.V; v++)
+    assert_true(fabs(pc_irec_pconn(&L, v) - importance(&sc, 0, &z, v) / total) < 1e-6);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+/* Lazy binary search over the weighted CMF sum returns what a linear scan of the materialised
+ * interpolated CMF returns, for random numbers and for numbers right at the CMF steps. */
+static void test_lazy_equals_materialised(void **state) {
+  (void)state;
+  scene sc = make_scene(97, 250, 4);
+  pc_irec_store *s = build(&sc, NULL);
+  pc_rng r = pc_rng_make(4, 0, PC_STREAM_MISC, 3);
+  double *C = malloc((size_t)sc.V * sizeof *C);
+  for (int q = 0; q < 100; q++) {
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
+    pc_irec_lookup L;
+    pc_irec_lookup_cached(s, &z, 1 + q % 12, 0.1f, &L);
+    if (L.n == 0) continue;
+    for (int i = 0; i < sc.V; i++) C[i] = pc_irec_interp_cmf(&L, i);
+    for (int t = 0; t < 200 + sc.V; t++) {
+      double xi = t < 200 ? (double)pc_rng_u32(&r) * 0x1p-32 : C[t - 200] / C[sc.V - 1];
+      if (!(xi < 1.0)) continue;
+      double target = xi * C[sc.V - 1];
+      int lin = 0;
+      while (!(C[lin] > target)) lin++;
+      int lazy = pc_irec_interp_sample(&L, xi);
+      assert_int_equal(lazy, lin);
+      assert_true(pc_irec_interp_pmf(&L, lazy) > 0.0);
+    }
+  }
+  free(C);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+static void test_memory_and_limit(void **state) {
+  (void)state;
+  scene sc = make_scene(200, 300, 5);
+  const size_t R = 300, V = 200, nthreads = 4;
+  pc_irec_store *s = build(&sc, NULL);
+  size_t b = pc_irec_bytes(s), mass = 2 * R * V * sizeof(float);
+  assert_true(b >= mass);
+  assert_true(b - mass <= R * 128 + nthreads * 2 * V * sizeof(float) + 4096);
+  assert_true(pc_irec_bytes_needed(s, 300, 200) == b);
+  pc_irec_destroy(s);
+
+  /* A limit below the need is refused with the figures; exactly the need is accepted. */
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(4, mass, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc.sites, 300, 200, importance, &sc, NULL, &e), PC_ELIMIT);
+  assert_non_null(strstr(e.msg, "300 records x 200 light vertices"));
+  assert_non_null(strstr(e.msg, "limit"));
+  assert_int_equal(pc_irec_count(s), 0);
+  size_t need = pc_irec_bytes_needed(s, 300, 200);
+  pc_irec_destroy(s);
+  assert_int_equal(pc_irec_create(4, need, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc.sites, 300, 200, importance, &sc, NULL, &e), PC_OK);
+  assert_true(pc_irec_bytes(s) <= need);
+  /* Reshaped builds never hold more than the limit, even with capacities kept. */
+  assert_int_equal(pc_irec_build(s, sc.sites, 30, 200, importance, &sc, NULL, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc.sites, 300, 100, importance, &sc, NULL, &e), PC_OK);
+  assert_true(pc_irec_bytes(s) <= need);
+  /* Overflowing figures are a limit error too, not a wrapped allocation. */
+  assert_int_equal(pc_irec_build(s, sc.sites, 2000000000, 2000000000, importance, &sc, NULL, &e), PC_ELIMIT);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+static void test_bad_importance(void **state) {
+  (void)state;
+  scene sc = make_scene(20, 50, 6);
+  sc.nan_record = 17;
+  pc_irec_store *s = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(1, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc.sites, sc.R, sc.V, importance, &sc, NULL, &e), PC_ENUMERIC);
+  assert_non_null(strstr(e.msg, "record 17"));
+  assert_int_equal(pc_irec_count(s), 0);
+  pc_irec_lookup L;
+  assert_int_equal(pc_irec_lookup_exact(s, 0, &sc.sites[17], importance, &sc, 0.1f, &L, &e), PC_OK); /* V = 0 */
+  assert_int_equal(pc_irec_build(s, sc.sites, 0, sc.V, importance, &sc, NULL, &e), PC_OK);
+  assert_int_equal(pc_irec_lookup_exact(s, 0, &sc.sites[17], importance, &sc, 0.1f, &L, &e), PC_ENUMERIC);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+/* No record with a PMF nearby: uniform with u > 0, nothing drawn with u = 0. Records facing
+ * away only: uniform. u = 1: exactly uniform. */
+static void test_fallbacks(void **state) {
+  (void)state;
+  scene sc = make_scene(30, 40, 7);
+  for (int i = 0; i < sc.R; i++) sc.sites[i].p.z = -1.f - (float)i; /* all in the basement */
+  pc_irec_store *s = build(&sc, NULL);
+  pc_irec_site z = {v3(0.5f, 0.5f, -0.5f), v3(0, 0, 1), v3(0, 0, 1), NULL};
+  pc_irec_lookup L;
+  pc_rng r = pc_rng_make(7, 0, PC_STREAM_MISC, 0);
+  int v;
+  double p;
+  pc_irec_lookup_cached(s, &z, 6, 0.f, &L);
+  assert_int_equal(L.n, 0);
+  assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 0);
+  assert_true(pc_irec_pconn(&L, 0) == 0.0);
+  pc_irec_lookup_cached(s, &z, 6, 0.2f, &L);
+  assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
+  assert_true(fabs(p - 1.0 / sc.V) < 1e-12);
+  chi_square(&L, 50000, 70);
+  pc_irec_destroy(s);
+
+  /* Two records, normals opposite to the query's: both dropped, and p_conn is uniform even
+   * with u = 0. */
+  pc_irec_site two[2] = {{v3(0.5f, 0.5f, 0.5f), v3(0, 0, -1), v3(0, 0, -1), NULL},
+                         {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL}};
+  s = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(1, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, two, 2, sc.V, importance, &sc, NULL, &e), PC_OK);
+  assert_true(pc_irec_total(s, 0) > 0.0 && pc_irec_total(s, 1) > 0.0);
+  pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL};
+  pc_irec_lookup_cached(s, &up, 6, 0.f, &L);
+  assert_int_equal(L.n, 0);
+  assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
+  for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
+  /* Same orientation: weights follow 1 - d_q / sum d (distances 0.1 and 0.3). */
+  pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL};
+  pc_irec_lookup_cached(s, &down, 6, 0.f, &L);
+  assert_int_equal(L.n, 2);
+  assert_true(fabs(L.w[0] - 0.75 / 1.0) < 1e-5 && fabs(L.w[1] - 0.25) < 1e-5);
+  /* One neighbour: its weight is 1 (no distance factor to rank it against). */
+  pc_irec_lookup_cached(s, &down, 1, 0.f, &L);
+  assert_int_equal(L.n, 1);
+  assert_true(L.w[0] == 1.0);
+  /* Mixing weight 1 is the uniform PMF whatever the records say. */
+  pc_irec_lookup_cached(s, &down, 6, 1.f, &L);
+  for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
+      cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_lazy_equals_materialised),
+      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_bad_importance),
+      cmocka_unit_test(test_fallbacks),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,561 @@
+/* worker.c: the farm worker: connects to the coordinator (reconnecting with backoff while it
+ * is away), authenticates, takes iteration ranges, fetches and caches scene bundles by hash,
+ * and streams deltas (sums + counts since the last acknowledged upload) in bounded chunks.
+ * A delta stays in memory until acknowledged and is re-sent after a reconnect; the
+ * coordinator recognises re-sent iterations and never counts them twice. The next range is
+ * asked for as soon as the last delta of a range is sent, so the render thread does not sit
+ * idle while the coordinator checkpoints and acknowledges it. */
+#include <errno.h>
+#include <netdb.h>
+#include <signal.h>
+#include <sodium.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "auth.h"
+#include "bundle.h"
+#include "render_flags.h"
+#include "wire_conn.h"
+#include "wire_film.h"
+#include "wire_log.h"
+#include "wire_settings.h"
+#include "worker.h"
+
+#define UPLOAD_INTERVAL 2.0
+
+struct pc_worker {
+  uv_loop_t *loop, loop_storage;
+  uv_timer_t retry, beat, pump;
+  uv_async_t notify;
+  uv_async_t stop;
+  uv_signal_t sigint, sigterm;
+  bool handle_signals, shutting_down;
+  pc_conn *conn;
+  bool connected, authed, waiting_work;
+  double backoff, last_upload, next_request;
+  char host[256];
+  int port;
+  char name[64], cache[1024];
+  uint8_t key[PC_AUTH_KEY], cnonce[PC_AUTH_NONCE];
+  int threads;
+  pc_wrender r;
+  /* current range, as the loop sees it */
+  bool busy, drop, stopping;
+  uint64_t job, range, first, count, acked_end;
+  /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
+  uint8_t *inflight; size_t inflight_len;
+  uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final, in_sent;
+  pc_render_stats in_stats;
+  /* a bundle being received */
+  uint8_t *bun; size_t bun_len; uint8_t bun_hash[PC_BUNDLE_HASH]; bool bun_wait;
+  Pcbpt__Assign *pending_assign;
+};
+typedef struct pc_worker worker;
+
+static double now_s(void) { return (double)uv_hrtime() * 1e-9; }
+
+static void send_env(worker *w, Pcbpt__Envelope *env) {
+  if (w->conn && w->connected) pc_conn_send(w->conn, env);
+}
+
+static void request_work(worker *w) {
+  if (!w->authed || w->busy || w->waiting_work) return;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__WorkRequest m = PCBPT__WORK_REQUEST__INIT;
+  uv_mutex_lock(&w->r.mu);
+  m.iterations_per_second = w->r.rate;
+  uv_mutex_unlock(&w->r.mu);
+  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_REQUEST;
+  env.work_request = &m;
+  w->waiting_work = true;
+  send_env(w, &env);
+}
+
+static void send_heartbeat(worker *w) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Heartbeat h = PCBPT__HEARTBEAT__INIT;
+  uv_mutex_lock(&w->r.mu);
+  h.iterations_per_second = w->r.rate;
+  h.iterations_done = w->r.rendered;
+  uv_mutex_unlock(&w->r.mu);
+  if (w->busy) { h.job_id = w->job; h.range_id = w->range; }
+  env.msg_case = PCBPT__ENVELOPE__MSG_HEARTBEAT;
+  env.heartbeat = &h;
+  send_env(w, &env);
+}
+
+static void send_inflight(worker *w) {
+  if (!w->inflight || !w->authed) return;
+  size_t nchunks = (w->inflight_len + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK;
+  if (nchunks == 0) nchunks = 1;
+  Pcbpt__RenderStats st = PCBPT__RENDER_STATS__INIT;
+  st.rays = w->in_stats.rays;
+  st.t_paths = w->in_stats.t_paths;
+  st.t_lt = w->in_stats.t_lt;
+  st.t_pmf = w->in_stats.t_pmf;
+  st.t_connect = w->in_stats.t_connect;
+  st.pmf_bytes = w->in_stats.pmf_bytes;
+  for (size_t i = 0; i < nchunks; i++) {
+    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+    Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;
+    u.job_id = w->in_job;
+    u.range_id = w->in_range;
+    u.first = w->in_first;
+    u.count = w->in_count;
+    u.index = (uint32_t)i;
+    u.nchunks = (uint32_t)nchunks;
+    u.raw_size = w->in_raw;
+    u.final = w->in_final;
+    u.stats = &st;
+    u.data.data = w->inflight + i * PC_WIRE_CHUNK;
+    u.data.len = w->inflight_len - i * PC_WIRE_CHUNK < PC_WIRE_CHUNK ? w->inflight_len - i * PC_WIRE_CHUNK : PC_WIRE_CHUNK;
+    env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
+    env.upload_chunk = &u;
+    if (pc_conn_send_bulk(w->conn, &env) != 0) return;
+  }
+  w->in_sent = true;
+  w->last_upload = now_s();
+}
+
+/* The render thread is idle and nothing of the range is left to take: ask for the next one
+ * (a final delta may still wait for its acknowledgement). */
+static void finish_range(worker *w) {
+  w->busy = false;
+  w->drop = w->stopping = false;
+  request_work(w);
+}
+
+/* Takes the pending delta for upload when due; finishes the range when all is acknowledged. */
+static void pump(worker *w) {
+  if (!w->busy) return;
+  uv_mutex_lock(&w->r.mu);
+  bool done = w->r.range_done, failed = w->r.failed;
+  uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
+  uv_mutex_unlock(&w->r.mu);
+  if (done && failed) {
+    pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
+    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+    Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
+    f.job_id = w->job;
+    f.range_id = w->range;
+    f.reason = w->r.error;
+    env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
+    env.range_failed = &f;
+    send_env(w, &env);
+    /* ask again after a pause, so a failing worker does not spin */
+    w->next_request = now_s() + 0.5;
+    w->busy = false;
+    w->drop = w->stopping = false;
+    return;
+  }
+  if (w->drop) {
+    if (done) finish_range(w);
+    return;
+  }
+  if (w->inflight) return;
+  bool all = done && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
+  if (pend == 0) {
+    if (done) finish_range(w);
+    return;
+  }
+  if (!w->authed || (!done && now_s() - w->last_upload < UPLOAD_INTERVAL)) return;
+  uint8_t *raw = NULL;
+  size_t n;
+  pc_err e;
+  uv_mutex_lock(&w->r.mu);
+  w->in_first = w->r.pend_first;
+  w->in_count = w->r.pend_count;
+  w->in_stats = w->r.pend_stats;
+  int rc = pc_wire_film_pack(&w->r.pending, &raw, &n, &e);
+  if (!rc) {
+    pc_film_clear(&w->r.pending);
+    memset(&w->r.pend_stats, 0, sizeof w->r.pend_stats);
+    w->r.pend_first += w->r.pend_count;
+    w->r.pend_count = 0;
+  }
+  uv_mutex_unlock(&w->r.mu);
+  if (rc || (rc = pc_wire_compress(raw, n, &w->inflight, &w->inflight_len, &e)) != 0) {
+    free(raw);
+    pc_wire_log("upload: %s", e.msg);
+    return;
+  }
+  free(raw);
+  w->in_job = w->job;
+  w->in_range = w->range;
+  w->in_raw = n;
+  w->in_final = all;
+  w->in_sent = false;
+  send_inflight(w);
+  if (all) finish_range(w);
+}
+
+static void on_notify(uv_async_t *a) { pump(a->data); }
+static void on_pump(uv_timer_t *t) {
+  worker *w = t->data;
+  pump(w);
+  if (!w->busy && now_s() >= w->next_request) request_work(w);
+}
+
+static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
+  pc_render_settings s;
+  pc_err e;
+  if (pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
+      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, &e) != 0) {
+    pc_wire_log("job %llu: cannot start range %llu: %s", (unsigned long long)a->job_id, (unsigned long long)a->range_id, e.msg);
+    if (w->conn) pc_conn_close(w->conn, "cannot start the assigned range");
+    return;
+  }
+  w->busy = true;
+  w->job = a->job_id;
+  w->range = a->range_id;
+  w->first = a->first;
+  w->count = a->count;
+  w->acked_end = a->first;
+  w->drop = w->stopping = false;
+  w->last_upload = now_s();
+}
+
+static void on_assign(worker *w, Pcbpt__Envelope *env) {
+  Pcbpt__Assign *a = env->assign;
+  w->waiting_work = false;
+  if (w->busy || a->bundle_hash.len != PC_BUNDLE_HASH || a->count == 0) {
+    pc_conn_close(w->conn, "unexpected or malformed assignment");
+    return;
+  }
+  char scene[1200];
+  if (pc_bundle_lookup(w->cache, a->bundle_hash.data, scene, sizeof scene)) {
+    start_range(w, a, scene);
+    return;
+  }
+  /* keep the assignment until the bundle is here */
+  env->msg_case = PCBPT__ENVELOPE__MSG__NOT_SET;
+  env->assign = NULL;
+  w->pending_assign = a;
+  memcpy(w->bun_hash, a->bundle_hash.data, PC_BUNDLE_HASH);
+  w->bun_len = 0;
+  w->bun_wait = true;
+  Pcbpt__Envelope req = PCBPT__ENVELOPE__INIT;
+  Pcbpt__BundleRequest br = PCBPT__BUNDLE_REQUEST__INIT;
+  br.hash.data = w->bun_hash;
+  br.hash.len = PC_BUNDLE_HASH;
+  req.msg_case = PCBPT__ENVELOPE__MSG_BUNDLE_REQUEST;
+  req.bundle_request = &br;
+  send_env(w, &req);
+}
+
+static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
+  if (!w->bun_wait || b->hash.len != PC_BUNDLE_HASH || memcmp(b->hash.data, w->bun_hash, PC_BUNDLE_HASH) ||
+      b->offset != w->bun_len || b->total > PC_BUNDLE_MAX || b->offset + b->data.len > b->total) {
+    pc_conn_close(w->conn, "bundle chunk does not continue the transfer");
+    return;
+  }
+  if (b->offset == 0) {
+    free(w->bun);
+    w->bun = malloc(b->total ? b->total : 1);
+    if (!w->bun) { pc_conn_close(w->conn, "out of memory for a bundle"); return; }
+  }
+  memcpy(w->bun + w->bun_len, b->data.data, b->data.len);
+  w->bun_len += b->data.len;
+  if (w->bun_len < b->total) return;
+  char scene[1200];
+  pc_err e;
+  int rc = pc_bundle_unpack(w->bun, w->bun_len, w->bun_hash, w->cache, scene, sizeof scene, &e);
+  free(w->bun);
+  w->bun = NULL;
+  w->bun_wait = false;
+  Pcbpt__Assign *a = w->pending_assign;
+  w->pending_assign = NULL;
+  if (rc) {
+    pc_wire_log("refused scene bundle: %s", e.msg);
+    pc_conn_close(w->conn, "bad scene bundle");
+  } else {
+    start_range(w, a, scene);
+  }
+  pcbpt__assign__free_unpacked(a, NULL);
+}
+
+static void on_cancel(worker *w, const Pcbpt__Cancel *c) {
+  if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) return;
+  atomic_store(&w->r.cancel, true);
+  if (c->upload_partial) {
+    w->stopping = true;
+    pc_wire_log("job %llu: halted; uploading what is rendered", (unsigned long long)w->job);
+  } else {
+    w->drop = true;
+    if (w->inflight && w->in_range == w->range) {
+      free(w->inflight);
+      w->inflight = NULL;
+    }
+    pc_wire_log("job %llu: range %llu cancelled", (unsigned long long)w->job, (unsigned long long)w->range);
+  }
+  pump(w);
+}
+
+static void on_ack(worker *w, const Pcbpt__UploadAck *a) {
+  if (!w->inflight || a->range_id != w->in_range) return;
+  if (a->refused && !(w->busy && w->in_range == w->range)) {
+    pc_wire_log("job %llu: last upload for range %llu refused: %s", (unsigned long long)w->in_job,
+                (unsigned long long)w->in_range, a->reason);
+  } else if (a->refused) {
+    pc_wire_log("job %llu: upload for range %llu refused: %s; dropping the range", (unsigned long long)w->job,
+                (unsigned long long)w->range, a->reason);
+    atomic_store(&w->r.cancel, true);
+    w->drop = true;
+  }
+  free(w->inflight);
+  w->inflight = NULL;
+  pump(w);
+}
+
+static void schedule_reconnect(worker *w);
+
+static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
+  worker *w = c->data;
+  switch (env->msg_case) {
+  case PCBPT__ENVELOPE__MSG_CHALLENGE: {
+    Pcbpt__Challenge *ch = env->challenge;
+    if (w->authed || ch->nonce.len != PC_AUTH_NONCE ||
+        !pc_auth_verify(w->key, true, w->cnonce, ch->nonce.data, ch->server_mac.data, ch->server_mac.len)) {
+      pc_conn_close(c, "the coordinator did not prove it knows the token");
+      return;
+    }
+    uint8_t mac[PC_AUTH_MAC];
+    if (pc_auth_mac(w->key, false, ch->nonce.data, w->cnonce, mac) != 0) { pc_conn_close(c, "auth: MAC failed"); return; }
+    Pcbpt__Envelope out = PCBPT__ENVELOPE__INIT;
+    Pcbpt__AuthResponse ar = PCBPT__AUTH_RESPONSE__INIT;
+    ar.mac.data = mac;
+    ar.mac.len = PC_AUTH_MAC;
+    out.msg_case = PCBPT__ENVELOPE__MSG_AUTH_RESPONSE;
+    out.auth_response = &ar;
+    pc_conn_send(c, &out);
+    return;
+  }
+  case PCBPT__ENVELOPE__MSG_AUTH_RESULT:
+    if (!env->auth_result->ok) { pc_conn_close(c, env->auth_result->reason); return; }
+    w->authed = true;
+    w->backoff = 0.5;
+    pc_wire_log("connected to %s:%d", w->host, w->port);
+    send_heartbeat(w);
+    if (w->inflight) send_inflight(w);
+    if (!w->busy) request_work(w);
+    else pump(w);
+    return;
+  case PCBPT__ENVELOPE__MSG_ERROR:
+    pc_wire_log("coordinator: %s", env->error->reason);
+    return;
+  default:
+    break;
+  }
+  if (!w->authed) { pc_conn_close(c, "unexpected message before authentication"); return; }
+  switch (env->msg_case) {
+  case PCBPT__ENVELOPE__MSG_ASSIGN: on_assign(w, env); return;
+  case PCBPT__ENVELOPE__MSG_NO_WORK:
+    /* asked again by the pump timer once retry_ms has passed */
+    w->waiting_work = false;
+    w->next_request = now_s() + (env->no_work->retry_ms > 10000 ? 10000 : env->no_work->retry_ms) / 1000.0;
+    return;
+  case PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK: on_bundle_chunk(w, env->bundle_chunk); return;
+  case PCBPT__ENVELOPE__MSG_CANCEL: on_cancel(w, env->cancel); return;
+  case PCBPT__ENVELOPE__MSG_UPLOAD_ACK: on_ack(w, env->upload_ack); return;
+  default:
+    pc_conn_close(c, "unexpected message from the coordinator");
+  }
+}
+
+static void on_closed(pc_conn *c) {
+  worker *w = c->data;
+  free(c);
+  w->conn = NULL;
+  if (w->shutting_down) return;
+  w->connected = w->authed = w->waiting_work = false;
+  if (w->bun_wait) {
+    /* the range was never started: the coordinator takes it back */
+    w->bun_wait = false;
+    free(w->bun);
+    w->bun = NULL;
+    if (w->pending_assign) pcbpt__assign__free_unpacked(w->pending_assign, NULL);
+    w->pending_assign = NULL;
+  }
+  schedule_reconnect(w);
+}
+
+static void on_connect(uv_connect_t *req, int status) {
+  pc_conn *c = (pc_conn *)req->handle->data;
+  worker *w = c->data;
+  free(req);
+  if (status < 0) {
+    pc_wire_log("cannot connect to %s:%d: %s (retrying in %.1f s)", w->host, w->port, uv_strerror(status), w->backoff);
+    pc_conn_close(c, NULL);
+    return;
+  }
+  int r = pc_conn_start(c);
+  if (r) { pc_conn_close(c, uv_strerror(r)); return; }
+  w->connected = true;
+  pc_auth_nonce(w->cnonce);
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Hello h = PCBPT__HELLO__INIT;
+  h.protocol_version = PC_WIRE_PROTOCOL_VERSION;
+  h.role = PCBPT__ROLE__ROLE_WORKER;
+  h.name = w->name;
+  h.threads = (uint32_t)w->threads;
+  h.client_nonce.data = w->cnonce;
+  h.client_nonce.len = PC_AUTH_NONCE;
+  env.msg_case = PCBPT__ENVELOPE__MSG_HELLO;
+  env.hello = &h;
+  pc_conn_send(c, &env);
+}
+
+static void try_connect(uv_timer_t *t) {
+  worker *w = t->data;
+  struct addrinfo hints = {.ai_socktype = SOCK_STREAM, .ai_family = AF_UNSPEC}, *ai = NULL;
+  char port[16];
+  snprintf(port, sizeof port, "%d", w->port);
+  int g = getaddrinfo(w->host, port, &hints, &ai);
+  if (g != 0) {
+    pc_wire_log("%s: %s (retrying)", w->host, gai_strerror(g));
+    schedule_reconnect(w);
+    return;
+  }
+  pc_conn *c = malloc(sizeof *c);
+  uv_connect_t *req = malloc(sizeof *req);
+  pc_conn_cbs cbs = {.on_msg = on_msg, .on_closed = on_closed};
+  int r = !c || !req ? UV_ENOMEM : pc_conn_init(w->loop, c, &cbs, w, PC_WIRE_MAX_FRAME);
+  if (r) {
+    free(c);
+    free(req);
+    freeaddrinfo(ai);
+    pc_wire_log("connect: %s", uv_strerror(r));
+    schedule_reconnect(w);
+    return;
+  }
+  w->conn = c;
+  r = uv_tcp_connect(req, &c->tcp, ai->ai_addr, on_connect);
+  freeaddrinfo(ai);
+  if (r) {
+    free(req);
+    pc_wire_log("connect: %s", uv_strerror(r));
+    pc_conn_close(c, NULL);
+  }
+}
+
+static void schedule_reconnect(worker *w) {
+  double d = w->backoff;
+  w->backoff = w->backoff * 2 > 10 ? 10 : w->backoff * 2;
+  int r = uv_timer_start(&w->retry, try_connect, (uint64_t)(d * 1000), 0);
+  if (r) pc_wire_log("reconnect timer: %s", uv_strerror(r));
+}
+
+static void on_beat(uv_timer_t *t) {
+  worker *w = t->data;
+  if (w->authed) send_heartbeat(w);
+}
+
+static void close_handle(uv_handle_t *h) {
+  if (!uv_is_closing(h)) uv_close(h, NULL);
+}
+
+/* Closes every handle but `notify` (the render thread may still signal it; unreferenced, it
+ * does not keep the loop alive) so the loop ends. */
+static void shut_down(worker *w) {
+  if (w->shutting_down) return;
+  w->shutting_down = true;
+  if (w->conn) pc_conn_close(w->conn, NULL);
+  close_handle((uv_handle_t *)&w->retry);
+  close_handle((uv_handle_t *)&w->beat);
+  close_handle((uv_handle_t *)&w->pump);
+  close_handle((uv_handle_t *)&w->stop);
+  uv_unref((uv_handle_t *)&w->notify);
+  if (w->handle_signals) {
+    close_handle((uv_handle_t *)&w->sigint);
+    close_handle((uv_handle_t *)&w->sigterm);
+  }
+}
+
+static void walk_close(uv_handle_t *h, void *arg) {
+  (void)arg;
+  close_handle(h);
+}
+
+static void on_stop(uv_async_t *a) { shut_down(a->data); }
+
+static void on_signal(uv_signal_t *s, int signum) {
+  worker *w = s->data;
+  pc_wire_log("signal %d: stopping", signum);
+  shut_down(w);
+}
+
+int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e) {
+  worker *w = calloc(1, sizeof *w);
+  if (!w) return pc_errf(e, PC_ENOMEM, "worker: out of memory");
+  snprintf(w->host, sizeof w->host, "%s", o->host);
+  w->port = o->port;
+  memcpy(w->key, o->key, PC_AUTH_KEY);
+  w->threads = o->threads;
+  w->handle_signals = o->handle_signals;
+  snprintf(w->cache, sizeof w->cache, "%s", o->cache_dir);
+  if (o->name) snprintf(w->name, sizeof w->name, "%s", o->name);
+  else {
+    char hostname[64] = "worker";
+    if (gethostname(hostname, sizeof hostname - 1) != 0) snprintf(hostname, sizeof hostname, "worker");
+    snprintf(w->name, sizeof w->name, "%s-%ld", hostname, (long)getpid());
+  }
+  if (mkdir(w->cache, 0700) != 0 && errno != EEXIST) {
+    int rc = pc_errf(e, PC_EIO, "%s: %s", w->cache, strerror(errno));
+    free(w);
+    return rc;
+  }
+  w->backoff = 0.5;
+  int r = uv_loop_init(&w->loop_storage);
+  if (r) { free(w); return pc_errf(e, PC_EIO, "worker: loop: %s", uv_strerror(r)); }
+  w->loop = &w->loop_storage;
+  w->notify.data = w->stop.data = w->retry.data = w->beat.data = w->pump.data = w->sigint.data = w->sigterm.data = w;
+  if ((r = uv_async_init(w->loop, &w->notify, on_notify)) != 0 || (r = uv_async_init(w->loop, &w->stop, on_stop)) != 0 ||
+      (r = uv_timer_init(w->loop, &w->retry)) != 0 || (r = uv_timer_init(w->loop, &w->beat)) != 0 ||
+      (r = uv_timer_init(w->loop, &w->pump)) != 0 || (r = uv_timer_start(&w->beat, on_beat, 1000, 1000)) != 0 ||
+      (r = uv_timer_start(&w->pump, on_pump, 250, 250)) != 0 || (r = uv_timer_start(&w->retry, try_connect, 0, 0)) != 0)
+    goto uv_fail;
+  if (w->handle_signals &&
+      ((r = uv_signal_init(w->loop, &w->sigint)) != 0 || (r = uv_signal_init(w->loop, &w->sigterm)) != 0 ||
+       (r = uv_signal_start(&w->sigint, on_signal, SIGINT)) != 0 || (r = uv_signal_start(&w->sigterm, on_signal, SIGTERM)) != 0))
+    goto uv_fail;
+  if ((r = pc_wrender_start(&w->r, w->threads, &w->notify, e)) != 0) {
+    shut_down(w);
+    close_handle((uv_handle_t *)&w->notify);
+    uv_run(w->loop, UV_RUN_DEFAULT);
+    uv_loop_close(w->loop);
+    free(w);
+    return r;
+  }
+  *out = w;
+  return 0;
+uv_fail:
+  pc_errf(e, PC_EIO, "worker: libuv initialisation failed: %s", uv_strerror(r));
+  /* handles initialised so far are closed by walking the loop */
+  uv_walk(w->loop, walk_close, NULL);
+  uv_run(w->loop, UV_RUN_DEFAULT);
+  uv_loop_close(w->loop);
+  free(w);
+  return PC_EIO;
+}
+
+void pc_worker_run(pc_worker *w) { uv_run(w->loop, UV_RUN_DEFAULT); }
+
+void pc_worker_stop(pc_worker *w) { uv_async_send(&w->stop); }
+
+void pc_worker_destroy(pc_worker *w) {
+  if (!w) return;
+  shut_down(w);
+  uv_run(w->loop, UV_RUN_DEFAULT);
+  pc_wrender_stop(&w->r);
+  close_handle((uv_handle_t *)&w->notify);
+  uv_run(w->loop, UV_RUN_DEFAULT);
+  if (uv_loop_close(w->loop) != 0) pc_wire_log("worker: loop still has open handles");
+  free(w->inflight);
+  free(w->bun);
+  if (w->pending_assign) pcbpt__assign__free_unpacked(w->pending_assign, NULL);
+  sodium_memzero(w->key, sizeof w->key);
+  free(w);
+}
