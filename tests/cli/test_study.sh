@@ -49,12 +49,6 @@ check no-scene 2 "SCENE" -- "$bin" study "${ok[@]}"
 check missing-reference 1 "nope.exr" -- "$bin" study "$scene" "${ok[@]}" --reference "$tmp/nope.exr"
 check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scene" "${ok[@]}" --width 16
 [ -e "$tmp/s" ] && { echo "FAIL: a refused study created its output folder"; fail=1; }
-# A method the renderer does not implement yet is an error naming it, before any render.
-if ! "$bin" render "$scene" --method pcbpt --spp 1 "${size[@]}" --quiet --out "$tmp/p.exr" >/dev/null 2>&1; then
-  check unimplemented 1 "pcbpt" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pcbpt
-  [ -e "$tmp/s/pt.exr" ] && { echo "FAIL unimplemented: pt rendered before the error"; fail=1; }
-fi
-
 check study 0 "needs .*x .* time than pt to reach beauty relMSE" -- "$bin" study "$scene" "${ok[@]}"
 grep -q "^inner *bdpt" "$tmp/out" || { echo "FAIL study: table lacks the inner row of bdpt"; cat "$tmp/out"; fail=1; }
 for f in pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg; do
