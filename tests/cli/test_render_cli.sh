@@ -2,27 +2,7 @@
 # The render and compare verbs from the command line: help, flag errors that name the flag
 # (non-zero exit, one line), and a small render that writes the EXR and the PNG preview.
 set -u
-bin="$PCBPT_BINARY_DIR/pcbpt-coord"
-src="$PCBPT_SOURCE_DIR"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { # check NAME EXPECTED_STATUS GREP_PATTERN -- command...
-  local name=$1 want=$2 pat=$3
-  shift 4
-  "$@" >"$tmp/out" 2>"$tmp/err"
-  local st=$?
-  if { [ "$want" = 0 ] && [ $st -ne 0 ]; } || { [ "$want" != 0 ] && [ $st -eq 0 ]; }; then
-    echo "FAIL $name: exit $st"; cat "$tmp/err"; fail=1; return
-  fi
-  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/out" "$tmp/err"; then
-    echo "FAIL $name: output lacks '$pat'"; cat "$tmp/out" "$tmp/err"; fail=1; return
-  fi
-  if [ "$want" != 0 ] && [ "$(wc -l <"$tmp/err")" -ne 1 ]; then
-    echo "FAIL $name: error is not one line"; cat "$tmp/err"; fail=1; return
-  fi
-  echo "ok   $name"
-}
+. "$(dirname "$0")/lib.inc"
 scene="$src/scenes/cornell-box/scene.xml"
 check help 0 "--spp" -- "$bin" render --help
 check verbs 0 "render" -- "$bin" --help

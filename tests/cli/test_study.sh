@@ -4,27 +4,7 @@
 # rendered here: every output file exists and study.csv has one row per method, snapshot and
 # layer, with the last snapshot at the end of the budget.
 set -u
-bin="$PCBPT_BINARY_DIR/pcbpt-coord"
-src="$PCBPT_SOURCE_DIR"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { # check NAME EXPECTED_STATUS GREP_PATTERN -- command...
-  local name=$1 want=$2 pat=$3
-  shift 4
-  "$@" >"$tmp/out" 2>"$tmp/err"
-  local st=$?
-  if { [ "$want" = 0 ] && [ $st -ne 0 ]; } || { [ "$want" != 0 ] && [ $st -ne "$want" ]; }; then
-    echo "FAIL $name: exit $st"; cat "$tmp/err"; fail=1; return
-  fi
-  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/out" "$tmp/err"; then
-    echo "FAIL $name: output lacks '$pat'"; cat "$tmp/out" "$tmp/err"; fail=1; return
-  fi
-  if [ "$want" != 0 ] && [ "$(wc -l <"$tmp/err")" -ne 1 ]; then
-    echo "FAIL $name: error is not one line"; cat "$tmp/err"; fail=1; return
-  fi
-  echo "ok   $name"
-}
+. "$(dirname "$0")/lib.inc"
 scene="$src/scenes/cornell-box/scene.xml"
 size=(--width 32 --height 32)
 # Another seed than the study's, so the reference shares no samples with the methods.
