@@ -182,3 +182,20 @@ int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *byte
   *bytes = got;
   return rc;
 }
+
+int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;
+  sr.job_id = job;
+  env.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REQUEST;
+  env.status_request = &sr;
+  int rc = pc_client_send(cl, &env, e);
+  if (!rc) rc = pc_client_recv(cl, 30, out, e);
+  if (rc) return rc;
+  if ((*out)->msg_case != PCBPT__ENVELOPE__MSG_STATUS_REPLY) {
+    pcbpt__envelope__free_unpacked(*out, NULL);
+    *out = NULL;
+    return pc_errf(e, PC_EPARSE, "unexpected reply to a status request");
+  }
+  return 0;
+}

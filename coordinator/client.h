@@ -23,6 +23,9 @@ void pc_client_close(pc_client *cl);
 int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const uint8_t *hash, pc_err *e);
 /* Downloads a job's image to `out` (through a temporary file renamed into place); *bytes is
  * its size. */
+/* Asks for the status of `job` (0: every job); *out is a STATUS_REPLY envelope the caller frees
+ * with pcbpt__envelope__free_unpacked. */
+int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e);
 int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *bytes, pc_err *e);
 
 #endif

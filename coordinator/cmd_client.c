@@ -121,21 +121,6 @@ int pc_cmd_submit(int argc, char **argv) {
   return 0;
 }
 
-static int query(pc_client *cl, uint64_t job, Pcbpt__Envelope **in, pc_err *e) {
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-  Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;
-  sr.job_id = job;
-  env.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REQUEST;
-  env.status_request = &sr;
-  int rc = pc_client_send(cl, &env, e);
-  if (!rc) rc = pc_client_recv(cl, 30, in, e);
-  if (!rc && (*in)->msg_case != PCBPT__ENVELOPE__MSG_STATUS_REPLY) {
-    pcbpt__envelope__free_unpacked(*in, NULL);
-    return pc_errf(e, PC_EPARSE, "unexpected reply");
-  }
-  return rc;
-}
-
 static void json_str(const char *s) {
   putchar('"');
   for (; *s; s++) {
@@ -182,7 +167,7 @@ static int status_like(const char *verb, int argc, char **argv, bool workers) {
   if (rc) return rc;
   pc_err e;
   Pcbpt__Envelope *in = NULL;
-  rc = query(&cl, job, &in, &e);
+  rc = pc_client_status(&cl, job, &in, &e);
   pc_client_close(&cl);
   if (rc) { fprintf(stderr, "pcbpt-coord %s: %s\n", verb, e.msg); return 1; }
   Pcbpt__StatusReply *s = in->status_reply;
@@ -246,7 +231,7 @@ int pc_cmd_wait(int argc, char **argv) {
   for (;;) {
     pc_err e;
     Pcbpt__Envelope *in = NULL;
-    if (query(&cl, job, &in, &e) != 0) { fprintf(stderr, "pcbpt-coord wait: %s\n", e.msg); pc_client_close(&cl); return 1; }
+    if (pc_client_status(&cl, job, &in, &e) != 0) { fprintf(stderr, "pcbpt-coord wait: %s\n", e.msg); pc_client_close(&cl); return 1; }
     if (in->status_reply->n_jobs != 1) {
       fprintf(stderr, "pcbpt-coord wait: no job %llu\n", (unsigned long long)job);
       pcbpt__envelope__free_unpacked(in, NULL);

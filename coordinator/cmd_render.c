@@ -103,15 +103,9 @@ static void sleep_s(double s) {
 
 /* Status of one job; *st is owned by *env. */
 static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt__JobStatus **st, pc_err *e) {
-  Pcbpt__Envelope q = PCBPT__ENVELOPE__INIT;
-  Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;
-  sr.job_id = job;
-  q.msg_case = PCBPT__ENVELOPE__MSG_STATUS_REQUEST;
-  q.status_request = &sr;
-  int rc = pc_client_send(cl, &q, e);
-  if (!rc) rc = pc_client_recv(cl, 30, env, e);
+  int rc = pc_client_status(cl, job, env, e);
   if (rc) return rc;
-  if ((*env)->msg_case != PCBPT__ENVELOPE__MSG_STATUS_REPLY || (*env)->status_reply->n_jobs != 1) {
+  if ((*env)->status_reply->n_jobs != 1) {
     pcbpt__envelope__free_unpacked(*env, NULL);
     *env = NULL;
     return pc_errf(e, PC_EPARSE, "embedded farm: unexpected status reply");
