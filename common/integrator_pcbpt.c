@@ -31,7 +31,7 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     if (pc_irec_lookup_exact(p->store, c->thread, &z, pc_pcbpt_importance, c->pcbpt, set->uniform_mix, &L, NULL) != PC_OK)
       return;
   } else {
-    pc_irec_lookup_cached(p->store, &z, set->knn, set->uniform_mix, &L);
+    pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
   }
   for (int k = 0; k < set->pcbpt_k; k++) {
     int v;

@@ -35,14 +35,28 @@ struct pc_irec_store {
   size_t scratch_cap;
   pc_kdtree tree;
   thread_err *terr;
+  float cell;           /* neighbour-set cell size of this build; 0: exact query positions */
+  vec3 cell_origin;
+  uint32_t epoch;       /* build counter: cached neighbour sets of older builds are stale */
+  int cache_k;          /* neighbours memoised per cell (the knn given at creation) */
+  size_t cache_stride;  /* bytes per cache entry */
+  unsigned char *cache; /* per thread: PC_IREC_CACHE_CELLS entries */
 };
+
+/* A memoised neighbour set: the cache_k nearest records of one cell's centre. */
+typedef struct cell_entry {
+  uint64_t key;
+  uint32_t epoch;
+  int n;
+  int idx[];
+} cell_entry;
 
 static size_t per_record_bytes(void) {
   return sizeof(pc_irec_record) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
 }
 
 static size_t fixed_bytes(const pc_irec_store *s) {
-  return sizeof *s + (size_t)s->nthreads * sizeof(thread_err);
+  return sizeof *s + (size_t)s->nthreads * (sizeof(thread_err) + PC_IREC_CACHE_CELLS * s->cache_stride);
 }
 
 /* Bytes for the given capacities, or SIZE_MAX on overflow. */
@@ -60,15 +74,21 @@ static size_t mass_floats(int R, int V) {
   return 2 * (size_t)R * (size_t)V;
 }
 
-int pc_irec_create(int nthreads, size_t max_bytes, pc_irec_store **out, pc_err *e) {
+int pc_irec_create(int nthreads, int knn, size_t max_bytes, pc_irec_store **out, pc_err *e) {
   *out = NULL;
   if (nthreads < 1 || nthreads > 4096) return pc_errf(e, PC_EINVAL, "importance records: thread count %d out of range 1..4096", nthreads);
+  if (knn < 1 || knn > PC_IREC_MAX_KNN) return pc_errf(e, PC_EINVAL, "importance records: knn %d out of range 1..%d", knn, PC_IREC_MAX_KNN);
+  size_t stride = (sizeof(cell_entry) + (size_t)knn * sizeof(int) + 7) & ~(size_t)7;
   pc_irec_store *s = calloc(1, sizeof *s);
   if (s) s->terr = calloc((size_t)nthreads, sizeof *s->terr);
-  if (!s || !s->terr) {
+  if (s) s->cache = calloc((size_t)nthreads * PC_IREC_CACHE_CELLS, stride);
+  if (!s || !s->terr || !s->cache) {
+    if (s) free(s->terr);
     free(s);
     return pc_errf(e, PC_ENOMEM, "importance records: out of memory");
   }
+  s->cache_k = knn;
+  s->cache_stride = stride;
   s->nthreads = nthreads;
   s->max_bytes = max_bytes;
   *out = s;
@@ -92,6 +112,7 @@ void pc_irec_destroy(pc_irec_store *s) {
   if (!s) return;
   release_buffers(s);
   free(s->terr);
+  free(s->cache);
   free(s);
 }
 
@@ -198,6 +219,37 @@ static int reserve(pc_irec_store *s, int R, int V, pc_err *e) {
   return PC_OK;
 }
 
+static int cmp_float(const void *a, const void *b) {
+  float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+/* The cell size for this build's neighbour sets: a fraction of the median distance from a
+ * record to its cache_k-th nearest other record, so a query moves at most a small part of
+ * its neighbourhood's radius when it is snapped to its cell centre. Measured on at most
+ * CELL_SAMPLES records spread over the set, so the cost stays flat as R grows. */
+#define CELL_SAMPLES 512
+static void set_cell(pc_irec_store *s) {
+  s->epoch++;
+  s->cell = 0.f;
+  if (s->R < 2) return;
+  int k = s->cache_k + 1 < s->R ? s->cache_k + 1 : s->R, n = s->R < CELL_SAMPLES ? s->R : CELL_SAMPLES;
+  float radius[CELL_SAMPLES], d2[PC_IREC_MAX_KNN + 1];
+  int idx[PC_IREC_MAX_KNN + 1];
+  vec3 lo = s->pos[0];
+  for (int r = 1; r < s->R; r++) lo = v3(fminf(lo.x, s->pos[r].x), fminf(lo.y, s->pos[r].y), fminf(lo.z, s->pos[r].z));
+  for (int i = 0; i < n; i++) {
+    int m = pc_kdtree_knn(&s->tree, s->pos[(int)((int64_t)i * s->R / n)], k, idx, d2);
+    radius[i] = m > 0 ? sqrtf(d2[m - 1]) : 0.f;
+  }
+  qsort(radius, (size_t)n, sizeof *radius, cmp_float);
+  float c = radius[n / 2] * PC_IREC_CELL_FRACTION;
+  if (c > 0.f && isfinite(c)) {
+    s->cell = c;
+    s->cell_origin = lo;
+  }
+}
+
 int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int nlight, pc_irec_importance_fn fn,
                   void *user, pc_pool *pool, pc_err *e) {
   s->R = 0;
@@ -235,6 +287,7 @@ int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int
                    bad->v, bad->record, (double)bad->value);
   }
   s->R = nrecords;
+  set_cell(s);
   return PC_OK;
 }
 
@@ -260,7 +313,38 @@ static void normalize_weights(pc_irec_lookup *L) {
   for (int j = 0; j < m; j++) L->w[j] /= sum;
 }
 
-void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int knn, float uniform_mix,
+/* Cell coordinates within +-2^20 pack into one 63-bit key. */
+#define CELL_RANGE 1048576.f
+
+/* The knn nearest records of the centre of z's cell (of z itself when the build has no cell
+ * size or z lies absurdly far out): a pure function of the position, so the lookup does not
+ * depend on which thread asks or in what order. The cache_k-neighbour sets are memoised per
+ * thread: neighbouring pixels mostly share a cell, and the kd-tree search is the costliest
+ * part of a lookup. */
+static int neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *idx) {
+  float d2[PC_IREC_MAX_KNN];
+  if (!(s->cell > 0.f)) return pc_kdtree_knn(&s->tree, p, knn, idx, d2);
+  vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
+  f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
+  if (!(fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE))
+    return pc_kdtree_knn(&s->tree, p, knn, idx, d2);
+  vec3 centre = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
+  if (knn != s->cache_k) return pc_kdtree_knn(&s->tree, centre, knn, idx, d2);
+  uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
+                 (uint64_t)(int64_t)(f.z + CELL_RANGE);
+  uint64_t h = key * 0x9E3779B97F4A7C15ull;
+  size_t slot = (size_t)(h >> 40) & (PC_IREC_CACHE_CELLS - 1);
+  cell_entry *c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
+  if (c->epoch != s->epoch || c->key != key) {
+    c->n = pc_kdtree_knn(&s->tree, centre, knn, c->idx, d2);
+    c->key = key;
+    c->epoch = s->epoch;
+  }
+  for (int j = 0; j < c->n; j++) idx[j] = c->idx[j];
+  return c->n;
+}
+
+void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L) {
   L->V = s->V;
   L->u = uniform_mix;
@@ -269,11 +353,10 @@ void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int kn
   if (knn < 1) knn = 1;
   if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
   int idx[PC_IREC_MAX_KNN];
-  float d2[PC_IREC_MAX_KNN];
   double d[PC_IREC_MAX_KNN], dsum = 0.0;
-  int k = pc_kdtree_knn(&s->tree, z->p, knn, idx, d2);
+  int k = neighbours(s, thread, z->p, knn, idx);
   for (int j = 0; j < k; j++) {
-    d[j] = sqrt((double)d2[j]);
+    d[j] = v3_len(v3_sub(z->p, s->pos[idx[j]]));
     dsum += d[j];
   }
   for (int j = 0; j < k; j++) {

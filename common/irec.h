@@ -9,8 +9,8 @@
  * from an eye vertex is computed by a caller-supplied callback, so this module knows nothing
  * of the path-vertex type, BSDFs or ray casting.
  *
- * At an eye vertex, a lookup interpolates the knn nearest records (weighted by normal and
- * incoming-direction similarity and distance) lazily: sampling is a binary search over the
+ * At an eye vertex, a lookup interpolates the knn records nearest to the centre of the eye
+ * vertex's cell (weighted by normal and incoming-direction similarity and distance) lazily: sampling is a binary search over the
  * weighted sum of the records' CMFs evaluated only at the probed indices, and p_conn(v) is the
  * same weighted sum of their PMFs. The result is blended with the uniform PMF:
  *   p_conn(v) = (1 - u) * p_interp(v) + u / V.
@@ -27,6 +27,10 @@
 #include "vecmath.h"
 
 #define PC_IREC_MAX_KNN PC_KDTREE_MAX_K
+/* Memoised neighbour sets per thread (a power of two). */
+#define PC_IREC_CACHE_CELLS 8192
+/* Cell size as a fraction of the median record-neighbourhood radius. */
+#define PC_IREC_CELL_FRACTION 0.5f
 
 /* Where an eye vertex is, as far as caching is concerned. Records and lookups must use the same
  * conventions: n the unit shading normal, wi the unit direction towards the previous vertex of
@@ -45,8 +49,9 @@ typedef float (*pc_irec_importance_fn)(void *user, int thread, const pc_irec_sit
 typedef struct pc_irec_store pc_irec_store;
 
 /* nthreads: the most threads that will build or look up concurrently (per-thread scratch for
- * the exact mode). max_bytes: hard limit on the memory the store may hold. */
-int pc_irec_create(int nthreads, size_t max_bytes, pc_irec_store **out, pc_err *e);
+ * the exact mode and neighbour-set memo); knn: the neighbour count lookups will use (memoised).
+ * max_bytes: hard limit on the memory the store may hold. */
+int pc_irec_create(int nthreads, int knn, size_t max_bytes, pc_irec_store **out, pc_err *e);
 void pc_irec_destroy(pc_irec_store *s);
 
 /* Builds the iteration's records: one per site (nrecords may be 0, e.g. in exact mode) over
@@ -81,7 +86,11 @@ typedef struct pc_irec_lookup {
   const float *pmf[PC_IREC_MAX_KNN], *cmf[PC_IREC_MAX_KNN];
 } pc_irec_lookup;
 
-/* Interpolates the knn (1..PC_IREC_MAX_KNN) nearest records. A record's weight is
+/* Interpolates the knn (1..PC_IREC_MAX_KNN) records nearest to the centre of z's cell: cells
+ * are cubes of PC_IREC_CELL_FRACTION times the build's median record-neighbourhood radius, so
+ * the neighbour set is a pure function of z's position (any thread, any order: unbiased and
+ * reproducible), and memoising it per cell and thread saves most kd-tree searches (the knn
+ * given at creation is memoised; others are searched every time). A record's weight is
  * cos(n, n_q) * cos(wi, wi_q) * (1 - d_q / sum_j d_j) over the knn found records (Popov et
  * al. sect. 6: product of the cosines, times the distance normalized over the selected
  * records); records with a non-positive cosine or weight, and records that see no light
@@ -89,7 +98,7 @@ typedef struct pc_irec_lookup {
  * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF, n = 0:
  * p_conn is then the uniform PMF when u > 0, and undefined (pc_irec_sample draws nothing)
  * when u == 0. */
-void pc_irec_lookup_cached(const pc_irec_store *s, const pc_irec_site *z, int knn, float uniform_mix,
+void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L);
 
 /* --pmf exact: evaluates fn over all V light vertices at z itself into `thread`'s scratch

@@ -21,7 +21,7 @@ int pc_pcbpt_create(const pc_render_settings *set, int nthreads, pc_pcbpt **out,
   p->m = set->pcbpt_m;
   p->nthreads = nthreads;
   if (set->method == PC_METHOD_PCBPT) {
-    int rc = pc_irec_create(nthreads, PC_PCBPT_RECORD_BYTES, &p->store, e);
+    int rc = pc_irec_create(nthreads, set->knn, PC_PCBPT_RECORD_BYTES, &p->store, e);
     if (rc != PC_OK) {
       pc_pcbpt_destroy(p);
       return rc;

@@ -79,7 +79,7 @@ static void free_scene(scene *sc) {
 static pc_irec_store *build(scene *sc, pc_pool *pool) {
   pc_irec_store *s = NULL;
   pc_err e = {0};
-  assert_int_equal(pc_irec_create(4, 64u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(4, 6, 64u << 20, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, sc->sites, sc->R, sc->V, importance, sc, pool, &e), PC_OK);
   return s;
 }
@@ -133,7 +133,7 @@ static void test_interpolated_pmf(void **state) {
   for (int q = 0; q < 500; q++) {
     pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
     pc_irec_lookup L;
-    pc_irec_lookup_cached(s, &z, 6, 0.1f, &L);
+    pc_irec_lookup_cached(s, 0, &z, 6, 0.1f, &L);
     assert_true(L.n >= 0 && L.n <= 6);
     double sp = 0.0, sc_ = 0.0, sw = 0.0;
     for (int j = 0; j < L.n; j++) sw += L.w[j];
@@ -203,7 +203,7 @@ static void test_sampling_matches_pconn(void **state) {
   pc_irec_lookup L;
   const float mixes[] = {0.1f, 0.f, 0.5f, 1.f};
   for (int m = 0; m < 4; m++) {
-    pc_irec_lookup_cached(s, &z, 6, mixes[m], &L);
+    pc_irec_lookup_cached(s, 0, &z, 6, mixes[m], &L);
     assert_true(L.n > 0);
     chi_square(&L, 200000, 10 + m);
     assert_int_equal(pc_irec_lookup_exact(s, 1, &z, importance, &sc, mixes[m], &L, &e), PC_OK);
@@ -231,7 +231,7 @@ static void test_lazy_equals_materialised(void **state) {
   for (int q = 0; q < 100; q++) {
     pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
     pc_irec_lookup L;
-    pc_irec_lookup_cached(s, &z, 1 + q % 12, 0.1f, &L);
+    pc_irec_lookup_cached(s, 0, &z, 1 + q % 12, 0.1f, &L);
     if (L.n == 0) continue;
     for (int i = 0; i < sc.V; i++) C[i] = pc_irec_interp_cmf(&L, i);
     for (int t = 0; t < 200 + sc.V; t++) {
@@ -257,20 +257,21 @@ static void test_memory_and_limit(void **state) {
   pc_irec_store *s = build(&sc, NULL);
   size_t b = pc_irec_bytes(s), mass = 2 * R * V * sizeof(float);
   assert_true(b >= mass);
-  assert_true(b - mass <= R * 128 + nthreads * 2 * V * sizeof(float) + 4096);
+  /* plus the per-thread memo of neighbour sets: 40-byte entries for knn 6 */
+  assert_true(b - mass <= R * 128 + nthreads * (2 * V * sizeof(float) + PC_IREC_CACHE_CELLS * 40) + 4096);
   assert_true(pc_irec_bytes_needed(s, 300, 200) == b);
   pc_irec_destroy(s);
 
   /* A limit below the need is refused with the figures; exactly the need is accepted. */
   pc_err e = {0};
-  assert_int_equal(pc_irec_create(4, mass, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(4, 6, mass, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, sc.sites, 300, 200, importance, &sc, NULL, &e), PC_ELIMIT);
   assert_non_null(strstr(e.msg, "300 records x 200 light vertices"));
   assert_non_null(strstr(e.msg, "limit"));
   assert_int_equal(pc_irec_count(s), 0);
   size_t need = pc_irec_bytes_needed(s, 300, 200);
   pc_irec_destroy(s);
-  assert_int_equal(pc_irec_create(4, need, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(4, 6, need, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, sc.sites, 300, 200, importance, &sc, NULL, &e), PC_OK);
   assert_true(pc_irec_bytes(s) <= need);
   /* Reshaped builds never hold more than the limit, even with capacities kept. */
@@ -289,7 +290,7 @@ static void test_bad_importance(void **state) {
   sc.nan_record = 17;
   pc_irec_store *s = NULL;
   pc_err e = {0};
-  assert_int_equal(pc_irec_create(1, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(1, 6, 1u << 20, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, sc.sites, sc.R, sc.V, importance, &sc, NULL, &e), PC_ENUMERIC);
   assert_non_null(strstr(e.msg, "record 17"));
   assert_int_equal(pc_irec_count(s), 0);
@@ -313,11 +314,11 @@ static void test_fallbacks(void **state) {
   pc_rng r = pc_rng_make(7, 0, PC_STREAM_MISC, 0);
   int v;
   double p;
-  pc_irec_lookup_cached(s, &z, 6, 0.f, &L);
+  pc_irec_lookup_cached(s, 0, &z, 6, 0.f, &L);
   assert_int_equal(L.n, 0);
   assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 0);
   assert_true(pc_irec_pconn(&L, 0) == 0.0);
-  pc_irec_lookup_cached(s, &z, 6, 0.2f, &L);
+  pc_irec_lookup_cached(s, 0, &z, 6, 0.2f, &L);
   assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
   assert_true(fabs(p - 1.0 / sc.V) < 1e-12);
   chi_square(&L, 50000, 70);
@@ -329,35 +330,96 @@ static void test_fallbacks(void **state) {
                          {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL}};
   s = NULL;
   pc_err e = {0};
-  assert_int_equal(pc_irec_create(1, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(1, 6, 1u << 20, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, two, 2, sc.V, importance, &sc, NULL, &e), PC_OK);
   assert_true(pc_irec_total(s, 0) > 0.0 && pc_irec_total(s, 1) > 0.0);
   pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL};
-  pc_irec_lookup_cached(s, &up, 6, 0.f, &L);
+  pc_irec_lookup_cached(s, 0, &up, 6, 0.f, &L);
   assert_int_equal(L.n, 0);
   assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
   for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
   /* Same orientation: weights follow 1 - d_q / sum d (distances 0.1 and 0.3). */
   pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL};
-  pc_irec_lookup_cached(s, &down, 6, 0.f, &L);
+  pc_irec_lookup_cached(s, 0, &down, 6, 0.f, &L);
   assert_int_equal(L.n, 2);
   assert_true(fabs(L.w[0] - 0.75 / 1.0) < 1e-5 && fabs(L.w[1] - 0.25) < 1e-5);
   /* One neighbour: its weight is 1 (no distance factor to rank it against). */
-  pc_irec_lookup_cached(s, &down, 1, 0.f, &L);
+  pc_irec_lookup_cached(s, 0, &down, 1, 0.f, &L);
   assert_int_equal(L.n, 1);
   assert_true(L.w[0] == 1.0);
   /* Mixing weight 1 is the uniform PMF whatever the records say. */
-  pc_irec_lookup_cached(s, &down, 6, 1.f, &L);
+  pc_irec_lookup_cached(s, 0, &down, 6, 1.f, &L);
   for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
   pc_irec_destroy(s);
   free_scene(&sc);
+}
+
+static bool same_lookup(const pc_irec_lookup *a, const pc_irec_lookup *b) {
+  if (a->n != b->n || a->V != b->V || a->u != b->u) return false;
+  for (int j = 0; j < a->n; j++)
+    if (a->w[j] != b->w[j] || memcmp(a->pmf[j], b->pmf[j], (size_t)a->V * sizeof(float))) return false;
+  return true;
+}
+
+/* A lookup is a pure function of the eye vertex: the same whichever thread asks, in whatever
+ * order, with the per-thread memo of neighbour sets warm or cold, and never a stale set from
+ * the previous build. */
+static void test_lookup_is_pure(void **state) {
+  (void)state;
+  enum { Q = 400 };
+  scene a = make_scene(60, 300, 8), b = make_scene(60, 300, 8);
+  /* b: a's records in reverse order, so the cells (size and origin) are the same and a stale
+   * memo entry would name the wrong records */
+  for (int i = 0; i < b.R; i++) b.sites[i] = a.sites[b.R - 1 - i];
+  pc_irec_store *s = NULL, *fresh = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(3, 6, 64u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(1, 6, 64u << 20, &fresh, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, a.sites, a.R, a.V, importance, &a, NULL, &e), PC_OK);
+  assert_int_equal(pc_irec_build(fresh, a.sites, a.R, a.V, importance, &a, NULL, &e), PC_OK);
+  pc_irec_site *z = malloc(Q * sizeof *z);
+  pc_irec_lookup *ref = malloc(Q * sizeof *ref);
+  pc_rng r = pc_rng_make(8, 0, PC_STREAM_MISC, 1);
+  for (int q = 0; q < Q; q++) {
+    /* pairs of nearby queries, as neighbouring pixels make */
+    vec3 p = q % 2 ? v3_add(z[q - 1].p, v3s(0.003f)) : rand_point(&r);
+    z[q] = (pc_irec_site){p, rand_dir_up(&r), rand_dir_up(&r), NULL};
+    pc_irec_lookup_cached(fresh, 0, &z[q], 6, 0.1f, &ref[q]);
+  }
+  int filled = 0;
+  for (int q = 0; q < Q; q++) {
+    pc_irec_lookup L;
+    pc_irec_lookup_cached(s, 0, &z[q], 6, 0.1f, &L);
+    filled += L.n > 1;
+    assert_true(same_lookup(&L, &ref[q]) || !"thread 0 in order");
+    pc_irec_lookup_cached(s, 2, &z[Q - 1 - q], 6, 0.1f, &L);
+    assert_true(same_lookup(&L, &ref[Q - 1 - q]) || !"thread 2 in reverse");
+  }
+  assert_true(filled > Q / 2);
+  /* Rebuild over other records: the warm memo of thread 0 must not leak the old sets. */
+  assert_int_equal(pc_irec_build(s, b.sites, b.R, b.V, importance, &b, NULL, &e), PC_OK);
+  pc_irec_destroy(fresh);
+  assert_int_equal(pc_irec_create(1, 6, 64u << 20, &fresh, &e), PC_OK);
+  assert_int_equal(pc_irec_build(fresh, b.sites, b.R, b.V, importance, &b, NULL, &e), PC_OK);
+  for (int q = 0; q < Q; q++) {
+    pc_irec_lookup L, F;
+    pc_irec_lookup_cached(s, 0, &z[q], 6, 0.1f, &L);
+    pc_irec_lookup_cached(fresh, 0, &z[q], 6, 0.1f, &F);
+    assert_true(same_lookup(&L, &F) || !"after a rebuild");
+  }
+  free(z);
+  free(ref);
+  pc_irec_destroy(s);
+  pc_irec_destroy(fresh);
+  free_scene(&a);
+  free_scene(&b);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
       cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_lazy_equals_materialised),
-      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_bad_importance),
+      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
       cmocka_unit_test(test_fallbacks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
