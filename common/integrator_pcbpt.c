@@ -33,10 +33,14 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   } else {
     pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
   }
+  /* The draws' component choices are stratified: each draw alone follows p_conn (so every
+   * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */
+  double xi = (double)pc_rng_f(crng);
   for (int k = 0; k < set->pcbpt_k; k++) {
     int v;
     double pconn;
-    if (!pc_irec_sample(&L, crng, &v, &pconn)) return; /* u = 0 and no PMF here: reported as no sample */
+    if (!pc_irec_sample_mix(&L, ((double)k + xi) / set->pcbpt_k, crng, &v, &pconn))
+      return; /* u = 0 and no PMF here: reported as no sample */
     add_inner(c, x, y, &p->lv[v], ev, (float)(1.0 / ((double)set->pcbpt_k * p->m * pconn)));
   }
 }

@@ -442,8 +442,12 @@ static uint32_t rng_below(pc_rng *rng, uint32_t n) {
 }
 
 int pc_irec_sample(const pc_irec_lookup *L, pc_rng *rng, int *v, double *p_conn) {
+  return pc_irec_sample_mix(L, (double)pc_rng_f(rng), rng, v, p_conn);
+}
+
+int pc_irec_sample_mix(const pc_irec_lookup *L, double xi_mix, pc_rng *rng, int *v, double *p_conn) {
   if (L->V <= 0 || (L->n == 0 && !(L->u > 0.f))) return 0;
-  if (L->n == 0 || (L->u > 0.f && pc_rng_f(rng) < L->u)) {
+  if (L->n == 0 || (L->u > 0.f && xi_mix < L->u)) {
     *v = (int)rng_below(rng, (uint32_t)L->V);
   } else {
     double xi = (double)pc_rng_u32(rng) * 0x1p-32;

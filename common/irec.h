@@ -111,6 +111,10 @@ int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc
  * otherwise by inverting the interpolated CMF. Returns 1 and sets *v and *p_conn > 0, or 0
  * when p_conn is undefined (V == 0, or n == 0 with u == 0). */
 int pc_irec_sample(const pc_irec_lookup *L, pc_rng *rng, int *v, double *p_conn);
+/* The same with the uniform-or-interpolated choice made by xi_mix in [0, 1) (uniform when
+ * xi_mix < u): K draws at one eye vertex stratify it, (k + xi) / K, so each draw still follows
+ * p_conn while the K of them split between the two components in proportion. */
+int pc_irec_sample_mix(const pc_irec_lookup *L, double xi_mix, pc_rng *rng, int *v, double *p_conn);
 /* p_conn(v), 0 when undefined; > 0 for every v whenever u > 0 and V > 0, and for every v
  * pc_irec_sample can return. */
 double pc_irec_pconn(const pc_irec_lookup *L, int v);
