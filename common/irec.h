@@ -3,8 +3,8 @@
  *
  * A record sits at a vertex z of a cache eye path and holds the PMF over the V connectable
  * light vertices of the iteration's M stored light paths, proportional to
- * luminance(light-subpath throughput x f_conn(y, z)), f_conn = rho_y * G * V * rho_z, and its
- * CMF. All PMFs and CMFs live in one contiguous float array (2*R*V floats, bounded by a limit
+ * luminance(light-subpath throughput x f_conn(y, z)), f_conn = rho_y * G * V * rho_z (the
+ * integrator may fold in more, e.g. the MIS weight), and its CMF. All PMFs and CMFs live in one contiguous float array (2*R*V floats, bounded by a limit
  * given at creation); records hold offsets into it. The importance of light vertex v seen
  * from an eye vertex is computed by a caller-supplied callback, so this module knows nothing
  * of the path-vertex type, BSDFs or ray casting.

