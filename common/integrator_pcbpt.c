@@ -25,7 +25,7 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     for (int v = 0; v < p->nv; v++) add_inner(c, x, y, &p->lv[v], ev, inv_m);
     return;
   }
-  pc_irec_site z = {ev->p, ev->sh.sh.n, ev->wo, ev};
+  pc_irec_site z = pc_pcbpt_site(c->scene, ev);
   pc_irec_lookup L;
   if (set->pmf_mode == PC_PMF_EXACT) {
     if (pc_irec_lookup_exact(p->store, c->thread, &z, pc_pcbpt_importance, c->pcbpt, set->uniform_mix, &L, NULL) != PC_OK)

@@ -362,7 +362,7 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   for (int j = 0; j < k; j++) {
     const pc_irec_record *rec = &s->rec[idx[j]];
     if (rec->total <= 0.0) continue; /* no distribution to contribute */
-    double cn = v3_dot(z->n, rec->site.n), cw = v3_dot(z->wi, rec->site.wi);
+    double cn = v3_dot(z->n, rec->site.n), cw = z->lambertian && rec->site.lambertian ? 1.0 : v3_dot(z->wi, rec->site.wi);
     double w = 0.0;
     /* The distance factor ranks records against each other; a lone record keeps factor 1. */
     if (cn > 0.0 && cw > 0.0) w = cn * cw * (k > 1 && dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);

@@ -18,6 +18,7 @@
 #ifndef PC_IREC_H
 #define PC_IREC_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "error.h"
@@ -39,6 +40,7 @@
 typedef struct pc_irec_site {
   vec3 p, n, wi;
   const void *vertex;
+  bool lambertian; /* the BSDF here is Lambertian: its PMF does not depend on wi */
 } pc_irec_site;
 
 /* Unnormalized connection importance of light vertex v (0 <= v < V) for the eye vertex z:
@@ -93,7 +95,9 @@ typedef struct pc_irec_lookup {
  * given at creation is memoised; others are searched every time). A record's weight is
  * cos(n, n_q) * cos(wi, wi_q) * (1 - d_q / sum_j d_j) over the knn found records (Popov et
  * al. sect. 6: product of the cosines, times the distance normalized over the selected
- * records); records with a non-positive cosine or weight, and records that see no light
+ * records), without the cos(wi, wi_q) factor when both z and the record are Lambertian (their
+ * PMFs do not depend on wi, and the factor only lowers the number of records that count);
+ * records with a non-positive cosine or weight, and records that see no light
  * vertex, are dropped. If every record with a PMF is dropped for its weight, p_conn falls
  * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF, n = 0:
  * p_conn is then the uniform PMF when u > 0, and undefined (pc_irec_sample draws nothing)

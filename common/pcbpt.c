@@ -133,9 +133,13 @@ static int trace_cache_paths(pc_pcbpt *p, pc_pool *pool, pc_err *e) {
   p->sites = s;
   for (int r = 0; r < p->nr; r++) {
     const pc_path_vertex *v = &p->cv[r];
-    s[r] = (pc_irec_site){v->p, v->sh.sh.n, v->wo, v};
+    s[r] = pc_pcbpt_site(p->tctx[0].scene, v);
   }
   return PC_OK;
+}
+
+pc_irec_site pc_pcbpt_site(const pc_scene *scene, const pc_path_vertex *v) {
+  return (pc_irec_site){v->p, v->sh.sh.n, v->wo, v, scene->materials[v->material].type == PC_MAT_DIFFUSE};
 }
 
 float pc_pcbpt_importance(void *user, int thread, const pc_irec_site *z, int v) {

@@ -49,6 +49,9 @@ void pc_pcbpt_destroy(pc_pcbpt *p);
  * for PCBPT with --pmf cached, traces the cache eye paths and builds their records on pool. */
 int pc_pcbpt_prepare(pc_pcbpt *p, pc_tctx *tctx, pc_pool *pool, pc_err *e);
 
+/* Where eye vertex v is, as the importance records see it. */
+pc_irec_site pc_pcbpt_site(const pc_scene *scene, const pc_path_vertex *v);
+
 /* Unnormalized connection importance of stored light vertex v for the eye vertex behind z:
  * luminance(light throughput * f_conn) times the connection's MIS weight, shadow ray included
  * (a pc_irec_importance_fn; user is the pc_pcbpt). */

@@ -131,7 +131,7 @@ static void test_interpolated_pmf(void **state) {
   pc_rng r = pc_rng_make(2, 0, PC_STREAM_MISC, 7);
   int interpolated = 0, multi = 0;
   for (int q = 0; q < 500; q++) {
-    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL, false};
     pc_irec_lookup L;
     pc_irec_lookup_cached(s, 0, &z, 6, 0.1f, &L);
     assert_true(L.n >= 0 && L.n <= 6);
@@ -199,7 +199,7 @@ static void test_sampling_matches_pconn(void **state) {
   scene sc = make_scene(80, 200, 3);
   pc_irec_store *s = build(&sc, NULL);
   pc_err e = {0};
-  pc_irec_site z = {v3(0.5f, 0.4f, 0.6f), v3_norm(v3(0.2f, -0.3f, 1.f)), v3_norm(v3(0.3f, 0.1f, 1.f)), NULL};
+  pc_irec_site z = {v3(0.5f, 0.4f, 0.6f), v3_norm(v3(0.2f, -0.3f, 1.f)), v3_norm(v3(0.3f, 0.1f, 1.f)), NULL, false};
   pc_irec_lookup L;
   const float mixes[] = {0.1f, 0.f, 0.5f, 1.f};
   for (int m = 0; m < 4; m++) {
@@ -229,7 +229,7 @@ static void test_lazy_equals_materialised(void **state) {
   pc_rng r = pc_rng_make(4, 0, PC_STREAM_MISC, 3);
   double *C = malloc((size_t)sc.V * sizeof *C);
   for (int q = 0; q < 100; q++) {
-    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL};
+    pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL, false};
     pc_irec_lookup L;
     pc_irec_lookup_cached(s, 0, &z, 1 + q % 12, 0.1f, &L);
     if (L.n == 0) continue;
@@ -309,7 +309,7 @@ static void test_fallbacks(void **state) {
   scene sc = make_scene(30, 40, 7);
   for (int i = 0; i < sc.R; i++) sc.sites[i].p.z = -1.f - (float)i; /* all in the basement */
   pc_irec_store *s = build(&sc, NULL);
-  pc_irec_site z = {v3(0.5f, 0.5f, -0.5f), v3(0, 0, 1), v3(0, 0, 1), NULL};
+  pc_irec_site z = {v3(0.5f, 0.5f, -0.5f), v3(0, 0, 1), v3(0, 0, 1), NULL, false};
   pc_irec_lookup L;
   pc_rng r = pc_rng_make(7, 0, PC_STREAM_MISC, 0);
   int v;
@@ -326,23 +326,37 @@ static void test_fallbacks(void **state) {
 
   /* Two records, normals opposite to the query's: both dropped, and p_conn is uniform even
    * with u = 0. */
-  pc_irec_site two[2] = {{v3(0.5f, 0.5f, 0.5f), v3(0, 0, -1), v3(0, 0, -1), NULL},
-                         {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL}};
+  pc_irec_site two[2] = {{v3(0.5f, 0.5f, 0.5f), v3(0, 0, -1), v3(0, 0, -1), NULL, false},
+                         {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL, false}};
   s = NULL;
   pc_err e = {0};
   assert_int_equal(pc_irec_create(1, 6, 1u << 20, &s, &e), PC_OK);
   assert_int_equal(pc_irec_build(s, two, 2, sc.V, importance, &sc, NULL, &e), PC_OK);
   assert_true(pc_irec_total(s, 0) > 0.0 && pc_irec_total(s, 1) > 0.0);
-  pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL};
+  pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL, false};
   pc_irec_lookup_cached(s, 0, &up, 6, 0.f, &L);
   assert_int_equal(L.n, 0);
   assert_int_equal(pc_irec_sample(&L, &r, &v, &p), 1);
   for (int i = 0; i < sc.V; i++) assert_true(fabs(pc_irec_pconn(&L, i) - 1.0 / sc.V) < 1e-12);
   /* Same orientation: weights follow 1 - d_q / sum d (distances 0.1 and 0.3). */
-  pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL};
+  pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL, false};
   pc_irec_lookup_cached(s, 0, &down, 6, 0.f, &L);
   assert_int_equal(L.n, 2);
   assert_true(fabs(L.w[0] - 0.75 / 1.0) < 1e-5 && fabs(L.w[1] - 0.25) < 1e-5);
+  /* Incoming directions apart (normals alike): dropped unless both ends are Lambertian. */
+  pc_irec_site side = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 1, 0), NULL, false};
+  pc_irec_lookup_cached(s, 0, &side, 6, 0.f, &L);
+  assert_int_equal(L.n, 0);
+  pc_irec_destroy(s);
+  two[0].lambertian = two[1].lambertian = true;
+  assert_int_equal(pc_irec_create(1, 6, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, two, 2, sc.V, importance, &sc, NULL, &e), PC_OK);
+  pc_irec_lookup_cached(s, 0, &side, 6, 0.f, &L);
+  assert_int_equal(L.n, 0); /* the query itself is not Lambertian */
+  side.lambertian = true;
+  pc_irec_lookup_cached(s, 0, &side, 6, 0.f, &L);
+  assert_int_equal(L.n, 2);
+  assert_true(fabs(L.w[0] - 0.75) < 1e-5 && fabs(L.w[1] - 0.25) < 1e-5);
   /* One neighbour: its weight is 1 (no distance factor to rank it against). */
   pc_irec_lookup_cached(s, 0, &down, 1, 0.f, &L);
   assert_int_equal(L.n, 1);
@@ -383,7 +397,7 @@ static void test_lookup_is_pure(void **state) {
   for (int q = 0; q < Q; q++) {
     /* pairs of nearby queries, as neighbouring pixels make */
     vec3 p = q % 2 ? v3_add(z[q - 1].p, v3s(0.003f)) : rand_point(&r);
-    z[q] = (pc_irec_site){p, rand_dir_up(&r), rand_dir_up(&r), NULL};
+    z[q] = (pc_irec_site){p, rand_dir_up(&r), rand_dir_up(&r), NULL, false};
     pc_irec_lookup_cached(fresh, 0, &z[q], 6, 0.1f, &ref[q]);
   }
   int filled = 0;
