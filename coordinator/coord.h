@@ -86,7 +86,11 @@ struct pc_peer {
   uint8_t nonce[PC_AUTH_NONCE], client_nonce[PC_AUTH_NONCE];
   char name[64];
   uint32_t threads;
-  double connected, last_seen, rate;
+  double connected, last_seen;
+  double rate;               /* iterations/s it reports, measured on job rate_job */
+  uint64_t rate_job;         /* the job last assigned to it */
+  uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
+  double hb_time;            /* ... at this time */
   /* upload being assembled */
   uint8_t *up_buf; size_t up_len, up_cap;
   uint32_t up_next, up_nchunks;

@@ -169,7 +169,11 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
 static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_coord *c = p->coord;
   if (h->iterations_per_second >= 0 && h->iterations_per_second < 1e9) p->rate = h->iterations_per_second;
+  p->hb_range = h->range_id;
+  p->hb_done = h->iterations_done;
+  p->hb_time = p->last_seen;
   if (!h->range_id) return;
+  p->rate_job = h->job_id; /* a busy worker's rate is measured on the job it renders */
   pc_job *j = pc_coord_job(c, h->job_id);
   pc_range *r = j && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) ? pc_sched_find_range(j, h->range_id) : NULL;
   if (r && r->owner == p) return;
