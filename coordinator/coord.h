@@ -56,6 +56,8 @@ typedef struct pc_job {
   char error[256];
   bool film_ready;
   pc_film film;
+  uint8_t *wire_buf;         /* a serialized film's room, reused by the ops (merges decompress
+                                into it, checkpoints pack into it) instead of a fresh one each */
   pc_range *ranges;          /* open ranges */
   bool busy;                 /* a background op runs on the film */
   pc_op *ops, *ops_tail;

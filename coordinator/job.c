@@ -56,42 +56,46 @@ static void queue_op(pc_job *j, pc_op *op) {
   if (!j->busy) op_start(j);
 }
 
+/* The job's serialized-film buffer, allocated by the first op that needs it. */
+static uint8_t *wire_buf(pc_job *j, pc_err *e) {
+  if (!j->wire_buf && !(j->wire_buf = malloc(pc_wire_film_size(&j->film))))
+    pc_errf(e, PC_ENOMEM, "out of memory for a %zu-byte film", pc_wire_film_size(&j->film));
+  return j->wire_buf;
+}
+
 static void merge_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
-  pc_film tmp;
-  uint8_t *raw = NULL;
   size_t want = pc_wire_film_size(&j->film);
   if (op->raw != want) {
     op->rc = pc_errf(&op->err, PC_EINVAL, "upload of %llu bytes, a %dx%d film with %d layers is %zu (wrong resolution?)",
                      (unsigned long long)op->raw, j->film.w, j->film.h, j->film.nlayers, want);
     return;
   }
-  if ((op->rc = pc_film_init(&tmp, j->film.w, j->film.h, j->set.strategy_layers, &op->err)) != 0) return;
-  if ((op->rc = pc_wire_decompress(op->buf, op->len, want, want, &raw, &op->err)) != 0) goto done;
-  if ((op->rc = pc_wire_film_unpack(raw, want, &tmp, &op->err)) != 0) goto done;
-  for (int l = 0; l < tmp.nlayers; l++) {
-    uint64_t cnt = tmp.layers[l].count;
-    if (tmp.layers[l].norm == PC_NORM_EYE) {
+  uint8_t *raw = wire_buf(j, &op->err);
+  uint64_t counts[PC_FILM_MAX_LAYERS];
+  if (!raw) { op->rc = op->err.code; return; }
+  if ((op->rc = pc_wire_decompress_to(op->buf, op->len, raw, want, &op->err)) != 0) return;
+  if ((op->rc = pc_wire_film_counts(raw, want, &j->film, counts, &op->err)) != 0) return;
+  for (int l = 0; l < j->film.nlayers; l++) {
+    uint64_t cnt = counts[l];
+    if (j->film.layers[l].norm == PC_NORM_EYE) {
       if (cnt != op->count) {
         op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations",
-                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        goto done;
+                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        return;
       }
     } else {
       int64_t per = (int64_t)(cnt / op->count);
       if (cnt % op->count != 0 || (op->light_per_iter >= 0 && per != op->light_per_iter)) {
         op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: light layer '%s' counts %llu for %llu iterations",
-                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        goto done;
+                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        return;
       }
       op->light_per_iter = per;
     }
   }
-  op->rc = pc_film_add(&j->film, &tmp, &op->err);
-done:
-  free(raw);
-  pc_film_free(&tmp);
+  op->rc = pc_wire_film_add(raw, want, &j->film, &op->err);
 }
 
 static void ckpt_work(uv_work_t *w) {
@@ -101,12 +105,11 @@ static void ckpt_work(uv_work_t *w) {
   pc_job_path(op->c, j, NULL, dir, sizeof dir);
   snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  uint8_t *raw = NULL, *z = NULL;
-  size_t n, zn;
-  if ((op->rc = pc_wire_film_pack(&j->film, &raw, &n, &op->err)) != 0) return;
-  op->rc = pc_wire_compress(raw, n, &z, &zn, &op->err);
-  free(raw);
-  if (op->rc) return;
+  uint8_t *raw = wire_buf(j, &op->err), *z = NULL;
+  size_t zn;
+  if (!raw) { op->rc = op->err.code; return; }
+  pc_wire_film_pack_to(&j->film, raw);
+  if ((op->rc = pc_wire_compress(raw, pc_wire_film_size(&j->film), &z, &zn, &op->err)) != 0) return;
   bool sync = !op->c->volatile_store;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
@@ -291,6 +294,8 @@ static void op_after(uv_work_t *w, int status) {
   if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
       j->film_ready) {
     pc_film_free(&j->film);
+    free(j->wire_buf);
+    j->wire_buf = NULL;
     j->film_ready = false;
   }
 }
@@ -470,6 +475,7 @@ void pc_job_free(pc_job *j) {
     free(a);
   }
   if (j->film_ready) pc_film_free(&j->film);
+  free(j->wire_buf);
   free(j->settings_blob);
   free(j);
 }

@@ -45,6 +45,7 @@ struct pc_worker {
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
   uint64_t job, range, first, count, acked_end;
+  uint8_t *pack_buf; size_t pack_len; /* the pending film serialized, kept for the next upload */
   /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
   uint8_t *inflight; size_t inflight_len;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final, in_sent;
@@ -161,28 +162,35 @@ static void pump(worker *w) {
     if (done) finish_range(w);
     return;
   }
-  if (!w->authed || (!done && now_s() - w->last_upload < UPLOAD_INTERVAL)) return;
-  uint8_t *raw = NULL;
-  size_t n;
+  if (!w->authed) return;
+  if (!done && now_s() - w->last_upload < UPLOAD_INTERVAL) return;
   pc_err e;
   uv_mutex_lock(&w->r.mu);
-  w->in_first = w->r.pend_first;
-  w->in_count = w->r.pend_count;
-  w->in_stats = w->r.pend_stats;
-  int rc = pc_wire_film_pack(&w->r.pending, &raw, &n, &e);
-  if (!rc) {
+  size_t n = pc_wire_film_size(&w->r.pending);
+  if (w->pack_len != n) {
+    free(w->pack_buf);
+    w->pack_buf = malloc(n);
+    w->pack_len = w->pack_buf ? n : 0;
+  }
+  if (w->pack_buf) {
+    w->in_first = w->r.pend_first;
+    w->in_count = w->r.pend_count;
+    w->in_stats = w->r.pend_stats;
+    pc_wire_film_pack_to(&w->r.pending, w->pack_buf);
     pc_film_clear(&w->r.pending);
     memset(&w->r.pend_stats, 0, sizeof w->r.pend_stats);
     w->r.pend_first += w->r.pend_count;
     w->r.pend_count = 0;
   }
   uv_mutex_unlock(&w->r.mu);
-  if (rc || (rc = pc_wire_compress(raw, n, &w->inflight, &w->inflight_len, &e)) != 0) {
-    free(raw);
+  if (!w->pack_buf) {
+    pc_wire_log("upload: out of memory packing %zu bytes", n);
+    return;
+  }
+  if (pc_wire_compress(w->pack_buf, n, &w->inflight, &w->inflight_len, &e) != 0) {
     pc_wire_log("upload: %s", e.msg);
     return;
   }
-  free(raw);
   w->in_job = w->job;
   w->in_range = w->range;
   w->in_raw = n;
@@ -554,6 +562,7 @@ void pc_worker_destroy(pc_worker *w) {
   uv_run(w->loop, UV_RUN_DEFAULT);
   if (uv_loop_close(w->loop) != 0) pc_wire_log("worker: loop still has open handles");
   free(w->inflight);
+  free(w->pack_buf);
   free(w->bun);
   if (w->pending_assign) pcbpt__assign__free_unpacked(w->pending_assign, NULL);
   sodium_memzero(w->key, sizeof w->key);
