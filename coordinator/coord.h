@@ -52,7 +52,7 @@ typedef struct pc_job {
   pc_job_state state;
   uint64_t next_iter, done, ckpt_gen;
   int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
-  double elapsed, stopping_since, last_exr;
+  double elapsed, stopping_since, last_exr, last_ckpt;
   char error[256];
   bool film_ready;
   pc_film film;

@@ -1,7 +1,9 @@
 /* job.c: a job's film and its background operations: merging uploads, checkpointing (film to
  * a file by atomic rename, then range progress to the store in one transaction, then the
  * acknowledgements), writing the EXR, halting and finishing. The ops of one job run one at a
- * time on the libuv thread pool, so the film is never touched by two threads at once. */
+ * time on the libuv thread pool, so the film is never touched by two threads at once.
+ * Checkpoints are at most one per ckpt_interval, each covering every upload merged since
+ * (their acknowledgements wait for it), except when the job is ending: then at once. */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -169,6 +171,7 @@ static void free_range_list_closed(pc_job *j) {
 }
 
 static void check_finished(pc_coord *c, pc_job *j);
+static void maybe_ckpt(pc_coord *c, pc_job *j);
 
 static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
   pc_err e = {0};
@@ -290,7 +293,10 @@ static void op_after(uv_work_t *w, int status) {
   }
   free(op);
   if (j->ops) op_start(j);
-  else if (!j->finishing) check_finished(c, j);
+  else if (!j->finishing) {
+    maybe_ckpt(c, j);
+    check_finished(c, j);
+  }
   if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
       j->film_ready) {
     pc_film_free(&j->film);
@@ -362,7 +368,26 @@ static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
   op->stats = j->stats_merged;
   j->acks = NULL;
   j->dirty = false;
+  j->last_ckpt = pc_coord_now();
   queue_op(j, op);
+}
+
+/* Nothing more will be merged but what the ranges' last uploads bring: the checkpoints that
+ * close them, and so the job, should not wait for the interval. */
+static bool ending(const pc_job *j) {
+  if (j->state == PC_JOB_STOPPING) return true;
+  if (!j->halt_iterations || j->next_iter < j->halt_iterations) return false;
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (!r->final && r->merged < r->count) return false;
+  return true;
+}
+
+/* Queues a checkpoint of what is merged when one is due. */
+static void maybe_ckpt(pc_coord *c, pc_job *j) {
+  double now = pc_coord_now();
+  if ((j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) || !j->dirty || j->busy || j->ops) return;
+  if (now - j->last_ckpt < c->ckpt_interval && !ending(j)) return;
+  queue_ckpt(c, j, now - j->last_exr >= c->exr_interval);
 }
 
 static void check_finished(pc_coord *c, pc_job *j) {
@@ -459,8 +484,8 @@ void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
     for (pc_range *r = j->ranges; r; r = r->next)
       if (!r->merging && (!r->owner || force) && !r->final) { r->final = true; j->dirty = true; }
   }
-  if (j->dirty && !j->busy && !j->ops) queue_ckpt(c, j, now - j->last_exr >= c->exr_interval);
-  else check_finished(c, j);
+  maybe_ckpt(c, j);
+  check_finished(c, j);
 }
 
 void pc_job_free(pc_job *j) {
