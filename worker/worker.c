@@ -135,6 +135,7 @@ static void pump(worker *w) {
   uv_mutex_lock(&w->r.mu);
   bool done = w->r.range_done, failed = w->r.failed;
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
+  double rate = w->r.rate;
   uv_mutex_unlock(&w->r.mu);
   if (done && failed) {
     pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
@@ -163,7 +164,13 @@ static void pump(worker *w) {
     return;
   }
   if (!w->authed) return;
-  if (!done && now_s() - w->last_upload < UPLOAD_INTERVAL) return;
+  if (!done) {
+    if (now_s() - w->last_upload < UPLOAD_INTERVAL) return;
+    /* the range's final upload is due within an interval anyway: every upload costs a whole
+     * film on both sides whatever it holds, and this keeps a range of up to two intervals
+     * to one upload (at most about two intervals of work unacknowledged) */
+    if (rate > 0 && (double)(w->count - rendered) / rate < UPLOAD_INTERVAL) return;
+  }
   pc_err e;
   uv_mutex_lock(&w->r.mu);
   size_t n = pc_wire_film_size(&w->r.pending);
