@@ -255,6 +255,7 @@ static void op_after(uv_work_t *w, int status) {
       r->merged += op->count;
       r->final = r->final || op->final;
       pc_render_stats_add(&j->stats_merged, &op->stats);
+      j->merges++;
       j->light_per_iter = op->light_per_iter;
       j->dirty = true;
       pc_pending_ack *a = calloc(1, sizeof *a);
@@ -274,6 +275,7 @@ static void op_after(uv_work_t *w, int status) {
     if (op->rc) pc_job_fail(c, j, op->err.msg);
     else {
       if (op->write_exr) j->last_exr = pc_coord_now();
+      j->ckpts++;
       commit_ckpt(c, j, op);
     }
     while (op->acks) {
@@ -288,7 +290,8 @@ static void op_after(uv_work_t *w, int status) {
       j->state = PC_JOB_DONE;
       pc_err e;
       if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
-      pc_wire_log("job %llu: done, %llu iterations", (unsigned long long)j->id, (unsigned long long)j->done);
+      pc_wire_log("job %llu: done, %llu iterations (%llu uploads merged, %llu checkpoints)", (unsigned long long)j->id,
+                  (unsigned long long)j->done, (unsigned long long)j->merges, (unsigned long long)j->ckpts);
     }
   }
   free(op);
