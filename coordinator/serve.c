@@ -323,7 +323,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     p->up_buf = nb;
     p->up_cap = cap;
   }
-  memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
+  if (u->data.len) memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
   p->up_len += u->data.len;
   pc_coord_buffered(c, (long long)u->data.len);
   p->up_next = u->index + 1;
@@ -337,6 +337,17 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     return;
   }
   p->up_next = 0;
+  if (p->up_count == 0) {
+    /* a halted worker with nothing rendered since its last upload: the range ends at what is
+     * merged, now rather than when the stopping job gives up waiting for it */
+    pc_range *r = j && j->state == PC_JOB_STOPPING ? pc_sched_find_range(j, p->up_range) : NULL;
+    if (p->up_final && r && r->owner == p && !r->merging && !r->final) {
+      r->final = true;
+      j->dirty = true;
+    }
+    upload_reset(p);
+    return;
+  }
 
   const char *refuse = NULL;
   char why[200];

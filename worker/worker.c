@@ -121,6 +121,23 @@ static void send_inflight(worker *w) {
   w->last_upload = now_s();
 }
 
+/* Halted with nothing rendered since the last upload: an upload of no iterations tells the
+ * coordinator the range ends here, or it would wait for one that never comes. */
+static void send_closing(worker *w) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;
+  u.job_id = w->job;
+  u.range_id = w->range;
+  uv_mutex_lock(&w->r.mu);
+  u.first = w->r.pend_first;
+  uv_mutex_unlock(&w->r.mu);
+  u.nchunks = 1;
+  u.final = true;
+  env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
+  env.upload_chunk = &u;
+  send_env(w, &env);
+}
+
 /* The render thread is idle and nothing of the range is left to take: ask for the next one
  * (a final delta may still wait for its acknowledgement). */
 static void finish_range(worker *w) {
@@ -160,6 +177,7 @@ static void pump(worker *w) {
   if (w->inflight) return;
   bool all = done && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
   if (pend == 0) {
+    if (done && w->stopping) send_closing(w);
     if (done) finish_range(w);
     return;
   }

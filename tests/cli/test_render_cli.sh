@@ -41,4 +41,19 @@ if [ $st -ne 1 ] || ! grep -q "interrupted twice" "$tmp/int.err" || [ "$(wc -l <
 else
   echo "ok   double-interrupt"
 fi
+# Interrupted once while the first iteration of a large image is under way: the worker has
+# nothing to upload, says so, and the render ends at once (not after the coordinator's
+# 13-second wait for an upload that never comes) with one line and no image.
+TMPDIR="$tmp/farm" "$bin" render "$scene" --method pt --time 60 --width 1024 --height 1024 --threads 1 \
+  --out "$tmp/big.exr" >"$tmp/int.out" 2>"$tmp/int.err" &
+pid=$!
+for _ in $(seq 200); do grep -qs -- "-> local" "$tmp"/farm/*/farm.log && break; sleep 0.05; done
+kill -INT $pid
+st=0; timeout 12 tail --pid=$pid -f /dev/null || st=124
+wait $pid; st=$((st ? st : $?))
+if [ $st -ne 1 ] || ! grep -q "no iteration finished" "$tmp/int.err" || [ -e "$tmp/big.exr" ]; then
+  echo "FAIL interrupt-early: exit $st"; cat "$tmp/int.err"; fail=1
+else
+  echo "ok   interrupt-early"
+fi
 exit $fail
