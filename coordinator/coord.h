@@ -64,7 +64,7 @@ typedef struct pc_job {
   pc_pending_ack *acks;      /* merged, waiting for a commit */
   bool dirty;                /* merged > acked somewhere */
   bool finishing;            /* the final image is being written */
-  int failures;              /* ranges workers reported they could not render */
+  int failures;              /* ranges workers reported they could not render (stored) */
   uint64_t merges, ckpts;    /* uploads merged and checkpoints written by this process (logged) */
   pc_render_stats stats;        /* work behind the committed iterations (stored) */
   pc_render_stats stats_merged; /* ... and behind everything merged */

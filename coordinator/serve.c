@@ -201,7 +201,10 @@ static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
   r->owner = NULL;
   r->orphan_since = 1; /* to another worker at once */
   pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
-  if (++j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
+  j->failures++;
+  pc_err e;
+  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+  if (j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
     char msg[400];
     snprintf(msg, sizeof msg, "render failed on worker %s: %s", p->name, why);
     pc_job_fail(c, j, msg);
