@@ -53,7 +53,8 @@ run() { # nworkers
   echo "$ips"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-r1=$(run 1)
-r2=$(run 2)
+# not in $(...): that subshell's PIDS would be lost to the cleanup if the bench is stopped
+run 1 >"$T/r1"; r1=$(cat "$T/r1")
+run 2 >"$T/r2"; r2=$(cat "$T/r2")
 awk -v a="$r1" -v b="$r2" 'BEGIN { printf "speed-up 1 -> 2 workers: %.2fx\n", b / a }'
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
