@@ -124,35 +124,43 @@ static int check_header(const uint8_t *buf, size_t n, const pc_film *like, bool 
   return 0;
 }
 
+/* The header checks, then that every sum is finite, before anything is read into a film. */
+static int check(const uint8_t *buf, size_t n, const pc_film *like, bool *planes, pc_err *e) {
+  int rc = check_header(buf, n, like, planes, e);
+  if (rc) return rc;
+  size_t px = (size_t)like->w * (size_t)like->h * 3;
+  const uint8_t *d = buf + HEAD + (size_t)like->nlayers * LAYER_HEAD;
+  for (int l = 0; l < like->nlayers; l++)
+    for (size_t k = 0; k < px; k += PLANE_BLOCK) {
+      size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
+      size_t i = first_nonfinite(d, *planes, m);
+      if (i < m) return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
+      d += 8 * m;
+    }
+  return 0;
+}
+
 int pc_wire_film_counts(const uint8_t *buf, size_t n, const pc_film *like, uint64_t *counts, pc_err *e) {
   bool planes;
-  int rc = check_header(buf, n, like, &planes, e);
+  int rc = check(buf, n, like, &planes, e);
   if (rc) return rc;
   for (int l = 0; l < like->nlayers; l++) counts[l] = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
   return 0;
 }
 
-/* Sets (add = false) or adds the serialized film into `into`, after checking its header and
- * that every sum is finite, so `into` is unchanged on error. */
+/* Sets (add = false) or adds the serialized film into `into` once it passed check(), so
+ * `into` is unchanged on error. */
 static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_err *e) {
   bool planes;
-  int rc = check_header(buf, n, into, &planes, e);
+  int rc = check(buf, n, into, &planes, e);
   if (rc) return rc;
   size_t px = (size_t)into->w * (size_t)into->h * 3;
-  const uint8_t *data = buf + HEAD + (size_t)into->nlayers * LAYER_HEAD, *d = data;
-  for (int l = 0; l < into->nlayers; l++)
-    for (size_t k = 0; k < px; k += PLANE_BLOCK) {
-      size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
-      size_t i = first_nonfinite(d, planes, m);
-      if (i < m) return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
-      d += 8 * m;
-    }
+  const uint8_t *d = buf + HEAD + (size_t)into->nlayers * LAYER_HEAD;
   double v[PLANE_BLOCK];
   uint64_t dropped = get64(buf + 20);
   into->dropped_nonfinite = add ? into->dropped_nonfinite + dropped : dropped;
   const uint8_t *p = buf + HEAD;
   for (int l = 0; l < into->nlayers; l++, p += LAYER_HEAD) into->layers[l].count = (add ? into->layers[l].count : 0) + get64(p + 20);
-  d = data;
   for (int l = 0; l < into->nlayers; l++)
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;

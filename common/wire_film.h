@@ -25,8 +25,8 @@ int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
 /* The same checks, then adds buf's sums, counts and dropped samples into `into` (unchanged
  * on error): a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
-/* Checks buf's header against the shape of `like` and reads its per-layer counts into
- * counts[like->nlayers], so a receiver can judge them before adding anything. */
+/* The checks of pc_wire_film_unpack against the shape of `like`, then buf's per-layer
+ * counts into counts[like->nlayers], so a receiver can judge them before adding anything. */
 int pc_wire_film_counts(const uint8_t *buf, size_t n, const pc_film *like, uint64_t *counts, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
