@@ -101,6 +101,7 @@ struct pc_peer {
   bool up_final;
   pc_render_stats up_stats;
   bool paused;               /* not read from until upload memory is freed */
+  bool idle;                 /* told NoWork: nudged with WorkAvailable when work comes */
   /* bundle being received from a client */
   int bun_fd; char bun_tmp[640]; uint64_t bun_off, bun_total; uint8_t bun_hash[PC_BUNDLE_HASH];
   pc_stream_out out;
@@ -164,7 +165,8 @@ void pc_job_free(pc_job *j);
 /* sched.c: handing out ranges and taking them back. */
 void pc_sched_request(pc_coord *c, pc_peer *p);
 void pc_sched_peer_gone(pc_coord *c, pc_peer *p);
-void pc_sched_tick(pc_coord *c);
+/* Tells the workers told NoWork that there is work to ask for. */
+void pc_sched_nudge(pc_coord *c);
 pc_range *pc_sched_find_range(pc_job *j, uint64_t id);
 
 /* serve.c helpers used by the others. */

@@ -198,6 +198,7 @@ static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
           nr->orphan_since = 1; /* available at once */
           nr->next = r->next;
           r->next = nr;
+          pc_sched_nudge(c);
         }
       }
       upd.count = upd.acked;
@@ -250,7 +251,11 @@ static void op_after(uv_work_t *w, int status) {
                   (unsigned long long)op->count, op->err.msg);
       if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, op->err.msg);
       /* the worker drops the range; hand it to someone else at once */
-      if (r && r->owner == op->peer) { r->owner = NULL; r->orphan_since = 1; }
+      if (r && r->owner == op->peer) {
+        r->owner = NULL;
+        r->orphan_since = 1;
+        pc_sched_nudge(c);
+      }
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;

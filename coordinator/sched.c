@@ -4,7 +4,7 @@
  * asking worker's measured throughput and, for iteration-bounded jobs, shrinking towards the
  * end with what is left and what the other workers still have to render (range_size.h), so
  * that the workers finish together and late joiners get work at once. Jobs are served by
- * priority, then submission. */
+ * priority, then submission. Workers told there is no work are nudged when some comes. */
 #include <stdlib.h>
 
 #include "coord.h"
@@ -35,6 +35,7 @@ static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
   env.assign = &a;
   r->owner = p;
   r->orphan_since = 0;
+  p->idle = false;
   /* the worker measures its rate afresh on a new job; until it reports, it is unknown */
   if (p->rate_job != j->id) p->rate = 0;
   p->rate_job = j->id;
@@ -157,7 +158,20 @@ void pc_sched_request(pc_coord *c, pc_peer *p) {
   nw.retry_ms = 500;
   env.msg_case = PCBPT__ENVELOPE__MSG_NO_WORK;
   env.no_work = &nw;
+  p->idle = true;
   pc_conn_send(&p->conn, &env);
+}
+
+void pc_sched_nudge(pc_coord *c) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__WorkAvailable wa = PCBPT__WORK_AVAILABLE__INIT;
+  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_AVAILABLE;
+  env.work_available = &wa;
+  for (pc_peer *p = c->peers; p; p = p->next)
+    if (p->idle && !p->closed) {
+      p->idle = false;
+      pc_conn_send(&p->conn, &env);
+    }
 }
 
 void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {

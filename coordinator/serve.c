@@ -200,6 +200,7 @@ static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
     if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
   r->owner = NULL;
   r->orphan_since = 1; /* to another worker at once */
+  pc_sched_nudge(c);
   pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
   j->failures++;
   pc_err e;
@@ -496,6 +497,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pc_job **tail = &c->jobs;
   while (*tail) tail = &(*tail)->next;
   *tail = j;
+  pc_sched_nudge(c);
   pc_wire_log("job %llu: submitted by %s: '%s' %s %dx%d, %llu iterations, %.1f s", (unsigned long long)j->id, p->name,
               j->name, pc_method_name(j->set.method), j->set.width, j->set.height,
               (unsigned long long)j->halt_iterations, j->halt_seconds);

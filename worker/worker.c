@@ -390,6 +390,12 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     w->waiting_work = false;
     w->next_request = now_s() + (env->no_work->retry_ms > 10000 ? 10000 : env->no_work->retry_ms) / 1000.0;
     return;
+  case PCBPT__ENVELOPE__MSG_WORK_AVAILABLE:
+    if (!w->busy) {
+      w->next_request = 0;
+      request_work(w);
+    }
+    return;
   case PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK: on_bundle_chunk(w, env->bundle_chunk); return;
   case PCBPT__ENVELOPE__MSG_CANCEL: on_cancel(w, env->cancel); return;
   case PCBPT__ENVELOPE__MSG_UPLOAD_ACK: on_ack(w, env->upload_ack); return;
