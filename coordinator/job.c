@@ -290,8 +290,10 @@ static void op_after(uv_work_t *w, int status) {
       free(a);
     }
     free(op->snap);
-    if (j->finishing && !op->rc && j->state != PC_JOB_FAILED) {
-      j->finishing = false;
+    /* (an upload that came after all, or a range left open, makes it a checkpoint like others) */
+    bool done = j->finishing && !op->rc && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
+    j->finishing = false;
+    if (done) {
       j->state = PC_JOB_DONE;
       pc_err e;
       if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
@@ -390,12 +392,22 @@ static bool ending(const pc_job *j) {
   return true;
 }
 
+/* A checkpoint now would close every open range (complete, or final while stopping), so it
+ * can be the job's last one, with the image, instead of being followed by another. */
+static bool closes_all(const pc_job *j) {
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (r->merged < r->count && !(r->final && j->state == PC_JOB_STOPPING)) return false;
+  return ending(j);
+}
+
 /* Queues a checkpoint of what is merged when one is due. */
 static void maybe_ckpt(pc_coord *c, pc_job *j) {
   double now = pc_coord_now();
   if ((j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) || !j->dirty || j->busy || j->ops) return;
   if (now - j->last_ckpt < c->ckpt_interval && !ending(j)) return;
-  queue_ckpt(c, j, now - j->last_exr >= c->exr_interval);
+  bool last = closes_all(j);
+  j->finishing = last;
+  queue_ckpt(c, j, last || now - j->last_exr >= c->exr_interval);
 }
 
 static void check_finished(pc_coord *c, pc_job *j) {
