@@ -63,6 +63,7 @@ typedef struct pc_job {
   pc_op *ops, *ops_tail;
   pc_pending_ack *acks;      /* merged, waiting for a commit */
   bool dirty;                /* merged > acked somewhere */
+  bool ack_soon;             /* a range's last upload is merged: its worker waits on the ack */
   bool finishing;            /* the final image is being written */
   int failures;              /* ranges workers reported they could not render (stored) */
   uint64_t merges, ckpts;    /* uploads merged and checkpoints written by this process (logged) */

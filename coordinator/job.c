@@ -3,7 +3,10 @@
  * acknowledgements), writing the EXR, halting and finishing. The ops of one job run one at a
  * time on the libuv thread pool, so the film is never touched by two threads at once.
  * Checkpoints are at most one per ckpt_interval, each covering every upload merged since
- * (their acknowledgements wait for it), except when the job is ending: then at once. */
+ * (their acknowledgements wait for it), except after a range's last upload (its worker
+ * sends nothing more before that acknowledgement, so its next range's uploads would wait
+ * and, once that range is rendered too, its render thread) and when the job is ending:
+ * then at once. */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -259,6 +262,7 @@ static void op_after(uv_work_t *w, int status) {
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
+      j->ack_soon = j->ack_soon || op->final;
       pc_render_stats_add(&j->stats_merged, &op->stats);
       j->merges++;
       j->light_per_iter = op->light_per_iter;
@@ -377,7 +381,7 @@ static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
   op->acks = j->acks;
   op->stats = j->stats_merged;
   j->acks = NULL;
-  j->dirty = false;
+  j->dirty = j->ack_soon = false;
   j->last_ckpt = pc_coord_now();
   queue_op(j, op);
 }
@@ -404,7 +408,7 @@ static bool closes_all(const pc_job *j) {
 static void maybe_ckpt(pc_coord *c, pc_job *j) {
   double now = pc_coord_now();
   if ((j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) || !j->dirty || j->busy || j->ops) return;
-  if (now - j->last_ckpt < c->ckpt_interval && !ending(j)) return;
+  if (now - j->last_ckpt < c->ckpt_interval && !ending(j) && !j->ack_soon) return;
   bool last = closes_all(j);
   j->finishing = last;
   queue_ckpt(c, j, last || now - j->last_exr >= c->exr_interval);
