@@ -219,10 +219,31 @@ static void film_v1_and_add(void **st) {
   free_film(&a); free_film(&b);
 }
 
+/* Several byte-plane blocks and a short last one: every value comes back bit for bit. */
+static void film_blocks(void **st) {
+  (void)st;
+  pc_film a, b;
+  make_film(&a, 50, 50); /* 7500 values a layer: 3 blocks of 2048 and one of 1356 */
+  make_film(&b, 50, 50);
+  for (int l = 0; l < 2; l++)
+    for (int i = 0; i < 7500; i++) a.layers[l].sum[i] = (l ? -1.0 : 1.0) * (double)i * 1.000001 / 7.0 + 1e-300 * i;
+  uint8_t *buf;
+  size_t n;
+  pc_err e;
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  assert_int_equal(pc_wire_film_unpack(buf, n, &b, &e), 0);
+  assert_memory_equal(a.layers[0].sum, b.layers[0].sum, 7500 * sizeof(double));
+  assert_memory_equal(a.layers[1].sum, b.layers[1].sum, 7500 * sizeof(double));
+  assert_int_equal(pc_wire_film_add(buf, n, &b, &e), 0);
+  assert_true(b.layers[1].sum[7499] == 2 * a.layers[1].sum[7499] && b.layers[0].sum[4100] == 2 * a.layers[0].sum[4100]);
+  free(buf);
+  free_film(&a); free_film(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
-    cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add),
+    cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
