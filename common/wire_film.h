@@ -15,15 +15,25 @@
 #define PC_WIRE_FILM_MAX ((size_t)1 << 34)
 
 size_t pc_wire_film_size(const pc_film *f);
-/* Serializes f into a malloc'd buffer (little-endian, layer by layer). */
+/* Serializes f (little-endian, layer by layer, sums as byte planes) into out, which holds
+ * pc_wire_film_size(f) bytes; pc_wire_film_pack into a malloc'd buffer. */
+void pc_wire_film_pack_to(const pc_film *f, uint8_t *out);
 int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
 /* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
  * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error. */
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
+/* The same checks, then adds buf's sums, counts and dropped samples into `into` (unchanged
+ * on error): a merge without an intermediate film. */
+int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
+/* The checks of pc_wire_film_unpack against the shape of `like`, then buf's per-layer
+ * counts into counts[like->nlayers], so a receiver can judge them before adding anything. */
+int pc_wire_film_counts(const uint8_t *buf, size_t n, const pc_film *like, uint64_t *counts, pc_err *e);
 
-/* zstd one-shot compression into a malloc'd buffer. */
+/* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);
 /* Decompresses a zstd frame whose content size must be exactly `expect` (<= limit). */
 int pc_wire_decompress(const uint8_t *in, size_t n, size_t expect, size_t limit, uint8_t **out, pc_err *e);
+/* The same into a caller's buffer of `expect` bytes. */
+int pc_wire_decompress_to(const uint8_t *in, size_t n, uint8_t *out, size_t expect, pc_err *e);
 
 #endif

@@ -76,7 +76,7 @@ const char *pc_wire_msg_name(int msg_case) {
     "none", "hello", "challenge", "auth_response", "auth_result", "work_request", "no_work",
     "assign", "cancel", "heartbeat", "bundle_request", "bundle_chunk", "upload_chunk",
     "upload_ack", "submit", "submit_reply", "status_request", "status_reply", "cancel_request",
-    "fetch_request", "fetch_chunk", "error", "range_failed"};
+    "fetch_request", "fetch_chunk", "error", "range_failed", "work_available"};
   if (msg_case < 0 || (size_t)msg_case >= sizeof names / sizeof names[0]) return "unknown";
   return names[msg_case];
 }

@@ -33,12 +33,21 @@ static const char render_help[] =
     "  --quiet               no progress bar\n"
     "Without --spp or --time, renders 64 iterations.\n";
 
-static atomic_bool g_interrupted; /* set by SIGINT/SIGTERM: the render stops and writes what it has */
-/* Asynchronous-signal state must be global; this flag is the only such state. */
+/* SIGINT/SIGTERM so far: the first stops the render and writes what it has, the second
+ * abandons that and ends without an image, and any after it kill the process (the handler
+ * gives the signals back their default action). Asynchronous-signal state must be global;
+ * this counter is the only such state. */
+static atomic_int g_interrupts;
 
 static void on_sigint(int sig) {
   (void)sig;
-  atomic_store(&g_interrupted, true);
+  if (atomic_fetch_add(&g_interrupts, 1) >= 1) {
+    struct sigaction dfl = {0};
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    sigaction(SIGINT, &dfl, NULL);
+    sigaction(SIGTERM, &dfl, NULL);
+  }
 }
 
 static double now_s(void) {
@@ -171,6 +180,10 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
   while (!rc) {
     Pcbpt__Envelope *env = NULL;
     Pcbpt__JobStatus *st = NULL;
+    if (atomic_load(&g_interrupts) >= 2) {
+      rc = pc_errf(e, PC_ECANCELED, "interrupted twice: aborted, no image written");
+      break;
+    }
     if ((rc = job_status(&cl, job, &env, &st, e)) != 0) break;
     bool done = strcmp(st->state, "done") == 0;
     if (done || strcmp(st->state, "failed") == 0 || strcmp(st->state, "cancelled") == 0) {
@@ -182,8 +195,9 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
     }
     draw_progress(prog, farm->term_fd, st->iterations_done);
     pcbpt__envelope__free_unpacked(env, NULL);
-    if (atomic_load(&g_interrupted) && !halted) {
+    if (atomic_load(&g_interrupts) && !halted) {
       halted = true;
+      if (prog->show) dprintf(farm->term_fd, "\ninterrupted: finishing with what is rendered (Ctrl-C again to abort)\n");
       if ((rc = halt_job(&cl, job, e)) != 0) break;
       continue;
     }

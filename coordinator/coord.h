@@ -52,17 +52,21 @@ typedef struct pc_job {
   pc_job_state state;
   uint64_t next_iter, done, ckpt_gen;
   int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
-  double elapsed, stopping_since, last_exr;
+  double elapsed, stopping_since, last_exr, last_ckpt;
   char error[256];
   bool film_ready;
   pc_film film;
+  uint8_t *wire_buf;         /* a serialized film's room, reused by the ops (merges decompress
+                                into it, checkpoints pack into it) instead of a fresh one each */
   pc_range *ranges;          /* open ranges */
   bool busy;                 /* a background op runs on the film */
   pc_op *ops, *ops_tail;
   pc_pending_ack *acks;      /* merged, waiting for a commit */
   bool dirty;                /* merged > acked somewhere */
+  bool ack_soon;             /* a range's last upload is merged: its worker waits on the ack */
   bool finishing;            /* the final image is being written */
-  int failures;              /* ranges workers reported they could not render */
+  int failures;              /* ranges workers reported they could not render (stored) */
+  uint64_t merges, ckpts;    /* uploads merged and checkpoints written by this process (logged) */
   pc_render_stats stats;        /* work behind the committed iterations (stored) */
   pc_render_stats stats_merged; /* ... and behind everything merged */
   struct pc_job *next;
@@ -86,7 +90,11 @@ struct pc_peer {
   uint8_t nonce[PC_AUTH_NONCE], client_nonce[PC_AUTH_NONCE];
   char name[64];
   uint32_t threads;
-  double connected, last_seen, rate;
+  double connected, last_seen;
+  double rate;               /* iterations/s it reports, measured on job rate_job */
+  uint64_t rate_job;         /* the job last assigned to it */
+  uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
+  double hb_time;            /* ... at this time */
   /* upload being assembled */
   uint8_t *up_buf; size_t up_len, up_cap;
   uint32_t up_next, up_nchunks;
@@ -94,6 +102,7 @@ struct pc_peer {
   bool up_final;
   pc_render_stats up_stats;
   bool paused;               /* not read from until upload memory is freed */
+  bool idle;                 /* told NoWork: nudged with WorkAvailable when work comes */
   /* bundle being received from a client */
   int bun_fd; char bun_tmp[640]; uint64_t bun_off, bun_total; uint8_t bun_hash[PC_BUNDLE_HASH];
   pc_stream_out out;
@@ -157,7 +166,8 @@ void pc_job_free(pc_job *j);
 /* sched.c: handing out ranges and taking them back. */
 void pc_sched_request(pc_coord *c, pc_peer *p);
 void pc_sched_peer_gone(pc_coord *c, pc_peer *p);
-void pc_sched_tick(pc_coord *c);
+/* Tells the workers told NoWork that there is work to ask for. */
+void pc_sched_nudge(pc_coord *c);
 pc_range *pc_sched_find_range(pc_job *j, uint64_t id);
 
 /* serve.c helpers used by the others. */

@@ -1,7 +1,12 @@
 /* job.c: a job's film and its background operations: merging uploads, checkpointing (film to
  * a file by atomic rename, then range progress to the store in one transaction, then the
  * acknowledgements), writing the EXR, halting and finishing. The ops of one job run one at a
- * time on the libuv thread pool, so the film is never touched by two threads at once. */
+ * time on the libuv thread pool, so the film is never touched by two threads at once.
+ * Checkpoints are at most one per ckpt_interval, each covering every upload merged since
+ * (their acknowledgements wait for it), except after a range's last upload (its worker
+ * sends nothing more before that acknowledgement, so its next range's uploads would wait
+ * and, once that range is rendered too, its render thread) and when the job is ending:
+ * then at once. */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -56,42 +61,46 @@ static void queue_op(pc_job *j, pc_op *op) {
   if (!j->busy) op_start(j);
 }
 
+/* The job's serialized-film buffer, allocated by the first op that needs it. */
+static uint8_t *wire_buf(pc_job *j, pc_err *e) {
+  if (!j->wire_buf && !(j->wire_buf = malloc(pc_wire_film_size(&j->film))))
+    pc_errf(e, PC_ENOMEM, "out of memory for a %zu-byte film", pc_wire_film_size(&j->film));
+  return j->wire_buf;
+}
+
 static void merge_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
-  pc_film tmp;
-  uint8_t *raw = NULL;
   size_t want = pc_wire_film_size(&j->film);
   if (op->raw != want) {
     op->rc = pc_errf(&op->err, PC_EINVAL, "upload of %llu bytes, a %dx%d film with %d layers is %zu (wrong resolution?)",
                      (unsigned long long)op->raw, j->film.w, j->film.h, j->film.nlayers, want);
     return;
   }
-  if ((op->rc = pc_film_init(&tmp, j->film.w, j->film.h, j->set.strategy_layers, &op->err)) != 0) return;
-  if ((op->rc = pc_wire_decompress(op->buf, op->len, want, want, &raw, &op->err)) != 0) goto done;
-  if ((op->rc = pc_wire_film_unpack(raw, want, &tmp, &op->err)) != 0) goto done;
-  for (int l = 0; l < tmp.nlayers; l++) {
-    uint64_t cnt = tmp.layers[l].count;
-    if (tmp.layers[l].norm == PC_NORM_EYE) {
+  uint8_t *raw = wire_buf(j, &op->err);
+  uint64_t counts[PC_FILM_MAX_LAYERS];
+  if (!raw) { op->rc = op->err.code; return; }
+  if ((op->rc = pc_wire_decompress_to(op->buf, op->len, raw, want, &op->err)) != 0) return;
+  if ((op->rc = pc_wire_film_counts(raw, want, &j->film, counts, &op->err)) != 0) return;
+  for (int l = 0; l < j->film.nlayers; l++) {
+    uint64_t cnt = counts[l];
+    if (j->film.layers[l].norm == PC_NORM_EYE) {
       if (cnt != op->count) {
         op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations",
-                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        goto done;
+                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        return;
       }
     } else {
       int64_t per = (int64_t)(cnt / op->count);
       if (cnt % op->count != 0 || (op->light_per_iter >= 0 && per != op->light_per_iter)) {
         op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: light layer '%s' counts %llu for %llu iterations",
-                         tmp.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        goto done;
+                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+        return;
       }
       op->light_per_iter = per;
     }
   }
-  op->rc = pc_film_add(&j->film, &tmp, &op->err);
-done:
-  free(raw);
-  pc_film_free(&tmp);
+  op->rc = pc_wire_film_add(raw, want, &j->film, &op->err);
 }
 
 static void ckpt_work(uv_work_t *w) {
@@ -101,12 +110,11 @@ static void ckpt_work(uv_work_t *w) {
   pc_job_path(op->c, j, NULL, dir, sizeof dir);
   snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  uint8_t *raw = NULL, *z = NULL;
-  size_t n, zn;
-  if ((op->rc = pc_wire_film_pack(&j->film, &raw, &n, &op->err)) != 0) return;
-  op->rc = pc_wire_compress(raw, n, &z, &zn, &op->err);
-  free(raw);
-  if (op->rc) return;
+  uint8_t *raw = wire_buf(j, &op->err), *z = NULL;
+  size_t zn;
+  if (!raw) { op->rc = op->err.code; return; }
+  pc_wire_film_pack_to(&j->film, raw);
+  if ((op->rc = pc_wire_compress(raw, pc_wire_film_size(&j->film), &z, &zn, &op->err)) != 0) return;
   bool sync = !op->c->volatile_store;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
@@ -166,6 +174,7 @@ static void free_range_list_closed(pc_job *j) {
 }
 
 static void check_finished(pc_coord *c, pc_job *j);
+static void maybe_ckpt(pc_coord *c, pc_job *j);
 
 static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
   pc_err e = {0};
@@ -192,6 +201,7 @@ static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
           nr->orphan_since = 1; /* available at once */
           nr->next = r->next;
           r->next = nr;
+          pc_sched_nudge(c);
         }
       }
       upd.count = upd.acked;
@@ -244,11 +254,17 @@ static void op_after(uv_work_t *w, int status) {
                   (unsigned long long)op->count, op->err.msg);
       if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, op->err.msg);
       /* the worker drops the range; hand it to someone else at once */
-      if (r && r->owner == op->peer) { r->owner = NULL; r->orphan_since = 1; }
+      if (r && r->owner == op->peer) {
+        r->owner = NULL;
+        r->orphan_since = 1;
+        pc_sched_nudge(c);
+      }
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
+      j->ack_soon = j->ack_soon || op->final;
       pc_render_stats_add(&j->stats_merged, &op->stats);
+      j->merges++;
       j->light_per_iter = op->light_per_iter;
       j->dirty = true;
       pc_pending_ack *a = calloc(1, sizeof *a);
@@ -268,6 +284,7 @@ static void op_after(uv_work_t *w, int status) {
     if (op->rc) pc_job_fail(c, j, op->err.msg);
     else {
       if (op->write_exr) j->last_exr = pc_coord_now();
+      j->ckpts++;
       commit_ckpt(c, j, op);
     }
     while (op->acks) {
@@ -277,20 +294,28 @@ static void op_after(uv_work_t *w, int status) {
       free(a);
     }
     free(op->snap);
-    if (j->finishing && !op->rc && j->state != PC_JOB_FAILED) {
-      j->finishing = false;
+    /* (an upload that came after all, or a range left open, makes it a checkpoint like others) */
+    bool done = j->finishing && !op->rc && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
+    j->finishing = false;
+    if (done) {
       j->state = PC_JOB_DONE;
       pc_err e;
       if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
-      pc_wire_log("job %llu: done, %llu iterations", (unsigned long long)j->id, (unsigned long long)j->done);
+      pc_wire_log("job %llu: done, %llu iterations (%llu uploads merged, %llu checkpoints)", (unsigned long long)j->id,
+                  (unsigned long long)j->done, (unsigned long long)j->merges, (unsigned long long)j->ckpts);
     }
   }
   free(op);
   if (j->ops) op_start(j);
-  else if (!j->finishing) check_finished(c, j);
+  else if (!j->finishing) {
+    maybe_ckpt(c, j);
+    check_finished(c, j);
+  }
   if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
       j->film_ready) {
     pc_film_free(&j->film);
+    free(j->wire_buf);
+    j->wire_buf = NULL;
     j->film_ready = false;
   }
 }
@@ -356,8 +381,37 @@ static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
   op->acks = j->acks;
   op->stats = j->stats_merged;
   j->acks = NULL;
-  j->dirty = false;
+  j->dirty = j->ack_soon = false;
+  j->last_ckpt = pc_coord_now();
   queue_op(j, op);
+}
+
+/* Nothing more will be merged but what the ranges' last uploads bring: the checkpoints that
+ * close them, and so the job, should not wait for the interval. */
+static bool ending(const pc_job *j) {
+  if (j->state == PC_JOB_STOPPING) return true;
+  if (!j->halt_iterations || j->next_iter < j->halt_iterations) return false;
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (!r->final && r->merged < r->count) return false;
+  return true;
+}
+
+/* A checkpoint now would close every open range (complete, or final while stopping), so it
+ * can be the job's last one, with the image, instead of being followed by another. */
+static bool closes_all(const pc_job *j) {
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (r->merged < r->count && !(r->final && j->state == PC_JOB_STOPPING)) return false;
+  return ending(j);
+}
+
+/* Queues a checkpoint of what is merged when one is due. */
+static void maybe_ckpt(pc_coord *c, pc_job *j) {
+  double now = pc_coord_now();
+  if ((j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) || !j->dirty || j->busy || j->ops) return;
+  if (now - j->last_ckpt < c->ckpt_interval && !ending(j) && !j->ack_soon) return;
+  bool last = closes_all(j);
+  j->finishing = last;
+  queue_ckpt(c, j, last || now - j->last_exr >= c->exr_interval);
 }
 
 static void check_finished(pc_coord *c, pc_job *j) {
@@ -454,8 +508,8 @@ void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
     for (pc_range *r = j->ranges; r; r = r->next)
       if (!r->merging && (!r->owner || force) && !r->final) { r->final = true; j->dirty = true; }
   }
-  if (j->dirty && !j->busy && !j->ops) queue_ckpt(c, j, now - j->last_exr >= c->exr_interval);
-  else check_finished(c, j);
+  maybe_ckpt(c, j);
+  check_finished(c, j);
 }
 
 void pc_job_free(pc_job *j) {
@@ -470,6 +524,7 @@ void pc_job_free(pc_job *j) {
     free(a);
   }
   if (j->film_ready) pc_film_free(&j->film);
+  free(j->wire_buf);
   free(j->settings_blob);
   free(j);
 }

@@ -1,11 +1,14 @@
 /* sched.c: hands out iteration ranges. Orphaned ranges (their worker went away longer than
  * the grace period ago) go first, split at what is acknowledged so the late uploads of the
  * old owner can never be counted twice; then fresh iterations, sized to a few seconds of the
- * asking worker's measured throughput and, for iteration-bounded jobs, to a fair share so
- * that workers joining late get work at once. Jobs are served by priority, then submission. */
+ * asking worker's measured throughput and, for iteration-bounded jobs, shrinking towards the
+ * end with what is left and what the other workers still have to render (range_size.h), so
+ * that the workers finish together and late joiners get work at once. Jobs are served by
+ * priority, then submission. Workers told there is no work are nudged when some comes. */
 #include <stdlib.h>
 
 #include "coord.h"
+#include "range_size.h"
 #include "wire_log.h"
 #include "wire_settings.h"
 
@@ -13,13 +16,6 @@ pc_range *pc_sched_find_range(pc_job *j, uint64_t id) {
   for (pc_range *r = j->ranges; r; r = r->next)
     if (r->id == id) return r;
   return NULL;
-}
-
-static int count_workers(pc_coord *c) {
-  int n = 0;
-  for (pc_peer *p = c->peers; p; p = p->next)
-    if (p->authed && p->role == PCBPT__ROLE__ROLE_WORKER) n++;
-  return n;
 }
 
 static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
@@ -39,6 +35,10 @@ static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
   env.assign = &a;
   r->owner = p;
   r->orphan_since = 0;
+  p->idle = false;
+  /* the worker measures its rate afresh on a new job; until it reports, it is unknown */
+  if (p->rate_job != j->id) p->rate = 0;
+  p->rate_job = j->id;
   pc_conn_send(&p->conn, &env);
   pcbpt__settings__free_unpacked(s, NULL);
   pc_wire_log("job %llu: range %llu [%llu,+%llu) -> %s (%s)", (unsigned long long)j->id, (unsigned long long)r->id,
@@ -67,7 +67,45 @@ static pc_range *claim_orphan(pc_coord *c, pc_job *j, pc_range *r, pc_err *e) {
   return nr;
 }
 
-static bool try_job(pc_coord *c, pc_peer *p, pc_job *j, int nworkers) {
+/* Iterations of r not rendered yet as far as the coordinator can tell: its owner's last
+ * heartbeat, advanced at the owner's rate since, or else what is merged. */
+static double unrendered(const pc_range *r, double now) {
+  double done = (double)r->merged;
+  const pc_peer *q = r->owner;
+  if (q && q->hb_range == r->id) {
+    double est = (double)q->hb_done + (q->rate > 0 ? q->rate * (now - q->hb_time) : 0);
+    if (est > done) done = est;
+  }
+  return done < (double)r->count ? (double)r->count - done : 0;
+}
+
+/* The job a worker holds a range of (NULL when idle). */
+static const pc_job *job_of(const pc_coord *c, const pc_peer *q) {
+  for (const pc_job *j = c->jobs; j; j = j->next)
+    for (const pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner == q) return j;
+  return NULL;
+}
+
+static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
+  pc_range_size_in in = {.rate = p->rate_job == j->id ? p->rate : 0, .range_seconds = c->range_seconds};
+  if (j->halt_iterations) {
+    in.bounded = true;
+    in.unassigned = j->halt_iterations - j->next_iter;
+    /* p asks only when its own ranges are rendered; every other open range is still to do */
+    for (const pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner != p) in.outstanding += r->owner ? unrendered(r, now) : (double)(r->count - r->merged);
+    /* a worker not measured on this job yet (it will ask soon) is taken to be as fast as p */
+    for (const pc_peer *q = c->peers; q; q = q->next) {
+      if (q == p || !q->authed || q->role != PCBPT__ROLE__ROLE_WORKER) continue;
+      const pc_job *qj = job_of(c, q);
+      if (!qj || qj == j) in.others_rate += q->rate_job == j->id && q->rate > 0 ? q->rate : in.rate;
+    }
+  }
+  return pc_range_size(&in);
+}
+
+static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
   double now = pc_coord_now();
   pc_err e = {0};
   if (!j->film_ready && pc_job_activate(c, j, &e) != 0) { pc_job_fail(c, j, e.msg); return false; }
@@ -80,15 +118,7 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j, int nworkers) {
     return true;
   }
   if (j->halt_iterations && j->next_iter >= j->halt_iterations) return false;
-  double want = p->rate > 0 ? p->rate * c->range_seconds : 1;
-  uint64_t n = want < 1 ? 1 : want > 1e6 ? 1000000 : (uint64_t)want;
-  if (j->halt_iterations) {
-    uint64_t left = j->halt_iterations - j->next_iter;
-    uint64_t share = (left + (uint64_t)nworkers - 1) / (uint64_t)nworkers;
-    if (n > share) n = share;
-    if (n > left) n = left;
-    if (n < 1) n = 1;
-  }
+  uint64_t n = fresh_size(c, p, j, now);
   uint64_t id;
   int rc = pc_store_begin(c, &e);
   if (!rc) rc = pc_store_insert_range(c, j->id, j->next_iter, n, &id, &e);
@@ -112,8 +142,6 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j, int nworkers) {
 }
 
 void pc_sched_request(pc_coord *c, pc_peer *p) {
-  int nworkers = count_workers(c);
-  if (nworkers < 1) nworkers = 1;
   /* highest priority first (pass 0), then any runnable job; each in submission order */
   for (int pri_pass = 0; pri_pass < 2; pri_pass++) {
     int top = -2147483647;
@@ -122,7 +150,7 @@ void pc_sched_request(pc_coord *c, pc_peer *p) {
     for (pc_job *j = c->jobs; j; j = j->next) {
       if ((j->state != PC_JOB_QUEUED && j->state != PC_JOB_RUNNING) || j->finishing) continue;
       if (pri_pass == 0 && j->priority != top) continue;
-      if (try_job(c, p, j, nworkers)) return;
+      if (try_job(c, p, j)) return;
     }
   }
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
@@ -130,7 +158,20 @@ void pc_sched_request(pc_coord *c, pc_peer *p) {
   nw.retry_ms = 500;
   env.msg_case = PCBPT__ENVELOPE__MSG_NO_WORK;
   env.no_work = &nw;
+  p->idle = true;
   pc_conn_send(&p->conn, &env);
+}
+
+void pc_sched_nudge(pc_coord *c) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__WorkAvailable wa = PCBPT__WORK_AVAILABLE__INIT;
+  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_AVAILABLE;
+  env.work_available = &wa;
+  for (pc_peer *p = c->peers; p; p = p->next)
+    if (p->idle && !p->closed) {
+      p->idle = false;
+      pc_conn_send(&p->conn, &env);
+    }
 }
 
 void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {

@@ -169,7 +169,11 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
 static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_coord *c = p->coord;
   if (h->iterations_per_second >= 0 && h->iterations_per_second < 1e9) p->rate = h->iterations_per_second;
+  p->hb_range = h->range_id;
+  p->hb_done = h->iterations_done;
+  p->hb_time = p->last_seen;
   if (!h->range_id) return;
+  p->rate_job = h->job_id; /* a busy worker's rate is measured on the job it renders */
   pc_job *j = pc_coord_job(c, h->job_id);
   pc_range *r = j && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) ? pc_sched_find_range(j, h->range_id) : NULL;
   if (r && r->owner == p) return;
@@ -196,8 +200,12 @@ static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
     if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
   r->owner = NULL;
   r->orphan_since = 1; /* to another worker at once */
+  pc_sched_nudge(c);
   pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
-  if (++j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
+  j->failures++;
+  pc_err e;
+  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+  if (j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
     char msg[400];
     snprintf(msg, sizeof msg, "render failed on worker %s: %s", p->name, why);
     pc_job_fail(c, j, msg);
@@ -319,7 +327,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     p->up_buf = nb;
     p->up_cap = cap;
   }
-  memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
+  if (u->data.len) memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
   p->up_len += u->data.len;
   pc_coord_buffered(c, (long long)u->data.len);
   p->up_next = u->index + 1;
@@ -333,6 +341,17 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     return;
   }
   p->up_next = 0;
+  if (p->up_count == 0) {
+    /* a halted worker with nothing rendered since its last upload: the range ends at what is
+     * merged, now rather than when the stopping job gives up waiting for it */
+    pc_range *r = j && j->state == PC_JOB_STOPPING ? pc_sched_find_range(j, p->up_range) : NULL;
+    if (p->up_final && r && r->owner == p && !r->merging && !r->final) {
+      r->final = true;
+      j->dirty = true;
+    }
+    upload_reset(p);
+    return;
+  }
 
   const char *refuse = NULL;
   char why[200];
@@ -478,6 +497,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pc_job **tail = &c->jobs;
   while (*tail) tail = &(*tail)->next;
   *tail = j;
+  pc_sched_nudge(c);
   pc_wire_log("job %llu: submitted by %s: '%s' %s %dx%d, %llu iterations, %.1f s", (unsigned long long)j->id, p->name,
               j->name, pc_method_name(j->set.method), j->set.width, j->set.height,
               (unsigned long long)j->halt_iterations, j->halt_seconds);

@@ -1,7 +1,9 @@
 /* store.c: the job store (SQLite in the data dir): jobs with their settings, state and
  * progress, and every iteration range handed out with how much of it is acknowledged. Range
  * ids come from AUTOINCREMENT so they are never reused; iteration indices come from
- * jobs.next_iter, which is advanced in the same transaction that records a new range. */
+ * jobs.next_iter, which is advanced in the same transaction that records a new range.
+ * Columns added later come by migrations numbered in PRAGMA user_version, so a data dir of
+ * an older coordinator opens and keeps its jobs. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,9 +26,16 @@ static const char schema[] =
     " open INTEGER NOT NULL DEFAULT 1);"
     "CREATE INDEX IF NOT EXISTS ranges_open ON ranges(job, open);";
 
+/* migrations[i] takes a store from user_version i to i + 1 */
+static const char *const migrations[] = {
+    "ALTER TABLE jobs ADD COLUMN failures INTEGER NOT NULL DEFAULT 0;", /* ranges workers could not render */
+};
+
 static int db_err(pc_coord *c, pc_err *e, const char *what) {
   return pc_errf(e, PC_EIO, "store %s/jobs.db: %s: %s", c->data_dir, what, sqlite3_errmsg(c->db));
 }
+
+static int migrate(pc_coord *c, const char *path, pc_err *e);
 
 int pc_store_open(pc_coord *c, pc_err *e) {
   char path[512];
@@ -48,7 +57,35 @@ int pc_store_open(pc_coord *c, pc_err *e) {
     c->db = NULL;
     return rc;
   }
-  return 0;
+  return migrate(c, path, e);
+}
+
+/* Brings an older store's tables up to this coordinator's (see migrations). */
+static int migrate(pc_coord *c, const char *path, pc_err *e) {
+  sqlite3_stmt *st = NULL;
+  int version = -1;
+  if (sqlite3_prepare_v2(c->db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
+    version = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  int nmig = (int)(sizeof migrations / sizeof migrations[0]), rc = 0;
+  if (version < 0) rc = db_err(c, e, "user_version");
+  else if (version > nmig) rc = pc_errf(e, PC_EINVAL, "store %s: schema version %d is newer than this coordinator's %d", path, version, nmig);
+  for (char *msg = NULL; !rc && version < nmig; version++) {
+    char bump[64];
+    snprintf(bump, sizeof bump, "PRAGMA user_version=%d;", version + 1);
+    if (sqlite3_exec(c->db, "BEGIN IMMEDIATE", NULL, NULL, &msg) != SQLITE_OK ||
+        sqlite3_exec(c->db, migrations[version], NULL, NULL, &msg) != SQLITE_OK ||
+        sqlite3_exec(c->db, bump, NULL, NULL, &msg) != SQLITE_OK || sqlite3_exec(c->db, "COMMIT", NULL, NULL, &msg) != SQLITE_OK) {
+      rc = pc_errf(e, PC_EIO, "store %s: migration to version %d: %s", path, version + 1, msg ? msg : sqlite3_errmsg(c->db));
+      sqlite3_free(msg);
+      sqlite3_exec(c->db, "ROLLBACK", NULL, NULL, NULL);
+    }
+  }
+  if (rc) {
+    sqlite3_close(c->db);
+    c->db = NULL;
+  }
+  return rc;
 }
 
 void pc_store_close(pc_coord *c) {
@@ -100,7 +137,7 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   sqlite3_stmt *st;
   int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?,"
-                                "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=?,pmf_bytes=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+                                "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=?,pmf_bytes=?,failures=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare update job");
   b |= sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
   b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
@@ -115,7 +152,8 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   b |= sqlite3_bind_double(st, 11, j->stats.t_pmf);
   b |= sqlite3_bind_double(st, 12, j->stats.t_connect);
   b |= sqlite3_bind_int64(st, 13, (sqlite3_int64)j->stats.pmf_bytes);
-  b |= sqlite3_bind_int64(st, 14, (sqlite3_int64)j->id);
+  b |= sqlite3_bind_int(st, 14, j->failures);
+  b |= sqlite3_bind_int64(st, 15, (sqlite3_int64)j->id);
   return step_done(c, st, b, e, "update job");
 }
 
@@ -177,7 +215,7 @@ static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
 int pc_store_load(pc_coord *c, pc_err *e) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(c->db, "SELECT id,name,bundle,settings,halt_iterations,halt_seconds,priority,state,next_iter,"
-                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
+                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes,failures FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare load jobs");
   pc_job **tail = &c->jobs;
   int r, rc = 0;
@@ -207,6 +245,7 @@ int pc_store_load(pc_coord *c, pc_err *e) {
     j->stats.t_pmf = sqlite3_column_double(st, 17);
     j->stats.t_connect = sqlite3_column_double(st, 18);
     j->stats.pmf_bytes = (uint64_t)sqlite3_column_int64(st, 19);
+    j->failures = sqlite3_column_int(st, 20);
     j->stats_merged = j->stats;
     *tail = j;
     tail = &j->next;

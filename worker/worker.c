@@ -45,6 +45,7 @@ struct pc_worker {
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
   uint64_t job, range, first, count, acked_end;
+  uint8_t *pack_buf; size_t pack_len; /* the pending film serialized, kept for the next upload */
   /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
   uint8_t *inflight; size_t inflight_len;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final, in_sent;
@@ -120,6 +121,23 @@ static void send_inflight(worker *w) {
   w->last_upload = now_s();
 }
 
+/* Halted with nothing rendered since the last upload: an upload of no iterations tells the
+ * coordinator the range ends here, or it would wait for one that never comes. */
+static void send_closing(worker *w) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;
+  u.job_id = w->job;
+  u.range_id = w->range;
+  uv_mutex_lock(&w->r.mu);
+  u.first = w->r.pend_first;
+  uv_mutex_unlock(&w->r.mu);
+  u.nchunks = 1;
+  u.final = true;
+  env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
+  env.upload_chunk = &u;
+  send_env(w, &env);
+}
+
 /* The render thread is idle and nothing of the range is left to take: ask for the next one
  * (a final delta may still wait for its acknowledgement). */
 static void finish_range(worker *w) {
@@ -134,6 +152,7 @@ static void pump(worker *w) {
   uv_mutex_lock(&w->r.mu);
   bool done = w->r.range_done, failed = w->r.failed;
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
+  double rate = w->r.rate;
   uv_mutex_unlock(&w->r.mu);
   if (done && failed) {
     pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
@@ -158,31 +177,45 @@ static void pump(worker *w) {
   if (w->inflight) return;
   bool all = done && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
   if (pend == 0) {
+    if (done && w->stopping) send_closing(w);
     if (done) finish_range(w);
     return;
   }
-  if (!w->authed || (!done && now_s() - w->last_upload < UPLOAD_INTERVAL)) return;
-  uint8_t *raw = NULL;
-  size_t n;
+  if (!w->authed) return;
+  if (!done) {
+    if (now_s() - w->last_upload < UPLOAD_INTERVAL) return;
+    /* the range's final upload is due within an interval anyway: every upload costs a whole
+     * film on both sides whatever it holds, and this keeps a range of up to two intervals
+     * to one upload (at most about two intervals of work unacknowledged) */
+    if (rate > 0 && (double)(w->count - rendered) / rate < UPLOAD_INTERVAL) return;
+  }
   pc_err e;
   uv_mutex_lock(&w->r.mu);
-  w->in_first = w->r.pend_first;
-  w->in_count = w->r.pend_count;
-  w->in_stats = w->r.pend_stats;
-  int rc = pc_wire_film_pack(&w->r.pending, &raw, &n, &e);
-  if (!rc) {
+  size_t n = pc_wire_film_size(&w->r.pending);
+  if (w->pack_len != n) {
+    free(w->pack_buf);
+    w->pack_buf = malloc(n);
+    w->pack_len = w->pack_buf ? n : 0;
+  }
+  if (w->pack_buf) {
+    w->in_first = w->r.pend_first;
+    w->in_count = w->r.pend_count;
+    w->in_stats = w->r.pend_stats;
+    pc_wire_film_pack_to(&w->r.pending, w->pack_buf);
     pc_film_clear(&w->r.pending);
     memset(&w->r.pend_stats, 0, sizeof w->r.pend_stats);
     w->r.pend_first += w->r.pend_count;
     w->r.pend_count = 0;
   }
   uv_mutex_unlock(&w->r.mu);
-  if (rc || (rc = pc_wire_compress(raw, n, &w->inflight, &w->inflight_len, &e)) != 0) {
-    free(raw);
+  if (!w->pack_buf) {
+    pc_wire_log("upload: out of memory packing %zu bytes", n);
+    return;
+  }
+  if (pc_wire_compress(w->pack_buf, n, &w->inflight, &w->inflight_len, &e) != 0) {
     pc_wire_log("upload: %s", e.msg);
     return;
   }
-  free(raw);
   w->in_job = w->job;
   w->in_range = w->range;
   w->in_raw = n;
@@ -356,6 +389,12 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     /* asked again by the pump timer once retry_ms has passed */
     w->waiting_work = false;
     w->next_request = now_s() + (env->no_work->retry_ms > 10000 ? 10000 : env->no_work->retry_ms) / 1000.0;
+    return;
+  case PCBPT__ENVELOPE__MSG_WORK_AVAILABLE:
+    if (!w->busy) {
+      w->next_request = 0;
+      request_work(w);
+    }
     return;
   case PCBPT__ENVELOPE__MSG_BUNDLE_CHUNK: on_bundle_chunk(w, env->bundle_chunk); return;
   case PCBPT__ENVELOPE__MSG_CANCEL: on_cancel(w, env->cancel); return;
@@ -554,6 +593,7 @@ void pc_worker_destroy(pc_worker *w) {
   uv_run(w->loop, UV_RUN_DEFAULT);
   if (uv_loop_close(w->loop) != 0) pc_wire_log("worker: loop still has open handles");
   free(w->inflight);
+  free(w->pack_buf);
   free(w->bun);
   if (w->pending_assign) pcbpt__assign__free_unpacked(w->pending_assign, NULL);
   sodium_memzero(w->key, sizeof w->key);

@@ -2,10 +2,11 @@
 # Benchmark (not a test): farm scaling on cornell-box. Runs the same job on one worker and on
 # two workers (one render thread each) and prints iterations/s and the speed-up (expect
 # >= 1.9x on an idle machine with two free cores), the coordinator's CPU time
-# (/proc/PID/stat utime+stime) and the bytes the workers sent per iteration (/proc/PID/io
-# wchar: uploads, heartbeats and requests), and iterations per worker CPU-second (equal for
-# 1 and 2 workers when the farm adds no work per iteration; on a busy machine the speed-up
-# is bounded by the free cores, this figure is not). Usage:
+# (/proc/PID/stat utime+stime) per iteration and per upload merged (the count is from the
+# coordinator's "done" log line), the bytes the workers sent per iteration and per upload
+# (/proc/PID/io wchar: uploads, heartbeats and requests), and iterations per worker
+# CPU-second (equal for 1 and 2 workers when the farm adds no work per iteration; on a busy
+# machine the speed-up is bounded by the free cores, this figure is not). Usage:
 #   tests/bench/bench_farm.sh [BUILD_DIR] [SPP] [SIZE]     (defaults: build 128 256)
 set -euo pipefail
 top=$(cd "$(dirname "$0")/../.." && pwd)
@@ -44,13 +45,16 @@ run() { # nworkers
   for p in "${W[@]}"; do w1=$((w1 + $(wchar "$p"))); k1=$(echo "$k1 + $(cpu_s "$p")" | bc); done
   kill "$C" "${W[@]}"
   local ips; ips=$(awk -v s="$SPP" -v e="$el" 'BEGIN { printf "%.2f", s / e }')
-  printf "%d worker(s): %d iterations of %dx%d in %.2f s = %s it/s; coordinator CPU %.2f s (%.1f ms/iteration); workers sent %.0f KB/iteration; %.2f iterations per worker CPU-second\n" \
+  local up; up=$(sed -n "s/.*job $J: done, .*(\([0-9]*\) uploads merged.*/\1/p" "$dir/coord.log")
+  printf "%d worker(s): %d iterations of %dx%d in %.2f s = %s it/s; coordinator CPU %.2f s (%.1f ms/iteration, %.1f ms/upload, %d uploads); workers sent %.0f KB/iteration (%.0f KB/upload); %.2f iterations per worker CPU-second\n" \
     "$n" "$SPP" "$SIZE" "$SIZE" "$el" "$ips" "$(echo "$c1 - $c0" | bc)" "$(echo "($c1 - $c0) * 1000 / $SPP" | bc -l)" \
-    "$(echo "($w1 - $w0) / 1024 / $SPP" | bc -l)" "$(echo "$SPP / ($k1 - $k0)" | bc -l)" >&2
+    "$(echo "($c1 - $c0) * 1000 / ${up:-1}" | bc -l)" "${up:-0}" \
+    "$(echo "($w1 - $w0) / 1024 / $SPP" | bc -l)" "$(echo "($w1 - $w0) / 1024 / ${up:-1}" | bc -l)" "$(echo "$SPP / ($k1 - $k0)" | bc -l)" >&2
   echo "$ips"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-r1=$(run 1)
-r2=$(run 2)
+# not in $(...): that subshell's PIDS would be lost to the cleanup if the bench is stopped
+run 1 >"$T/r1"; r1=$(cat "$T/r1")
+run 2 >"$T/r2"; r2=$(cat "$T/r2")
 awk -v a="$r1" -v b="$r2" 'BEGIN { printf "speed-up 1 -> 2 workers: %.2fx\n", b / a }'
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

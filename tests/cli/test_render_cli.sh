@@ -24,4 +24,36 @@ grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zer
 check compare-json 0 '"layer": "inner"' -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr" --json
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
+# Interrupted twice: the render stops at once, writes nothing, says so in one line and removes
+# its temporary farm (whose log shows when the render is under way). SIGTERM then SIGINT: two
+# signals of one kind sent at once may arrive as one.
+mkdir "$tmp/farm"
+TMPDIR="$tmp/farm" "$bin" render "$scene" --method pt --time 60 --width 32 --height 24 --threads 1 --out "$tmp/int.exr" \
+  >"$tmp/int.out" 2>"$tmp/int.err" &
+pid=$!
+for _ in $(seq 200); do grep -qs -- "-> local" "$tmp"/farm/*/farm.log && break; sleep 0.05; done
+kill -TERM $pid; kill -INT $pid
+st=0; timeout 20 tail --pid=$pid -f /dev/null || st=124
+wait $pid; st=$((st ? st : $?))
+if [ $st -ne 1 ] || ! grep -q "interrupted twice" "$tmp/int.err" || [ "$(wc -l <"$tmp/int.err")" -ne 1 ] ||
+   [ -e "$tmp/int.exr" ] || [ -n "$(ls -A "$tmp/farm")" ]; then
+  echo "FAIL double-interrupt: exit $st"; cat "$tmp/int.err"; ls -A "$tmp/farm"; fail=1
+else
+  echo "ok   double-interrupt"
+fi
+# Interrupted once while the first iteration of a large image is under way: the worker has
+# nothing to upload, says so, and the render ends at once (not after the coordinator's
+# 13-second wait for an upload that never comes) with one line and no image.
+TMPDIR="$tmp/farm" "$bin" render "$scene" --method pt --time 60 --width 1024 --height 1024 --threads 1 \
+  --out "$tmp/big.exr" >"$tmp/int.out" 2>"$tmp/int.err" &
+pid=$!
+for _ in $(seq 200); do grep -qs -- "-> local" "$tmp"/farm/*/farm.log && break; sleep 0.05; done
+kill -INT $pid
+st=0; timeout 12 tail --pid=$pid -f /dev/null || st=124
+wait $pid; st=$((st ? st : $?))
+if [ $st -ne 1 ] || ! grep -q "no iteration finished" "$tmp/int.err" || [ -e "$tmp/big.exr" ]; then
+  echo "FAIL interrupt-early: exit $st"; cat "$tmp/int.err"; fail=1
+else
+  echo "ok   interrupt-early"
+fi
 exit $fail

@@ -6,15 +6,16 @@ start_worker w1
 J=$("$B/pcbpt-coord" submit "$S/scenes/furnace/scene.xml" --spp 16 --width 64 --height 64 $H | tail -1)
 echo "wrong-token-entirely" > "$T/bad"; chmod 600 "$T/bad"
 "$B/pcbpt-coord" list --host 127.0.0.1:$PORT --token-file "$T/bad" 2>/dev/null && fail "wrong token accepted"
-python3 - "$PORT" <<'PY'
-import socket, struct, sys, time, os
+python3 - "$PORT" "$S/common/wire_frame.h" <<'PY'
+import socket, struct, sys, time, os, re
 port = int(sys.argv[1])
+version = int(re.search(r"PC_WIRE_PROTOCOL_VERSION (\d+)u", open(sys.argv[2]).read()).group(1))
 def send(b, wait=0.3):
     s = socket.create_connection(("127.0.0.1", port)); s.sendall(b); time.sleep(wait); s.close()
 def frame(b): return struct.pack(">I", len(b)) + b
 # a worker that answers the challenge with a MAC made from the wrong token
 s = socket.create_connection(("127.0.0.1", port))
-hello = b"\x08\x01\x10\x01\x2a\x20" + os.urandom(32)
+hello = b"\x08" + bytes([version]) + b"\x10\x01\x2a\x20" + os.urandom(32)
 s.sendall(frame(b"\x0a" + bytes([len(hello)]) + hello)); time.sleep(0.3); s.recv(4096)
 auth = b"\x0a\x20" + os.urandom(32)
 s.sendall(frame(b"\x1a" + bytes([len(auth)]) + auth)); time.sleep(0.3); s.close()

@@ -6,7 +6,9 @@
  *   farm_tool upload HOST:PORT TOKEN nan|size   speaks as a worker: takes a range and uploads
  *       a delta with a NaN sum or of the wrong size; exits 0 if the coordinator refuses it
  *   farm_tool bundle HOST:PORT TOKEN            sends a scene bundle whose content does not
- *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it */
+ *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it
+ *   farm_tool fail HOST:PORT TOKEN              speaks as a worker: takes a range and reports
+ *       that it cannot render it */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -112,26 +114,54 @@ static int cmd_mean(int argc, char **argv) {
   return fabs(mean - want) <= tol * want ? 0 : 1;
 }
 
+/* Connects as a worker and asks until the coordinator assigns a range (*in holds it). */
+static int take_range(const char *hostport, const char *token, pc_client *cl, Pcbpt__Envelope **in, pc_err *e) {
+  if (pc_client_connect_as(hostport, token, PCBPT__ROLE__ROLE_WORKER, cl, e)) return 1;
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__WorkRequest wr = PCBPT__WORK_REQUEST__INIT;
+  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_REQUEST;
+  env.work_request = &wr;
+  for (int tries = 0; tries < 100; tries++) {
+    if (pc_client_send(cl, &env, e) || pc_client_recv(cl, 10, in, e)) break;
+    if ((*in)->msg_case == PCBPT__ENVELOPE__MSG_ASSIGN) return 0;
+    pcbpt__envelope__free_unpacked(*in, NULL);
+    *in = NULL;
+    struct timespec ts = {0, 100000000};
+    nanosleep(&ts, NULL);
+  }
+  if (!e->code) pc_errf(e, PC_EIO, "no range assigned");
+  pc_client_close(cl);
+  return 1;
+}
+
+/* Takes a range and reports that it cannot render it. */
+static int cmd_fail(int argc, char **argv) {
+  if (argc != 3) { fprintf(stderr, "fail HOST:PORT TOKEN\n"); return 2; }
+  pc_client cl;
+  pc_err e = {0};
+  Pcbpt__Envelope *in = NULL;
+  if (take_range(argv[1], argv[2], &cl, &in, &e)) { fprintf(stderr, "fail: %s\n", e.msg); return 1; }
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
+  f.job_id = in->assign->job_id;
+  f.range_id = in->assign->range_id;
+  f.reason = "farm_tool: refusing on purpose";
+  env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
+  env.range_failed = &f;
+  int rc = pc_client_send(&cl, &env, &e);
+  pcbpt__envelope__free_unpacked(in, NULL);
+  pc_client_close(&cl);
+  if (rc) fprintf(stderr, "fail: %s\n", e.msg);
+  return rc ? 1 : 0;
+}
+
 static int cmd_upload(int argc, char **argv) {
   if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size"))) { fprintf(stderr, "upload HOST:PORT TOKEN nan|size\n"); return 2; }
   pc_client cl;
   pc_err e = {0};
-  if (pc_client_connect_as(argv[1], argv[2], PCBPT__ROLE__ROLE_WORKER, &cl, &e)) { fprintf(stderr, "upload: %s\n", e.msg); return 1; }
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
-  Pcbpt__WorkRequest wr = PCBPT__WORK_REQUEST__INIT;
-  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_REQUEST;
-  env.work_request = &wr;
+  Pcbpt__Envelope *in = NULL;
   int rc = 1;
-  /* retry until the coordinator has a range for us */
-  for (int tries = 0; tries < 100; tries++) {
-    if (pc_client_send(&cl, &env, &e) || pc_client_recv(&cl, 10, &in, &e)) goto fail;
-    if (in->msg_case == PCBPT__ENVELOPE__MSG_ASSIGN) break;
-    pcbpt__envelope__free_unpacked(in, NULL);
-    in = NULL;
-    struct timespec ts = {0, 100000000};
-    nanosleep(&ts, NULL);
-  }
-  if (!in) { fprintf(stderr, "upload: no range assigned\n"); goto fail; }
+  if (take_range(argv[1], argv[2], &cl, &in, &e)) { fprintf(stderr, "upload: %s\n", e.msg); return 1; }
   Pcbpt__Assign *a = in->assign;
   pc_render_settings s;
   if (pc_wire_settings_from_proto(a->settings, &s, &e)) goto fail;
@@ -231,6 +261,7 @@ int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "mean") == 0) return cmd_mean(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "upload") == 0) return cmd_upload(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "bundle") == 0) return cmd_bundle(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size | bundle HOST:PORT TOKEN\n");
+  if (argc >= 2 && strcmp(argv[1], "fail") == 0) return cmd_fail(argc - 1, argv + 1);
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN\n");
   return 2;
 }

@@ -166,10 +166,84 @@ static void film_roundtrip(void **st) {
   free_film(&a); free_film(&b); free_film(&c);
 }
 
+/* A film serialized as older coordinators wrote it (PCFILM01: interleaved doubles), as in
+ * their checkpoints: it still loads. */
+static void film_v1_and_add(void **st) {
+  (void)st;
+  pc_film a, b;
+  make_film(&a, 4, 3);
+  make_film(&b, 4, 3);
+  size_t px = 36, n = 28 + 2 * 28 + 2 * px * 8;
+  uint8_t *v1 = calloc(1, n), *p = v1;
+  memcpy(p, "PCFILM01", 8);
+  p[8] = 4; p[12] = 3; p[16] = 2; p[20] = 5; /* w, h, layers, dropped (little-endian) */
+  p += 28;
+  const char *names[] = {"pt", "lt"};
+  for (int l = 0; l < 2; l++, p += 28) {
+    memcpy(p, names[l], strlen(names[l]));
+    p[16] = (uint8_t)(l == 0 ? PC_NORM_EYE : PC_NORM_LIGHT);
+    p[20] = (uint8_t)(l == 0 ? 2 : 24);
+  }
+  for (int l = 0; l < 2; l++)
+    for (size_t i = 0; i < px; i++, p += 8) {
+      double v = l == 0 ? 0.25 * (double)i : -1.0 - (double)i;
+      memcpy(p, &v, 8); /* the test machine is little-endian like the format */
+    }
+  pc_err e;
+  uint64_t counts[2];
+  assert_int_equal(pc_wire_film_counts(v1, n, &b, counts, &e), 0);
+  assert_int_equal(counts[0], 2);
+  assert_int_equal(counts[1], 24);
+  assert_int_equal(pc_wire_film_unpack(v1, n, &a, &e), 0);
+  assert_true(a.layers[0].sum[35] == 8.75 && a.layers[1].sum[35] == -36.0);
+  assert_int_equal(a.dropped_nonfinite, 5);
+  /* adding a film packed now (byte planes) to it: sums, counts and drops add */
+  uint8_t *v2;
+  size_t n2;
+  assert_int_equal(pc_wire_film_pack(&a, &v2, &n2, &e), 0);
+  assert_int_equal(n2, n);
+  assert_memory_not_equal(v1, v2, n);
+  assert_int_equal(pc_wire_film_add(v2, n2, &a, &e), 0);
+  assert_true(a.layers[0].sum[35] == 17.5 && a.layers[1].sum[0] == -2.0);
+  assert_int_equal(a.layers[0].count, 4);
+  assert_int_equal(a.layers[1].count, 48);
+  assert_int_equal(a.dropped_nonfinite, 10);
+  /* a non-finite value anywhere refuses the whole add, leaving the target as it was */
+  double inf = 1.0 / 0.0;
+  memcpy(v1 + 28 + 56 + (px + 7) * 8, &inf, 8);
+  assert_int_equal(pc_wire_film_add(v1, n, &a, &e), PC_ENUMERIC);
+  assert_non_null(strstr(e.msg, "layer 1"));
+  assert_true(a.layers[0].sum[35] == 17.5);
+  assert_int_equal(a.layers[0].count, 4);
+  free(v1); free(v2);
+  free_film(&a); free_film(&b);
+}
+
+/* Several byte-plane blocks and a short last one: every value comes back bit for bit. */
+static void film_blocks(void **st) {
+  (void)st;
+  pc_film a, b;
+  make_film(&a, 50, 50); /* 7500 values a layer: 3 blocks of 2048 and one of 1356 */
+  make_film(&b, 50, 50);
+  for (int l = 0; l < 2; l++)
+    for (int i = 0; i < 7500; i++) a.layers[l].sum[i] = (l ? -1.0 : 1.0) * (double)i * 1.000001 / 7.0 + 1e-300 * i;
+  uint8_t *buf;
+  size_t n;
+  pc_err e;
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  assert_int_equal(pc_wire_film_unpack(buf, n, &b, &e), 0);
+  assert_memory_equal(a.layers[0].sum, b.layers[0].sum, 7500 * sizeof(double));
+  assert_memory_equal(a.layers[1].sum, b.layers[1].sum, 7500 * sizeof(double));
+  assert_int_equal(pc_wire_film_add(buf, n, &b, &e), 0);
+  assert_true(b.layers[1].sum[7499] == 2 * a.layers[1].sum[7499] && b.layers[0].sum[4100] == 2 * a.layers[0].sum[4100]);
+  free(buf);
+  free_film(&a); free_film(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
-    cmocka_unit_test(film_roundtrip),
+    cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

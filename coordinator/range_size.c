@@ -1,0 +1,19 @@
+/* range_size.c: the size of a fresh iteration range (see range_size.h). */
+#include "range_size.h"
+
+uint64_t pc_range_size(const pc_range_size_in *in) {
+  if (!(in->rate > 0)) return 1;
+  double n = in->rate * in->range_seconds;
+  if (in->bounded) {
+    double others = in->others_rate > 0 ? in->others_rate : 0;
+    double left = (double)in->unassigned + (in->outstanding > 0 ? in->outstanding : 0);
+    double share = left * in->rate / (in->rate + others);
+    double floor_n = in->rate * PC_RANGE_MIN_SECONDS;
+    double want = 0.5 * share;
+    if (want < floor_n) want = floor_n < share ? floor_n : share;
+    if (n > want) n = want;
+  }
+  uint64_t k = n < 1 ? 1 : n > 1e6 ? 1000000 : (uint64_t)n;
+  if (in->bounded && k > in->unassigned) k = in->unassigned;
+  return k < 1 ? 1 : k;
+}

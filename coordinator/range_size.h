@@ -1,0 +1,32 @@
+/* range_size.h: how many fresh iterations a range holds (guided self-scheduling). Pure
+ * arithmetic on what the scheduler knows, kept apart from the loop's state so it can be
+ * tested on its own. */
+#ifndef PC_RANGE_SIZE_H
+#define PC_RANGE_SIZE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* A range shorter than this much of its worker's time costs more in its upload (a whole
+ * film, whatever the iteration count) than it saves in balance at the end of a job. */
+#define PC_RANGE_MIN_SECONDS 0.5
+
+typedef struct pc_range_size_in {
+  double rate;            /* the asking worker's iterations/s on this job; <= 0: not measured */
+  double others_rate;     /* summed rates of the other workers on this job or idle */
+  bool bounded;           /* the job ends at an iteration count */
+  uint64_t unassigned;    /* bounded: fresh iterations nobody holds yet */
+  double outstanding;     /* bounded: iterations held by the others (or orphaned) not yet rendered */
+  double range_seconds;   /* target length of a range in the asking worker's time */
+} pc_range_size_in;
+
+/* The size of the next fresh range, >= 1 and (bounded) <= unassigned; the caller checks
+ * that something is left. An unmeasured worker gets a 1-iteration probe, which measures
+ * it. Otherwise a range is range_seconds of the worker's rate, and near the end of a
+ * bounded job half of the worker's fair share of the work left (unassigned + outstanding,
+ * in proportion to its rate, so all would finish together): the ranges shrink as the job
+ * ends, and the half kept back evens out wrong rate estimates on later requests. Not under
+ * PC_RANGE_MIN_SECONDS of work unless the whole share is less. */
+uint64_t pc_range_size(const pc_range_size_in *in);
+
+#endif

@@ -1,0 +1,109 @@
+/* test_range_size.c: the coordinator's range sizing (coordinator/range_size.c): probes for
+ * unmeasured workers, the range_seconds cap, the floor, and, simulated on workers of known
+ * speed, that an iteration-bounded job's ranges shrink at the end so the workers finish
+ * within about PC_RANGE_MIN_SECONDS of each other with every iteration handed out once. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include "range_size.h"
+
+static void single_requests(void **st) {
+  (void)st;
+  pc_range_size_in in = {.rate = 0, .range_seconds = 3, .bounded = true, .unassigned = 500};
+  assert_int_equal(pc_range_size(&in), 1); /* probe */
+  in.rate = 20;
+  in.bounded = false;
+  assert_int_equal(pc_range_size(&in), 60); /* time-bounded: range_seconds of work */
+  in.bounded = true;
+  in.others_rate = 20;
+  assert_int_equal(pc_range_size(&in), 60); /* plenty left: the cap */
+  in.unassigned = 100;
+  in.outstanding = 30;
+  assert_int_equal(pc_range_size(&in), 32); /* half of 130 * 20/40 */
+  in.unassigned = 12;
+  in.outstanding = 4;
+  assert_int_equal(pc_range_size(&in), 8); /* the whole share (16/2): under the floor of half a second */
+  in.unassigned = 30;
+  assert_int_equal(pc_range_size(&in), 10); /* the floor: half a second, less than the share (17) */
+  in.unassigned = 3;
+  assert_int_equal(pc_range_size(&in), 3); /* never more than is left */
+  in.range_seconds = 0.1;
+  in.unassigned = 100;
+  assert_int_equal(pc_range_size(&in), 2); /* the cap wins over the floor */
+}
+
+#define NW 3
+typedef struct sim {
+  double rate[NW];     /* true speed */
+  double reported[NW]; /* what the scheduler believes */
+  double busy_until[NW], start[NW];
+  uint64_t first[NW], count[NW];
+} sim;
+
+/* Runs a job of `total` iterations on nw workers; returns the spread of their finishing
+ * times and checks that the ranges tile [0, total) and the last ones are short. */
+static double simulate(sim *s, int nw, uint64_t total, double range_seconds) {
+  uint64_t next = 0, largest = 0, last = 0;
+  double t = 0, finish[NW] = {0};
+  for (int i = 0; i < nw; i++) s->busy_until[i] = s->count[i] = 0;
+  for (;;) {
+    int w = 0; /* the worker that asks next: the first to become idle */
+    for (int i = 1; i < nw; i++)
+      if (s->busy_until[i] < s->busy_until[w]) w = i;
+    t = s->busy_until[w];
+    if (s->count[w]) finish[w] = t;
+    if (next >= total) {
+      s->busy_until[w] = INFINITY;
+      bool all = true;
+      for (int i = 0; i < nw; i++) all = all && isinf(s->busy_until[i]);
+      if (all) break;
+      continue;
+    }
+    pc_range_size_in in = {.rate = s->reported[w], .range_seconds = range_seconds, .bounded = true,
+                           .unassigned = total - next};
+    for (int i = 0; i < nw; i++) {
+      if (i == w || isinf(s->busy_until[i])) continue;
+      in.others_rate += s->reported[i];
+      double done = (t - s->start[i]) * s->rate[i];
+      if (done < (double)s->count[i]) in.outstanding += (double)s->count[i] - done;
+    }
+    uint64_t n = pc_range_size(&in);
+    assert_true(n >= 1 && n <= total - next);
+    s->first[w] = next;
+    s->count[w] = n;
+    s->start[w] = t;
+    s->busy_until[w] = t + (double)n / s->rate[w];
+    next += n;
+    if (n > largest) largest = n;
+    last = n;
+  }
+  assert_int_equal(next, total);
+  assert_true(last < largest);
+  double lo = INFINITY, hi = 0;
+  for (int i = 0; i < nw; i++) {
+    lo = fmin(lo, finish[i]);
+    hi = fmax(hi, finish[i]);
+  }
+  return hi - lo;
+}
+
+static void tail_balance(void **st) {
+  (void)st;
+  /* two equal workers, as in the scaling benchmark */
+  sim a = {.rate = {20, 20}, .reported = {20, 20}};
+  assert_true(simulate(&a, 2, 512, 3) <= PC_RANGE_MIN_SECONDS + 1e-9);
+  /* unequal speeds, three workers */
+  sim b = {.rate = {30, 10, 20}, .reported = {30, 10, 20}};
+  assert_true(simulate(&b, 3, 1000, 3) <= PC_RANGE_MIN_SECONDS + 1e-9);
+  /* one worker 25% slower than it reports: the half kept back evens it out */
+  sim c = {.rate = {15, 20}, .reported = {20, 20}};
+  assert_true(simulate(&c, 2, 512, 3) <= 2 * PC_RANGE_MIN_SECONDS);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(single_requests), cmocka_unit_test(tail_balance)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
