@@ -272,7 +272,8 @@ int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE
   for (size_t i = 0; !rc && i < b->n_files; i++) {
     if ((rc = make_parents(tmp, b->files[i]->path, e)) != 0) break;
     char p[PATH_MAX];
-    snprintf(p, sizeof p, "%s/%s", tmp, b->files[i]->path);
+    int pn = snprintf(p, sizeof p, "%s/%s", tmp, b->files[i]->path);
+    if (pn < 0 || (size_t)pn >= sizeof p) { rc = pc_errf(e, PC_ELIMIT, "bundle: cache path too long for %s", b->files[i]->path); break; }
     int fd = open(p, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
     if (fd < 0) { rc = pc_errf(e, PC_EIO, "bundle: create %s: %s", p, strerror(errno)); break; }
     if (pc_write_all(fd, b->files[i]->data.data, b->files[i]->data.len) != 0 || close(fd) != 0)

@@ -539,7 +539,7 @@ int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e) {
   else {
     char hostname[64] = "worker";
     if (gethostname(hostname, sizeof hostname - 1) != 0) snprintf(hostname, sizeof hostname, "worker");
-    snprintf(w->name, sizeof w->name, "%s-%ld", hostname, (long)getpid());
+    snprintf(w->name, sizeof w->name, "%.40s-%ld", hostname, (long)getpid()); /* fits: 40 + 1 + 20 < 64 */
   }
   if (mkdir(w->cache, 0700) != 0 && errno != EEXIST) {
     int rc = pc_errf(e, PC_EIO, "%s: %s", w->cache, strerror(errno));
