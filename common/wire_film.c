@@ -140,20 +140,18 @@ static int check(const uint8_t *buf, size_t n, const pc_film *like, bool *planes
   return 0;
 }
 
-int pc_wire_film_counts(const uint8_t *buf, size_t n, const pc_film *like, uint64_t *counts, pc_err *e) {
-  bool planes;
-  int rc = check(buf, n, like, &planes, e);
-  if (rc) return rc;
-  for (int l = 0; l < like->nlayers; l++) counts[l] = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
-  return 0;
-}
-
-/* Sets (add = false) or adds the serialized film into `into` once it passed check(), so
- * `into` is unchanged on error. */
-static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_err *e) {
-  bool planes;
+/* Sets (add = false) or adds the serialized film into `into` once it passed check() and
+ * judge, so `into` is unchanged on error. */
+static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_counts_judge judge, void *user,
+                 pc_err *e) {
+  bool planes = false;
   int rc = check(buf, n, into, &planes, e);
   if (rc) return rc;
+  if (judge) {
+    uint64_t counts[PC_FILM_MAX_LAYERS];
+    for (int l = 0; l < into->nlayers; l++) counts[l] = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
+    if ((rc = judge(user, counts, e)) != 0) return rc;
+  }
   size_t px = (size_t)into->w * (size_t)into->h * 3;
   const uint8_t *d = buf + HEAD + (size_t)into->nlayers * LAYER_HEAD;
   double v[PLANE_BLOCK];
@@ -173,8 +171,12 @@ static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_err *
   return 0;
 }
 
-int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e) { return apply(buf, n, into, false, e); }
-int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_err *e) { return apply(buf, n, into, true, e); }
+int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e) {
+  return apply(buf, n, into, false, NULL, NULL, e);
+}
+int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e) {
+  return apply(buf, n, into, true, judge, user, e);
+}
 
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e) {
   size_t cap = ZSTD_compressBound(n);

@@ -22,12 +22,13 @@ int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
 /* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
  * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error. */
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
-/* The same checks, then adds buf's sums, counts and dropped samples into `into` (unchanged
- * on error): a merge without an intermediate film. */
-int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
-/* The checks of pc_wire_film_unpack against the shape of `like`, then buf's per-layer
- * counts into counts[like->nlayers], so a receiver can judge them before adding anything. */
-int pc_wire_film_counts(const uint8_t *buf, size_t n, const pc_film *like, uint64_t *counts, pc_err *e);
+/* Judges buf's per-layer counts (counts[into->nlayers]) before anything is added: 0 accepts,
+ * an error code (with e set) refuses. */
+typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *e);
+/* The same checks (a non-finite sum is refused before the counts are judged), then judge
+ * (NULL: any counts), then adds buf's sums, counts and dropped samples into `into`
+ * (unchanged on error): a merge without an intermediate film. */
+int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);

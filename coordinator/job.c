@@ -68,6 +68,28 @@ static uint8_t *wire_buf(pc_job *j, pc_err *e) {
   return j->wire_buf;
 }
 
+/* An upload's per-layer counts must be those of op->count iterations: eye layers count the
+ * iterations, light layers the same light paths per iteration as every upload before. */
+static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
+  pc_op *op = user;
+  const pc_film *f = &op->j->film;
+  for (int l = 0; l < f->nlayers; l++) {
+    uint64_t cnt = counts[l];
+    if (f->layers[l].norm == PC_NORM_EYE) {
+      if (cnt != op->count)
+        return pc_errf(e, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations", f->layers[l].name,
+                       (unsigned long long)cnt, (unsigned long long)op->count);
+    } else {
+      int64_t per = (int64_t)(cnt / op->count);
+      if (cnt % op->count != 0 || (op->light_per_iter >= 0 && per != op->light_per_iter))
+        return pc_errf(e, PC_EINVAL, "inconsistent counts: light layer '%s' counts %llu for %llu iterations",
+                       f->layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
+      op->light_per_iter = per;
+    }
+  }
+  return 0;
+}
+
 static void merge_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
@@ -78,29 +100,9 @@ static void merge_work(uv_work_t *w) {
     return;
   }
   uint8_t *raw = wire_buf(j, &op->err);
-  uint64_t counts[PC_FILM_MAX_LAYERS];
   if (!raw) { op->rc = op->err.code; return; }
   if ((op->rc = pc_wire_decompress_to(op->buf, op->len, raw, want, &op->err)) != 0) return;
-  if ((op->rc = pc_wire_film_counts(raw, want, &j->film, counts, &op->err)) != 0) return;
-  for (int l = 0; l < j->film.nlayers; l++) {
-    uint64_t cnt = counts[l];
-    if (j->film.layers[l].norm == PC_NORM_EYE) {
-      if (cnt != op->count) {
-        op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations",
-                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        return;
-      }
-    } else {
-      int64_t per = (int64_t)(cnt / op->count);
-      if (cnt % op->count != 0 || (op->light_per_iter >= 0 && per != op->light_per_iter)) {
-        op->rc = pc_errf(&op->err, PC_EINVAL, "inconsistent counts: light layer '%s' counts %llu for %llu iterations",
-                         j->film.layers[l].name, (unsigned long long)cnt, (unsigned long long)op->count);
-        return;
-      }
-      op->light_per_iter = per;
-    }
-  }
-  op->rc = pc_wire_film_add(raw, want, &j->film, &op->err);
+  op->rc = pc_wire_film_add(raw, want, &j->film, judge_counts, op, &op->err);
 }
 
 static void ckpt_work(uv_work_t *w) {

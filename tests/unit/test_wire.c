@@ -166,6 +166,18 @@ static void film_roundtrip(void **st) {
   free_film(&a); free_film(&b); free_film(&c);
 }
 
+/* A counts judge that notes what it was shown and answers `answer`. */
+typedef struct seen_counts {
+  uint64_t counts[2];
+  int answer;
+} seen_counts;
+
+static int record_counts(void *user, const uint64_t *counts, pc_err *e) {
+  seen_counts *s = user;
+  memcpy(s->counts, counts, sizeof s->counts);
+  return s->answer ? pc_errf(e, s->answer, "counts refused") : 0;
+}
+
 /* A film serialized as older coordinators wrote it (PCFILM01: interleaved doubles), as in
  * their checkpoints: it still loads. */
 static void film_v1_and_add(void **st) {
@@ -190,10 +202,12 @@ static void film_v1_and_add(void **st) {
       memcpy(p, &v, 8); /* the test machine is little-endian like the format */
     }
   pc_err e;
-  uint64_t counts[2];
-  assert_int_equal(pc_wire_film_counts(v1, n, &b, counts, &e), 0);
-  assert_int_equal(counts[0], 2);
-  assert_int_equal(counts[1], 24);
+  /* the judge sees the counts before anything is added, and its refusal leaves b as it was */
+  seen_counts seen = {{0, 0}, PC_EINVAL};
+  assert_int_equal(pc_wire_film_add(v1, n, &b, record_counts, &seen, &e), PC_EINVAL);
+  assert_int_equal(seen.counts[0], 2);
+  assert_int_equal(seen.counts[1], 24);
+  assert_true(b.layers[0].sum[35] == 0.0 && b.layers[0].count == 0 && b.dropped_nonfinite == 0);
   assert_int_equal(pc_wire_film_unpack(v1, n, &a, &e), 0);
   assert_true(a.layers[0].sum[35] == 8.75 && a.layers[1].sum[35] == -36.0);
   assert_int_equal(a.dropped_nonfinite, 5);
@@ -203,7 +217,7 @@ static void film_v1_and_add(void **st) {
   assert_int_equal(pc_wire_film_pack(&a, &v2, &n2, &e), 0);
   assert_int_equal(n2, n);
   assert_memory_not_equal(v1, v2, n);
-  assert_int_equal(pc_wire_film_add(v2, n2, &a, &e), 0);
+  assert_int_equal(pc_wire_film_add(v2, n2, &a, NULL, NULL, &e), 0);
   assert_true(a.layers[0].sum[35] == 17.5 && a.layers[1].sum[0] == -2.0);
   assert_int_equal(a.layers[0].count, 4);
   assert_int_equal(a.layers[1].count, 48);
@@ -211,7 +225,9 @@ static void film_v1_and_add(void **st) {
   /* a non-finite value anywhere refuses the whole add, leaving the target as it was */
   double inf = 1.0 / 0.0;
   memcpy(v1 + 28 + 56 + (px + 7) * 8, &inf, 8);
-  assert_int_equal(pc_wire_film_add(v1, n, &a, &e), PC_ENUMERIC);
+  seen = (seen_counts){{0, 0}, 0};
+  assert_int_equal(pc_wire_film_add(v1, n, &a, record_counts, &seen, &e), PC_ENUMERIC);
+  assert_int_equal(seen.counts[0], 0); /* refused for the value before its counts were judged */
   assert_non_null(strstr(e.msg, "layer 1"));
   assert_true(a.layers[0].sum[35] == 17.5);
   assert_int_equal(a.layers[0].count, 4);
@@ -234,7 +250,7 @@ static void film_blocks(void **st) {
   assert_int_equal(pc_wire_film_unpack(buf, n, &b, &e), 0);
   assert_memory_equal(a.layers[0].sum, b.layers[0].sum, 7500 * sizeof(double));
   assert_memory_equal(a.layers[1].sum, b.layers[1].sum, 7500 * sizeof(double));
-  assert_int_equal(pc_wire_film_add(buf, n, &b, &e), 0);
+  assert_int_equal(pc_wire_film_add(buf, n, &b, NULL, NULL, &e), 0);
   assert_true(b.layers[1].sum[7499] == 2 * a.layers[1].sum[7499] && b.layers[0].sum[4100] == 2 * a.layers[0].sum[4100]);
   free(buf);
   free_film(&a); free_film(&b);
