@@ -221,16 +221,28 @@ static int cairo_fail(pc_err *e, const char *tmp, const char *path, cairo_status
                  cairo_status_to_string(st));
 }
 
-int pc_chart_write_png(const pc_chart *c, const char *path, pc_err *e) {
-  int rc = check_chart(c, path, e);
-  char tmp[4096];
-  if (rc == PC_OK) rc = pc_image_tmp_path(path, tmp, sizeof tmp, e);
-  if (rc != PC_OK) return rc;
-  cairo_surface_t *surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, c->width, c->height);
+/* The chart drawn on surf; the drawing's status. */
+static cairo_status_t draw_on(cairo_surface_t *surf, const pc_chart *c) {
   cairo_t *cr = cairo_create(surf);
   draw(cr, c);
   cairo_status_t st = cairo_status(cr);
   cairo_destroy(cr);
+  return st;
+}
+
+/* Checks the chart and names the temporary file it is written to before the rename. */
+static int begin(const pc_chart *c, const char *path, char *tmp, size_t tmp_size, pc_err *e) {
+  int rc = check_chart(c, path, e);
+  if (rc == PC_OK) rc = pc_image_tmp_path(path, tmp, tmp_size, e);
+  return rc;
+}
+
+int pc_chart_write_png(const pc_chart *c, const char *path, pc_err *e) {
+  char tmp[4096];
+  int rc = begin(c, path, tmp, sizeof tmp, e);
+  if (rc != PC_OK) return rc;
+  cairo_surface_t *surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, c->width, c->height);
+  cairo_status_t st = draw_on(surf, c);
   if (st == CAIRO_STATUS_SUCCESS) st = cairo_surface_write_to_png(surf, tmp);
   cairo_surface_destroy(surf);
   if (st != CAIRO_STATUS_SUCCESS) return cairo_fail(e, tmp, path, st);
@@ -238,15 +250,11 @@ int pc_chart_write_png(const pc_chart *c, const char *path, pc_err *e) {
 }
 
 int pc_chart_write_svg(const pc_chart *c, const char *path, pc_err *e) {
-  int rc = check_chart(c, path, e);
   char tmp[4096];
-  if (rc == PC_OK) rc = pc_image_tmp_path(path, tmp, sizeof tmp, e);
+  int rc = begin(c, path, tmp, sizeof tmp, e);
   if (rc != PC_OK) return rc;
   cairo_surface_t *surf = cairo_svg_surface_create(tmp, c->width, c->height);
-  cairo_t *cr = cairo_create(surf);
-  draw(cr, c);
-  cairo_status_t st = cairo_status(cr);
-  cairo_destroy(cr);
+  cairo_status_t st = draw_on(surf, c);
   cairo_surface_finish(surf); /* flushes the SVG to the file */
   if (st == CAIRO_STATUS_SUCCESS) st = cairo_surface_status(surf);
   cairo_surface_destroy(surf);
