@@ -6,7 +6,7 @@ start_worker w1
 J=$("$B/pcbpt-coord" submit "$S/scenes/furnace/scene.xml" --spp 16 --width 64 --height 64 $H | tail -1)
 echo "wrong-token-entirely" > "$T/bad"; chmod 600 "$T/bad"
 "$B/pcbpt-coord" list --host 127.0.0.1:$PORT --token-file "$T/bad" 2>/dev/null && fail "wrong token accepted"
-python3 - "$PORT" "$S/common/wire_frame.h" <<'PY'
+python3 - "$PORT" "$S/proto/wire_frame.h" <<'PY'
 import socket, struct, sys, time, os, re
 port = int(sys.argv[1])
 version = int(re.search(r"PC_WIRE_PROTOCOL_VERSION (\d+)u", open(sys.argv[2]).read()).group(1))

@@ -166,10 +166,10 @@ static void test_full_scene(void **state) {
 
 static void test_cornell_box(void **state) {
   (void)state;
-  const char *shared = getenv("PCBPT_SHARED_DIR");
-  if (!shared) skip();
+  const char *src = getenv("PCBPT_SOURCE_DIR");
+  assert_non_null(src);
   char path[4096];
-  snprintf(path, sizeof path, "%s/scenes/cornell-box-bitterli/scene.xml", shared);
+  snprintf(path, sizeof path, "%s/scenes/cornell-box/scene.xml", src);
   pc_scene s;
   pc_err e = {0};
   int rc = pc_scene_load(path, &s, &e);
@@ -185,7 +185,7 @@ static void test_cornell_box(void **state) {
   assert_true(left->twosided);
   near3(left->reflectance.value, v3(0.63f, 0.065f, 0.05f), 1e-7f);
   assert_false(s.materials[s.shapes[7].material].twosided);
-  assert_int_equal(s.method, PC_METHOD_BDPT);
+  assert_int_equal(s.method, PC_METHOD_PCBPT);
   assert_int_equal(s.max_depth, 11);
   assert_int_equal(s.camera.width, 256);
   assert_true(s.camera.fov_deg == 19.5f);

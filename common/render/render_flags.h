@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "error.h"
+#include "parse.h"
 #include "render.h"
 
 typedef struct pc_render_request {
@@ -29,10 +30,5 @@ void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s);
 
 /* Help text for the render flags (one flag per line). */
 extern const char pc_render_flags_help[];
-
-/* Strict number parsing: the whole string, in range; false otherwise. */
-bool pc_parse_i64(const char *s, long long lo, long long hi, long long *out);
-bool pc_parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out);
-bool pc_parse_f64(const char *s, double lo, double hi, double *out);
 
 #endif

@@ -155,7 +155,7 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
   int rc = check_layers(path, layers, nlayers, e);
   if (rc) return rc;
   char tmp[4096];
-  if ((rc = pc_image_tmp_path(path, tmp, sizeof tmp, e))) return rc;
+  if ((rc = pc_file_tmp_path(path, tmp, sizeof tmp, e))) return rc;
 
   int nch = 3 * nlayers;
   out_channel *ch = calloc((size_t)nch, sizeof *ch);
@@ -184,7 +184,7 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
     if (rv && rc == PC_OK) rc = exr_fail(e, tmp, "cannot finish", rv, &m);
   }
   free(ch);
-  if (rc == PC_OK) return pc_image_commit(tmp, path, e);
+  if (rc == PC_OK) return pc_file_commit(tmp, path, e);
   unlink(tmp);
   return rc;
 }

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render_flags.h"
+#include "parse.h"
 #include "wire_log.h"
 
 struct pc_conn_frame {

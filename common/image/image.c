@@ -1,11 +1,9 @@
-/* image.c: the pc_image raster's lifetime, format detection by magic bytes for pc_image_read,
- * and the temp-file-and-rename helpers all image writers use. */
+/* image.c: the pc_image raster's lifetime, format detection by magic bytes for pc_image_read. */
 #include "image_internal.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 void pc_image_free(pc_image *img) {
   if (!img) return;
@@ -33,19 +31,4 @@ int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e
     return pc_jpeg_read(path, srgb_to_linear, out, e);
   if (n >= 4 && memcmp(m, exr_magic, 4) == 0) return pc_exr_read_beauty(path, out, e);
   return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG or OpenEXR file", path);
-}
-
-int pc_image_tmp_path(const char *path, char *buf, size_t size, pc_err *e) {
-  int n = snprintf(buf, size, "%s.tmp.%ld", path, (long)getpid());
-  if (n < 0 || (size_t)n >= size) return pc_errf(e, PC_EINVAL, "%s: path too long", path);
-  return PC_OK;
-}
-
-int pc_image_commit(const char *tmp, const char *path, pc_err *e) {
-  if (rename(tmp, path) != 0) {
-    int err = errno;
-    unlink(tmp);
-    return pc_errf(e, PC_EIO, "%s: cannot rename %s into place: %s", path, tmp, strerror(err));
-  }
-  return PC_OK;
 }

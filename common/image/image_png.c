@@ -184,7 +184,7 @@ int pc_png_write_preview(const char *path, int w, int h, const float *rgb, float
   if (!isfinite(scale) || scale <= 0.0f)
     return pc_errf(e, PC_EINVAL, "%s: exposure %g out of range", path, (double)exposure);
   char tmp[4096];
-  int rc = pc_image_tmp_path(path, tmp, sizeof tmp, e);
+  int rc = pc_file_tmp_path(path, tmp, sizeof tmp, e);
   if (rc) return rc;
 
   size_t n = (size_t)w * h * 3;
@@ -222,7 +222,7 @@ done:
   if (wr->f && fclose(wr->f) != 0 && rc == PC_OK)
     rc = pc_errf(e, PC_EIO, "%s: write error: %s", tmp, strerror(errno));
   if (wr->f) {
-    if (rc == PC_OK) rc = pc_image_commit(tmp, path, e);
+    if (rc == PC_OK) rc = pc_file_commit(tmp, path, e);
     else unlink(tmp);
   }
   free(pixels);

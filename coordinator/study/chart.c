@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <unistd.h>
 
-#include "image_internal.h"
+#include "file_replace.h"
 
 /* Colour-blind-friendly qualitative palette (Okabe-Ito), cycled past its end. */
 static const double palette[][3] = {
@@ -233,7 +233,7 @@ static cairo_status_t draw_on(cairo_surface_t *surf, const pc_chart *c) {
 /* Checks the chart and names the temporary file it is written to before the rename. */
 static int begin(const pc_chart *c, const char *path, char *tmp, size_t tmp_size, pc_err *e) {
   int rc = check_chart(c, path, e);
-  if (rc == PC_OK) rc = pc_image_tmp_path(path, tmp, tmp_size, e);
+  if (rc == PC_OK) rc = pc_file_tmp_path(path, tmp, tmp_size, e);
   return rc;
 }
 
@@ -246,7 +246,7 @@ int pc_chart_write_png(const pc_chart *c, const char *path, pc_err *e) {
   if (st == CAIRO_STATUS_SUCCESS) st = cairo_surface_write_to_png(surf, tmp);
   cairo_surface_destroy(surf);
   if (st != CAIRO_STATUS_SUCCESS) return cairo_fail(e, tmp, path, st);
-  return pc_image_commit(tmp, path, e);
+  return pc_file_commit(tmp, path, e);
 }
 
 int pc_chart_write_svg(const pc_chart *c, const char *path, pc_err *e) {
@@ -259,5 +259,5 @@ int pc_chart_write_svg(const pc_chart *c, const char *path, pc_err *e) {
   if (st == CAIRO_STATUS_SUCCESS) st = cairo_surface_status(surf);
   cairo_surface_destroy(surf);
   if (st != CAIRO_STATUS_SUCCESS) return cairo_fail(e, tmp, path, st);
-  return pc_image_commit(tmp, path, e);
+  return pc_file_commit(tmp, path, e);
 }

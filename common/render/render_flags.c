@@ -1,7 +1,6 @@
 /* render_flags.c: parsing of the render flags (see render_flags.h). */
 #include "render_flags.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,36 +26,6 @@ const char pc_render_flags_help[] =
 void pc_render_request_default(pc_render_request *r) {
   memset(r, 0, sizeof *r);
   pc_render_settings_default(&r->set);
-}
-
-bool pc_parse_i64(const char *s, long long lo, long long hi, long long *out) {
-  if (!s || !*s) return false;
-  char *end;
-  errno = 0;
-  long long v = strtoll(s, &end, 10);
-  if (errno || *end || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
-
-bool pc_parse_u64(const char *s, uint64_t lo, uint64_t hi, uint64_t *out) {
-  if (!s || !*s || *s == '-' || *s == '+') return false;
-  char *end;
-  errno = 0;
-  unsigned long long v = strtoull(s, &end, 10);
-  if (errno || *end || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
-
-bool pc_parse_f64(const char *s, double lo, double hi, double *out) {
-  if (!s || !*s) return false;
-  char *end;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (errno || *end || !isfinite(v) || v < lo || v > hi) return false;
-  *out = v;
-  return true;
 }
 
 int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e) {

@@ -1,12 +1,12 @@
 /* image_internal.h: what the image codecs (image.c, image_png.c, image_jpeg.c, image_exr.c)
- * share with each other and nobody else: per-format readers, the sRGB transfer functions and
- * the temporary-file-then-rename discipline of every image writer (chart.c included). */
+ * share with each other and nobody else: per-format readers and the sRGB transfer functions. */
 #ifndef PC_IMAGE_INTERNAL_H
 #define PC_IMAGE_INTERNAL_H
 
 #include <math.h>
 #include <stdio.h>
 
+#include "file_replace.h"
 #include "image.h"
 
 int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
@@ -21,11 +21,5 @@ static inline float pc_srgb_to_linear(float c) {
 static inline float pc_linear_to_srgb(float v) {
   return v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
 }
-
-/* "<path>.tmp.<pid>": writers fill this and rename() it over path, so a reader of path sees
- * either the old file or the complete new one. */
-int pc_image_tmp_path(const char *path, char *buf, size_t size, pc_err *e);
-/* rename(tmp, path), removing tmp when that fails. */
-int pc_image_commit(const char *tmp, const char *path, pc_err *e);
 
 #endif
