@@ -178,6 +178,20 @@ static void free_range_list_closed(pc_job *j) {
 static void check_finished(pc_coord *c, pc_job *j);
 static void maybe_ckpt(pc_coord *c, pc_job *j);
 
+static bool job_live(const pc_job *j) { return j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING; }
+
+/* Answers acknowledgements that no checkpoint will commit (the job ended first): a worker
+ * uploads nothing more until its last upload is answered, so silence would wedge it. */
+static void refuse_acks(pc_pending_ack **list, const char *why) {
+  while (*list) {
+    pc_pending_ack *a = *list;
+    *list = a->next;
+    if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, 0, why);
+    pc_peer_unref(a->peer);
+    free(a);
+  }
+}
+
 static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
   pc_err e = {0};
   int rc = pc_store_begin(c, &e);
@@ -236,8 +250,13 @@ static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
     pc_job_path(c, j, leaf, p, sizeof p);
     if (unlink(p) != 0 && errno != ENOENT) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
   }
-  for (pc_pending_ack *a = op->acks; a; a = a->next)
+  while (op->acks) {
+    pc_pending_ack *a = op->acks;
+    op->acks = a->next;
     if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, a->acked_end, NULL);
+    pc_peer_unref(a->peer);
+    free(a);
+  }
   free_range_list_closed(j);
 }
 
@@ -261,6 +280,9 @@ static void op_after(uv_work_t *w, int status) {
         r->orphan_since = 1;
         pc_sched_nudge(c);
       }
+    } else if (r && !job_live(j)) {
+      /* merged into a film nobody will write: the job ended while it ran */
+      if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, "job is not running");
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
@@ -289,12 +311,7 @@ static void op_after(uv_work_t *w, int status) {
       j->ckpts++;
       commit_ckpt(c, j, op);
     }
-    while (op->acks) {
-      pc_pending_ack *a = op->acks;
-      op->acks = a->next;
-      pc_peer_unref(a->peer);
-      free(a);
-    }
+    refuse_acks(&op->acks, "job failed"); /* what the failed checkpoint did not commit */
     free(op->snap);
     /* (an upload that came after all, or a range left open, makes it a checkpoint like others) */
     bool done = j->finishing && !op->rc && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
@@ -467,6 +484,7 @@ void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
   snprintf(j->error, sizeof j->error, "%s", why);
   j->state = PC_JOB_FAILED;
   j->finishing = false;
+  refuse_acks(&j->acks, "job failed");
   for (pc_range *r = j->ranges; r; r = r->next)
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   pc_err e;
@@ -479,6 +497,7 @@ void pc_job_cancel(pc_coord *c, pc_job *j) {
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   j->state = PC_JOB_CANCELLED;
   j->finishing = false;
+  refuse_acks(&j->acks, "job cancelled");
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
   pc_wire_log("job %llu: cancelled", (unsigned long long)j->id);

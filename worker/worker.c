@@ -138,6 +138,20 @@ static void send_closing(worker *w) {
   send_env(w, &env);
 }
 
+/* Tells the coordinator a range cannot be rendered here (it counts towards failing the job,
+ * with this reason) and asks again only after a pause, so a failing worker does not spin. */
+static void give_back(worker *w, uint64_t job, uint64_t range, const char *why) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
+  f.job_id = job;
+  f.range_id = range;
+  f.reason = (char *)why;
+  env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
+  env.range_failed = &f;
+  send_env(w, &env);
+  w->next_request = now_s() + 0.5;
+}
+
 /* The render thread is idle and nothing of the range is left to take: ask for the next one
  * (a final delta may still wait for its acknowledgement). */
 static void finish_range(worker *w) {
@@ -156,16 +170,7 @@ static void pump(worker *w) {
   uv_mutex_unlock(&w->r.mu);
   if (done && failed) {
     pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
-    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-    Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
-    f.job_id = w->job;
-    f.range_id = w->range;
-    f.reason = w->r.error;
-    env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
-    env.range_failed = &f;
-    send_env(w, &env);
-    /* ask again after a pause, so a failing worker does not spin */
-    w->next_request = now_s() + 0.5;
+    give_back(w, w->job, w->range, w->r.error);
     w->busy = false;
     w->drop = w->stopping = false;
     return;
@@ -238,7 +243,7 @@ static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
   if (pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
       pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, &e) != 0) {
     pc_wire_log("job %llu: cannot start range %llu: %s", (unsigned long long)a->job_id, (unsigned long long)a->range_id, e.msg);
-    if (w->conn) pc_conn_close(w->conn, "cannot start the assigned range");
+    give_back(w, a->job_id, a->range_id, e.msg);
     return;
   }
   w->busy = true;
@@ -302,8 +307,12 @@ static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
   Pcbpt__Assign *a = w->pending_assign;
   w->pending_assign = NULL;
   if (rc) {
-    pc_wire_log("refused scene bundle: %s", e.msg);
-    pc_conn_close(w->conn, "bad scene bundle");
+    /* the range fails, not the connection: the job fails after a few such ranges with this
+     * reason, where reconnecting would fetch the same bundle forever */
+    char why[sizeof e.msg + 32];
+    snprintf(why, sizeof why, "scene bundle refused: %s", e.msg);
+    pc_wire_log("job %llu: %s", (unsigned long long)a->job_id, why);
+    give_back(w, a->job_id, a->range_id, why);
   } else {
     start_range(w, a, scene);
   }
@@ -311,17 +320,22 @@ static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
 }
 
 static void on_cancel(worker *w, const Pcbpt__Cancel *c) {
-  if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) return;
+  /* an upload of a dropped range (this one or the last) is not waited for: nothing would
+   * be uploaded after it */
+  if (!c->upload_partial && w->inflight && w->in_job == c->job_id && (!c->range_id || c->range_id == w->in_range)) {
+    free(w->inflight);
+    w->inflight = NULL;
+  }
+  if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) {
+    pump(w);
+    return;
+  }
   atomic_store(&w->r.cancel, true);
   if (c->upload_partial) {
     w->stopping = true;
     pc_wire_log("job %llu: halted; uploading what is rendered", (unsigned long long)w->job);
   } else {
     w->drop = true;
-    if (w->inflight && w->in_range == w->range) {
-      free(w->inflight);
-      w->inflight = NULL;
-    }
     pc_wire_log("job %llu: range %llu cancelled", (unsigned long long)w->job, (unsigned long long)w->range);
   }
   pump(w);
