@@ -30,6 +30,7 @@ typedef struct pc_range {
   double orphan_since;  /* when the owner went away; 0 while owned */
   bool merging;         /* an upload for it is being merged */
   bool final;           /* the owner sent its last upload: close at merged on commit */
+  double progress_at;   /* when it was assigned or its owner's last upload came (0: not owned) */
   struct pc_range *next;
 } pc_range;
 

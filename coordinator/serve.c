@@ -673,10 +673,31 @@ static void on_connection(uv_stream_t *server, int status) {
     pc_conn_close(&p->conn, uv_strerror(r));
 }
 
+/* The loop did not run for `by` seconds (the process was stopped, or the machine slept):
+ * nothing was read in that time, so the peers' silence is ours. Every time a timeout is
+ * judged from moves forward by as much, and the peers' pending input is read before it is
+ * judged again. */
+static void loop_stalled(pc_coord *c, double by) {
+  pc_wire_log("the loop did not run for %.1f s: timeouts restart from now", by);
+  for (pc_peer *p = c->peers; p; p = p->next) {
+    p->connected += by;
+    p->last_seen += by;
+    p->hb_time += by;
+  }
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    if (j->stopping_since > 0) j->stopping_since += by;
+    for (pc_range *r = j->ranges; r; r = r->next) {
+      if (r->orphan_since > 1) r->orphan_since += by; /* 1: free at once */
+      if (r->progress_at > 0) r->progress_at += by;
+    }
+  }
+}
+
 static void on_tick(uv_timer_t *t) {
   pc_coord *c = t->data;
   double now = pc_coord_now(), dt = now - c->last_tick;
   c->last_tick = now;
+  if (dt > 1.0 + 2e-3 * c->tick_ms) loop_stalled(c, dt - 1e-3 * c->tick_ms);
   for (pc_peer *p = c->peers; p; p = p->next) {
     if (p->conn.closing || p->paused) continue; /* a paused peer is silent because we do not read */
     if (!p->authed && now - p->connected > HANDSHAKE_TIMEOUT) pc_conn_close(&p->conn, "no authentication within 10 s");
