@@ -35,6 +35,8 @@ static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
   env.assign = &a;
   r->owner = p;
   r->orphan_since = 0;
+  r->progress_at = pc_coord_now();
+  r->stop_asked = r->revoked = false;
   p->idle = false;
   /* the worker measures its rate afresh on a new job; until it reports, it is unknown */
   if (p->rate_job != j->id) p->rate = 0;
@@ -87,8 +89,17 @@ static const pc_job *job_of(const pc_coord *c, const pc_peer *q) {
   return NULL;
 }
 
+/* The rate a worker's ranges on j are sized by: what it claims, trusted up to 4x what its
+ * uploads on j brought (so a false claim earns no more than a few seconds of real work); a
+ * worker not measured on j yet gets a probe. */
+static double trusted_rate(const pc_peer *q, const pc_job *j) {
+  if (q->mrate_job != j->id || !(q->mrate > 0)) return 0;
+  double claimed = q->rate_job == j->id ? q->rate : 0;
+  return claimed > 0 && claimed < 4 * q->mrate ? claimed : claimed > 0 ? 4 * q->mrate : q->mrate;
+}
+
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
-  pc_range_size_in in = {.rate = p->rate_job == j->id ? p->rate : 0, .range_seconds = c->range_seconds};
+  pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds};
   if (j->halt_iterations) {
     in.bounded = true;
     in.unassigned = j->halt_iterations - j->next_iter;
@@ -99,7 +110,8 @@ static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
     for (const pc_peer *q = c->peers; q; q = q->next) {
       if (q == p || !q->authed || q->role != PCBPT__ROLE__ROLE_WORKER) continue;
       const pc_job *qj = job_of(c, q);
-      if (!qj || qj == j) in.others_rate += q->rate_job == j->id && q->rate > 0 ? q->rate : in.rate;
+      double qr = trusted_rate(q, j);
+      if (!qj || qj == j) in.others_rate += qr > 0 ? qr : in.rate;
     }
   }
   return pc_range_size(&in);
@@ -185,4 +197,56 @@ void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {
                     (unsigned long long)j->id, (unsigned long long)r->id, p->name, (unsigned long long)r->acked,
                     (unsigned long long)r->count);
       }
+}
+
+void pc_sched_progress(pc_job *j, pc_range *r, pc_peer *p, uint64_t count) {
+  double now = pc_coord_now(), dt = now - r->progress_at;
+  if (p->mrate_job != j->id) {
+    p->mrate = 0;
+    p->mrate_job = j->id;
+  }
+  if (count && r->progress_at > 0 && dt > 0) {
+    double inst = (double)count / dt;
+    p->mrate = p->mrate > 0 ? 0.5 * (p->mrate + inst) : inst;
+  }
+  r->progress_at = now;
+  r->stop_asked = false;
+}
+
+/* Seconds r's owner may go without an upload: a few of its upload intervals, each at least
+ * one iteration at its measured rate; a worker not measured on the job (its first range is
+ * a probe of one iteration, after the scene loads) gets --progress-timeout. */
+static double allowance(const pc_coord *c, const pc_job *j, const pc_peer *p) {
+  if (p->mrate_job != j->id || !(p->mrate > 0)) return c->progress_timeout;
+  return 3 * (PC_WIRE_UPLOAD_INTERVAL + 1 / p->mrate);
+}
+
+void pc_sched_check_progress(pc_coord *c, pc_job *j) {
+  if (j->state != PC_JOB_RUNNING) return; /* a stopping job has its own deadline */
+  double now = pc_coord_now();
+  for (pc_range *r = j->ranges; r; r = r->next) {
+    pc_peer *p = r->owner;
+    /* an upload arriving, or held back by our own back-pressure, is not overdue */
+    if (!p || p->closed || r->merging || r->final || p->paused || p->up_next > 0 || r->progress_at <= 0) continue;
+    double idle = now - r->progress_at;
+    if (idle <= allowance(c, j, p)) continue;
+    if (!r->stop_asked) {
+      pc_wire_log("job %llu: range %llu overdue on %s (no upload for %.1f s): asking it to upload what it has and stop",
+                  (unsigned long long)j->id, (unsigned long long)r->id, p->name, idle);
+      r->stop_asked = true;
+      r->progress_at = now;
+      p->mrate *= 0.5; /* its deadline was too short, so was its range */
+      pc_peer_send_cancel(p, j->id, r->id, true);
+      continue;
+    }
+    pc_wire_log("job %llu: range %llu taken back from %s (no upload for %.1f s after the request to stop)",
+                (unsigned long long)j->id, (unsigned long long)r->id, p->name, idle);
+    pc_peer_send_cancel(p, j->id, r->id, false);
+    r->owner = NULL;
+    r->orphan_since = 1; /* to another worker at once, split at what is acknowledged */
+    r->stop_asked = false;
+    r->revoked = true;
+    p->mrate = 0;        /* it gets probes until its uploads measure it again */
+    pc_sched_nudge(c);
+  }
 }

@@ -177,9 +177,10 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_job *j = pc_coord_job(c, h->job_id);
   pc_range *r = j && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) ? pc_sched_find_range(j, h->range_id) : NULL;
   if (r && r->owner == p) return;
-  if (r && !r->owner && !r->final && r->acked < r->count) {
+  if (r && !r->owner && !r->final && !r->revoked && r->acked < r->count) {
     r->owner = p;
     r->orphan_since = 0;
+    r->progress_at = p->last_seen;
     pc_wire_log("job %llu: range %llu re-attached to %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name);
     if (j->state == PC_JOB_STOPPING) pc_peer_send_cancel(p, j->id, r->id, true);
     return;
@@ -344,8 +345,8 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   if (p->up_count == 0) {
     /* a halted worker with nothing rendered since its last upload: the range ends at what is
      * merged, now rather than when the stopping job gives up waiting for it */
-    pc_range *r = j && j->state == PC_JOB_STOPPING ? pc_sched_find_range(j, p->up_range) : NULL;
-    if (p->up_final && r && r->owner == p && !r->merging && !r->final) {
+    pc_range *r = j && (j->state == PC_JOB_STOPPING || j->state == PC_JOB_RUNNING) ? pc_sched_find_range(j, p->up_range) : NULL;
+    if (p->up_final && r && r->owner == p && !r->merging && !r->final && (j->state == PC_JOB_STOPPING || r->stop_asked)) {
       r->final = true;
       j->dirty = true;
     }
@@ -359,6 +360,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   if (!j || !j->film_ready || (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING)) refuse = "job is not running";
   else if (!(r = pc_sched_find_range(j, p->up_range))) refuse = "range is closed or unknown";
   else if (r->owner && r->owner != p) refuse = "range was handed to another worker";
+  else if (!r->owner && r->revoked) refuse = "range was taken back (no upload in time)";
   else if (r->merging) refuse = "an upload for this range is still being merged";
   uint64_t end = p->up_first + p->up_count;
   if (!refuse && (p->up_count == 0 || p->up_first < r->first || end > r->first + r->count)) refuse = "iterations outside the range";
@@ -395,6 +397,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     upload_reset(p);
     return;
   }
+  pc_sched_progress(j, r, p, p->up_count);
   /* the bytes stay accounted in c->buffered until the merge frees them */
   uint8_t *buf = p->up_buf;
   size_t len = p->up_len;
@@ -707,7 +710,10 @@ static void on_tick(uv_timer_t *t) {
       pc_conn_close(&p->conn, why);
     }
   }
-  for (pc_job *j = c->jobs; j; j = j->next) pc_job_tick(c, j, dt);
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    pc_sched_check_progress(c, j);
+    pc_job_tick(c, j, dt);
+  }
 }
 
 static void close_handle(uv_handle_t *h) {
@@ -746,6 +752,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
   if (!c->ckpt_interval) c->ckpt_interval = 1;
   if (!c->exr_interval) c->exr_interval = 10;
   if (!c->tick_ms) c->tick_ms = 250;
+  if (!c->progress_timeout) c->progress_timeout = 60;
   if (!c->max_buffered) c->max_buffered = MAX_BUFFERED;
   if ((size_t)snprintf(c->data_dir, sizeof c->data_dir, "%s", data_dir) >= sizeof c->data_dir)
     return pc_errf(e, PC_ELIMIT, "--data-dir: path too long");
@@ -810,6 +817,10 @@ static const char serve_help[] =
     "  --heartbeat-timeout S  drop a worker silent for S seconds (10)\n"
     "  --range-seconds S      target seconds of work per range (3)\n"
     "  --exr-interval S       seconds between image writes of a running job (10)\n"
+    "  --progress-timeout S   seconds a worker not yet measured on a job may hold a range without\n"
+    "                         uploading (60); a measured one gets 3 upload intervals of its rate.\n"
+    "                         An overdue worker is asked to upload what it has and stop; one that\n"
+    "                         ignores that loses the range to others\n"
     "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
 
 int pc_cmd_serve(int argc, char **argv) {
@@ -821,7 +832,8 @@ int pc_cmd_serve(int argc, char **argv) {
     double *num = strcmp(a, "--orphan-grace") == 0 ? &c.orphan_grace
                   : strcmp(a, "--heartbeat-timeout") == 0 ? &c.heartbeat_timeout
                   : strcmp(a, "--range-seconds") == 0 ? &c.range_seconds
-                  : strcmp(a, "--exr-interval") == 0 ? &c.exr_interval : NULL;
+                  : strcmp(a, "--exr-interval") == 0 ? &c.exr_interval
+                  : strcmp(a, "--progress-timeout") == 0 ? &c.progress_timeout : NULL;
     if (strcmp(a, "--help") == 0) { fputs(serve_help, stdout); return 0; }
     if (i + 1 >= argc) { fprintf(stderr, "pcbpt-coord serve: %s needs a value (see --help)\n", a); return 2; }
     if (num) {

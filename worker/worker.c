@@ -24,8 +24,6 @@
 #include "wire_settings.h"
 #include "worker.h"
 
-#define UPLOAD_INTERVAL 2.0
-
 struct pc_worker {
   uv_loop_t *loop, loop_storage;
   uv_timer_t retry, beat, pump;
@@ -188,11 +186,11 @@ static void pump(worker *w) {
   }
   if (!w->authed) return;
   if (!done) {
-    if (now_s() - w->last_upload < UPLOAD_INTERVAL) return;
+    if (now_s() - w->last_upload < PC_WIRE_UPLOAD_INTERVAL) return;
     /* the range's final upload is due within an interval anyway: every upload costs a whole
      * film on both sides whatever it holds, and this keeps a range of up to two intervals
      * to one upload (at most about two intervals of work unacknowledged) */
-    if (rate > 0 && (double)(w->count - rendered) / rate < UPLOAD_INTERVAL) return;
+    if (rate > 0 && (double)(w->count - rendered) / rate < PC_WIRE_UPLOAD_INTERVAL) return;
   }
   pc_err e;
   uv_mutex_lock(&w->r.mu);
