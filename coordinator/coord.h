@@ -138,6 +138,8 @@ struct pc_coord {
   double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
   int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
   bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
+  bool trim_due;             /* peers went: return freed memory to the system at the next tick */
+  double last_refusal_log;   /* refused handshakes are logged at most every 10 s */
 };
 
 double pc_coord_now(void);

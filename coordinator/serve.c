@@ -4,6 +4,7 @@
  * Any protocol violation closes that peer's connection with a logged reason only. */
 #include <errno.h>
 #include <fcntl.h>
+#include <malloc.h>
 #include <sodium.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +24,11 @@
 
 #define HANDSHAKE_TIMEOUT 10.0
 #define MAX_BUFFERED ((size_t)64 << 20)
+/* Before authentication a peer may only say hello and answer the challenge (a few hundred
+ * bytes): its frames are bounded by HANDSHAKE_MAX_FRAME and at most MAX_HANDSHAKES such
+ * peers are connected at once, so strangers cannot make the coordinator hold memory. */
+#define HANDSHAKE_MAX_FRAME 4096
+#define MAX_HANDSHAKES 128
 
 double pc_coord_now(void) {
   struct timespec ts;
@@ -157,6 +163,7 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
     return;
   }
   p->authed = true;
+  p->conn.dec.max = PC_WIRE_MAX_FRAME; /* the handshake's bound is lifted for the peer's work */
   r.ok = true;
   r.reason = "";
   pc_conn_send(&p->conn, &env);
@@ -654,16 +661,20 @@ static void on_closed(pc_conn *conn) {
   if (p->bun_fd >= 0) close(p->bun_fd);
   if (p->bun_tmp[0]) unlink(p->bun_tmp);
   if (p->out.fd >= 0) close(p->out.fd);
+  /* a burst of peers (or an upload) freed: give the memory back at the next tick */
+  c->trim_due = true;
   pc_peer_unref(p);
 }
 
 static void on_connection(uv_stream_t *server, int status) {
   pc_coord *c = server->data;
   if (status < 0) { pc_wire_log("accept: %s", uv_strerror(status)); return; }
+  int handshakes = 0;
+  for (pc_peer *q = c->peers; q; q = q->next) handshakes += !q->authed && !q->conn.closing;
   pc_peer *p = calloc(1, sizeof *p);
   if (!p) { pc_wire_log("accept: out of memory"); return; }
   pc_conn_cbs cbs = {.on_msg = on_msg, .on_drain = on_drain, .on_closed = on_closed};
-  int r = pc_conn_init(c->loop, &p->conn, &cbs, p, PC_WIRE_MAX_FRAME);
+  int r = pc_conn_init(c->loop, &p->conn, &cbs, p, HANDSHAKE_MAX_FRAME);
   if (r) { pc_wire_log("accept: %s", uv_strerror(r)); free(p); return; }
   p->coord = c;
   p->refs = 1;
@@ -672,8 +683,16 @@ static void on_connection(uv_stream_t *server, int status) {
   p->connected = p->last_seen = pc_coord_now();
   p->next = c->peers;
   c->peers = p;
-  if ((r = uv_accept(server, (uv_stream_t *)&p->conn.tcp)) != 0 || (r = pc_conn_start(&p->conn)) != 0)
+  if ((r = uv_accept(server, (uv_stream_t *)&p->conn.tcp)) != 0 || (r = pc_conn_start(&p->conn)) != 0) {
     pc_conn_close(&p->conn, uv_strerror(r));
+  } else if (handshakes >= MAX_HANDSHAKES) {
+    double now = pc_coord_now();
+    if (now - c->last_refusal_log > 10) {
+      pc_wire_log("%s: refused: %d connections are authenticating already (logged once per 10 s)", p->conn.peer, handshakes);
+      c->last_refusal_log = now;
+    }
+    pc_conn_close(&p->conn, NULL);
+  }
 }
 
 /* The loop did not run for `by` seconds (the process was stopped, or the machine slept):
@@ -713,6 +732,10 @@ static void on_tick(uv_timer_t *t) {
   for (pc_job *j = c->jobs; j; j = j->next) {
     pc_sched_check_progress(c, j);
     pc_job_tick(c, j, dt);
+  }
+  if (c->trim_due) {
+    c->trim_due = false;
+    malloc_trim(0);
   }
 }
 
