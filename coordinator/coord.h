@@ -57,6 +57,8 @@ typedef struct pc_job {
   int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
   double elapsed, stopping_since, last_exr, last_ckpt;
   char error[256];
+  char storage_error[300];   /* the last checkpoint could not be written: retried (not stored) */
+  double storage_retry;      /* ... at this time */
   bool film_ready;
   pc_film film;
   uint8_t *wire_buf;         /* a serialized film's room, reused by the ops (merges decompress
@@ -163,6 +165,9 @@ int pc_store_load(pc_coord *c, pc_err *e);
 /* job.c: job lifecycle: films, checkpoints, images, halting. */
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
+/* The data dir could not be written for j (a checkpoint, with op, or a range): j pauses and
+ * retries instead of failing (job.c says how). */
+void pc_job_storage_trouble(pc_coord *c, pc_job *j, pc_op *op, const char *why);
 void pc_job_cancel(pc_coord *c, pc_job *j);
 /* Stops handing out work and finishes the job with what its workers have rendered. */
 void pc_job_halt(pc_coord *c, pc_job *j);

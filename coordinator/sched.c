@@ -125,7 +125,8 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
     if (r->owner || r->merging || r->final || r->merged != r->acked || r->acked == r->count) continue;
     if (r->orphan_since == 0 || now - r->orphan_since < c->orphan_grace) continue;
     pc_range *g = claim_orphan(c, j, r, &e);
-    if (!g) { pc_job_fail(c, j, e.msg); return false; }
+    if (!g && e.code == PC_ENOMEM) { pc_job_fail(c, j, e.msg); return false; }
+    if (!g) { pc_job_storage_trouble(c, j, NULL, e.msg); return false; }
     send_assign(c, p, j, g);
     return true;
   }
@@ -141,7 +142,8 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
   if (!r) {
     pc_store_rollback(c);
     j->next_iter -= n;
-    pc_job_fail(c, j, rc ? e.msg : "out of memory");
+    if (rc) pc_job_storage_trouble(c, j, NULL, e.msg);
+    else pc_job_fail(c, j, "out of memory");
     return false;
   }
   r->id = id;

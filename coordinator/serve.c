@@ -557,7 +557,7 @@ static void send_status(pc_peer *p, uint64_t only) {
       double eta_t = j->halt_seconds > 0 ? j->halt_seconds - j->elapsed : -1;
       s->eta_seconds = eta_i >= 0 && (eta_t < 0 || eta_i < eta_t) ? eta_i : eta_t;
     }
-    s->error = j->error;
+    s->error = j->storage_error[0] ? j->storage_error : j->error;
     pc_job_path(c, j, "image.exr", images[k], sizeof images[k]);
     s->image = access(images[k], R_OK) == 0 ? images[k] : "";
     jp[k] = s;
