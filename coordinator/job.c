@@ -7,6 +7,7 @@
  * sends nothing more before that acknowledgement, so its next range's uploads would wait
  * and, once that range is rendered too, its render thread) and when the job is ending:
  * then at once. */
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -478,6 +479,23 @@ static void check_finished(pc_coord *c, pc_job *j) {
   queue_ckpt(c, j, true);
 }
 
+/* Removes the checkpoint files of j but its current one: a kill between writing a checkpoint
+ * and recording it, or between recording it and removing the one before, leaves them. */
+static void remove_stale_ckpts(pc_coord *c, pc_job *j, const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return;
+  char keep[40];
+  snprintf(keep, sizeof keep, "ckpt.%llu", (unsigned long long)j->ckpt_gen);
+  for (struct dirent *de; (de = readdir(d)) != NULL;) {
+    if (strncmp(de->d_name, "ckpt.", 5) != 0 || (j->ckpt_gen && strcmp(de->d_name, keep) == 0)) continue;
+    char p[900];
+    snprintf(p, sizeof p, "%s/%s", dir, de->d_name);
+    if (unlink(p) != 0) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
+  }
+  closedir(d);
+  (void)c;
+}
+
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   if (j->film_ready) return 0;
   char dir[512];
@@ -485,6 +503,7 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
   pc_job_path(c, j, NULL, dir, sizeof dir);
   if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
+  remove_stale_ckpts(c, j, dir);
   int rc = pc_film_init(&j->film, j->set.width, j->set.height, j->set.strategy_layers, e);
   if (rc) return rc;
   if (j->ckpt_gen) {

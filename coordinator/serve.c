@@ -369,8 +369,11 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   else if (r->owner && r->owner != p) refuse = "range was handed to another worker";
   else if (!r->owner && r->revoked) refuse = "range was taken back (no upload in time)";
   else if (r->merging) refuse = "an upload for this range is still being merged";
+  /* in the range, without an overflow of first + count */
+  if (!refuse && (p->up_count == 0 || p->up_first < r->first || p->up_first - r->first > r->count ||
+                  p->up_count > r->count - (p->up_first - r->first)))
+    refuse = "iterations outside the range";
   uint64_t end = p->up_first + p->up_count;
-  if (!refuse && (p->up_count == 0 || p->up_first < r->first || end > r->first + r->count)) refuse = "iterations outside the range";
   if (refuse) {
     pc_wire_log("job %llu: refused upload from %s for range %llu: %s", (unsigned long long)p->up_job, p->conn.peer,
                 (unsigned long long)p->up_range, refuse);
@@ -544,7 +547,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_iterations = j->halt_iterations;
     s->halt_seconds = j->halt_seconds;
     s->elapsed = j->elapsed;
-    for (pc_range *r = j->ranges; r; r = r->next) {
+    for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
       bool seen = false;
       for (pc_range *q = j->ranges; q != r && !seen; q = q->next) seen = q->owner == r->owner;
@@ -575,7 +578,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     w->iterations_per_second = q->rate;
     w->address = q->conn.peer;
     for (pc_job *j = c->jobs; j; j = j->next)
-      for (pc_range *r = j->ranges; r; r = r->next)
+      for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next)
         if (r->owner == q) { w->job_id = j->id; w->range_id = r->id; }
     wp[k++] = w;
   }
@@ -594,7 +597,12 @@ static void on_fetch(pc_peer *p, uint64_t id) {
   char path[600];
   if (!j) { send_error(p, "fetch: no such job"); return; }
   pc_job_path(p->coord, j, "image.exr", path, sizeof path);
-  if (stream_file(p, path, false, NULL) != 0) send_error(p, "fetch: the job has no image yet");
+  if (stream_file(p, path, false, NULL) != 0) {
+    char why[120];
+    snprintf(why, sizeof why, "fetch: job %llu is %s and has no image%s", (unsigned long long)j->id, pc_job_state_name(j->state),
+             j->state == PC_JOB_RUNNING || j->state == PC_JOB_QUEUED || j->state == PC_JOB_STOPPING ? " yet" : "");
+    send_error(p, why);
+  }
 }
 
 /* ---- dispatch ---- */
@@ -635,6 +643,13 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
     case PCBPT__ENVELOPE__MSG_CANCEL_REQUEST: {
       pc_job *j = pc_coord_job(p->coord, env->cancel_request->job_id);
       if (!j) { send_error(p, "cancel: no such job"); return; }
+      bool ended = j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED;
+      if (ended && !env->cancel_request->finish) { /* (finishing an ended job is a no-op: a race) */
+        char why[80];
+        snprintf(why, sizeof why, "cancel: job %llu is %s already", (unsigned long long)j->id, pc_job_state_name(j->state));
+        send_error(p, why);
+        return;
+      }
       if (env->cancel_request->finish) pc_job_halt(p->coord, j);
       else pc_job_cancel(p->coord, j);
       send_status(p, j->id);

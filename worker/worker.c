@@ -31,6 +31,7 @@ struct pc_worker {
   uv_async_t stop;
   uv_signal_t sigint, sigterm;
   bool handle_signals, shutting_down;
+  bool wrong_token;          /* the coordinator holds another token: retrying cannot help */
   pc_conn *conn;
   bool connected, authed, waiting_work;
   double backoff, last_upload, next_request;
@@ -356,15 +357,19 @@ static void on_ack(worker *w, const Pcbpt__UploadAck *a) {
 }
 
 static void schedule_reconnect(worker *w);
+static void token_mismatch(worker *w, pc_conn *c);
 
 static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
   worker *w = c->data;
   switch (env->msg_case) {
   case PCBPT__ENVELOPE__MSG_CHALLENGE: {
     Pcbpt__Challenge *ch = env->challenge;
-    if (w->authed || ch->nonce.len != PC_AUTH_NONCE ||
-        !pc_auth_verify(w->key, true, w->cnonce, ch->nonce.data, ch->server_mac.data, ch->server_mac.len)) {
-      pc_conn_close(c, "the coordinator did not prove it knows the token");
+    if (w->authed || ch->nonce.len != PC_AUTH_NONCE) {
+      pc_conn_close(c, "malformed challenge");
+      return;
+    }
+    if (!pc_auth_verify(w->key, true, w->cnonce, ch->nonce.data, ch->server_mac.data, ch->server_mac.len)) {
+      token_mismatch(w, c);
       return;
     }
     uint8_t mac[PC_AUTH_MAC];
@@ -379,7 +384,7 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     return;
   }
   case PCBPT__ENVELOPE__MSG_AUTH_RESULT:
-    if (!env->auth_result->ok) { pc_conn_close(c, env->auth_result->reason); return; }
+    if (!env->auth_result->ok) { token_mismatch(w, c); return; }
     w->authed = true;
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
@@ -532,6 +537,15 @@ static void walk_close(uv_handle_t *h, void *arg) {
 
 static void on_stop(uv_async_t *a) { shut_down(a->data); }
 
+/* Neither side can tell which token is the wrong one, only that they differ; a worker with
+ * the wrong token would fail the same way forever, so it stops and says so. */
+static void token_mismatch(worker *w, pc_conn *c) {
+  pc_wire_log("the coordinator at %s:%d holds a different token than this worker's --token-file: stopping", w->host, w->port);
+  w->wrong_token = true;
+  pc_conn_close(c, NULL);
+  shut_down(w);
+}
+
 static void on_signal(uv_signal_t *s, int signum) {
   worker *w = s->data;
   pc_wire_log("signal %d: stopping", signum);
@@ -592,7 +606,12 @@ uv_fail:
   return PC_EIO;
 }
 
-void pc_worker_run(pc_worker *w) { uv_run(w->loop, UV_RUN_DEFAULT); }
+int pc_worker_run(pc_worker *w, pc_err *e) {
+  uv_run(w->loop, UV_RUN_DEFAULT);
+  if (w->wrong_token)
+    return pc_errf(e, PC_EINVAL, "the coordinator at %s:%d holds a different token than --token-file", w->host, w->port);
+  return 0;
+}
 
 void pc_worker_stop(pc_worker *w) { uv_async_send(&w->stop); }
 

@@ -40,7 +40,7 @@ for trial in $(seq "$TRIALS"); do
       fi
     fi
   done
-  timeout 90 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "trial $trial (seed $SEED, events:$events): job did not complete"
+  timeout 90 "$B/pcbpt-coord" wait "$J" $H >/dev/null 2>"$T/wait.err" || fail "trial $trial (seed $SEED, events:$events): job did not complete"
   N=$(job_field "$J" iterations)
   [ "$N" = "$SPP" ] || fail "trial $trial (seed $SEED, events:$events): $N iterations != $SPP"
   CK=$(ls "$DATA/jobs/$J"/ckpt.* | sort -t. -k2 -n | tail -1)

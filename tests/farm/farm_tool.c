@@ -3,9 +3,10 @@
  *       equal a single-process render of iterations [0, --spp) up to summation order:
  *       identical counts, relative 1e-9 on per-layer totals and on every pixel value
  *   farm_tool mean CKPT EXPECT TOL              |mean(beauty) - EXPECT| <= TOL * EXPECT
- *   farm_tool upload HOST:PORT TOKEN nan|size|huge   speaks as a worker: takes a range and
- *       uploads a delta with a NaN sum, of the wrong size, or with a finite sum no radiance
- *       reaches (1.7e308); exits 0 if the coordinator refuses it
+ *   farm_tool upload HOST:PORT TOKEN nan|size|huge|wrap   speaks as a worker: takes a range
+ *       and uploads a delta with a NaN sum, of the wrong size, with a finite sum no radiance
+ *       reaches (1.7e308), or of 2^64-1 iterations (first + count wraps); exits 0 if the
+ *       coordinator refuses it
  *   farm_tool bundle HOST:PORT TOKEN            sends a scene bundle whose content does not
  *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it
  *   farm_tool fail HOST:PORT TOKEN              speaks as a worker: takes a range and reports
@@ -254,8 +255,8 @@ static int request_range(pc_client *cl, double rate, Pcbpt__Envelope **in, pc_er
 }
 
 static int cmd_upload(int argc, char **argv) {
-  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size") && strcmp(argv[3], "huge"))) {
-    fprintf(stderr, "upload HOST:PORT TOKEN nan|size|huge\n");
+  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size") && strcmp(argv[3], "huge") && strcmp(argv[3], "wrap"))) {
+    fprintf(stderr, "upload HOST:PORT TOKEN nan|size|huge|wrap\n");
     return 2;
   }
   pc_client cl;
@@ -265,7 +266,9 @@ static int cmd_upload(int argc, char **argv) {
   Pcbpt__Assign *a = in->assign;
   bool size = strcmp(argv[3], "size") == 0, refused = false;
   double value = strcmp(argv[3], "nan") == 0 ? NAN : strcmp(argv[3], "huge") == 0 ? 1.7e308 : 0;
-  int rc = send_delta(&cl, a, a->first, 1, true, size ? 1 : 0, value, &e);
+  /* wrap: 2^64-1 iterations from first + 1, so first + count wraps round to first */
+  bool wrap = strcmp(argv[3], "wrap") == 0;
+  int rc = send_delta(&cl, a, wrap ? a->first + 1 : a->first, wrap ? UINT64_MAX : 1, true, size ? 1 : 0, value, &e);
   if (!rc) printf("uploaded a %s delta for job %llu range %llu\n", argv[3], (unsigned long long)a->job_id, (unsigned long long)a->range_id);
   if (!rc) rc = wait_ack(&cl, a->range_id, 30, &refused, &e);
   if (rc) fprintf(stderr, "upload: %s\n", e.msg);
@@ -456,7 +459,7 @@ int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "cancelack") == 0) return cmd_cancelack(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "hoard") == 0) return cmd_hoard(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "badbundle") == 0) return cmd_badbundle(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size|huge"
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size|huge|wrap"
                   " | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN | cancelack HOST:PORT TOKEN | hoard HOST:PORT TOKEN JOB SECONDS"
                   " | badbundle HOST:PORT TOKEN KIND\n");
   return 2;
