@@ -78,15 +78,17 @@ int pc_cmd_submit(int argc, char **argv) {
   }
   if (!scene_path) { fprintf(stderr, "pcbpt-coord submit: missing SCENE.xml\n"); return 2; }
   if (req.spp == 0 && req.seconds == 0) req.spp = 64;
-  /* the scene supplies what the flags left open, so every worker gets complete settings */
-  pc_scene scene = {0};
-  if (pc_scene_load(scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
-  pc_render_request_apply_scene(&req, &scene);
-  pc_scene_free(&scene);
-  if (pc_render_settings_check(&req.set, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 2; }
+  /* bundled first: a scene too large to submit (or reaching out of its folder) is refused
+   * before the loader reads it whole */
   uint8_t *blob, hash[PC_BUNDLE_HASH];
   size_t n;
   if (pc_bundle_create(scene_path, &blob, &n, hash, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  /* the scene supplies what the flags left open, so every worker gets complete settings */
+  pc_scene scene = {0};
+  if (pc_scene_load(scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); free(blob); return 1; }
+  pc_render_request_apply_scene(&req, &scene);
+  pc_scene_free(&scene);
+  if (pc_render_settings_check(&req.set, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); free(blob); return 2; }
   pc_client cl;
   int rc = connect_or_say("submit", &o, &cl);
   if (rc) { free(blob); return rc; }

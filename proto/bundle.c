@@ -194,6 +194,17 @@ int pc_bundle_create(const char *scene_arg, uint8_t **blob, size_t *n, uint8_t h
     files[0].data.len = xml_n;
     fp[0] = &files[0];
     nfiles = 1;
+    /* the sizes first: a scene too large to bundle is refused before anything is read */
+    unsigned long long sum = xml_n;
+    for (int i = 0; i < r.n && !rc; i++) {
+      char full[PATH_MAX];
+      struct stat st;
+      if (strcmp(r.paths[i], base) == 0) continue;
+      if ((rc = resolve_inside(scene_arg, dir, r.paths[i], full, e)) != 0) break;
+      if (stat(full, &st) == 0 && st.st_size > 0) sum += (unsigned long long)st.st_size;
+      if (sum > PC_BUNDLE_MAX)
+        rc = pc_errf(e, PC_ELIMIT, "%s: scene and its files exceed %zu bytes (at '%s')", scene_arg, PC_BUNDLE_MAX, r.paths[i]);
+    }
     for (int i = 0; i < r.n && !rc; i++) {
       if (strcmp(r.paths[i], base) == 0) continue;
       char full[PATH_MAX];

@@ -2,7 +2,8 @@
 # items): a wrong token is reported as the two sides holding different tokens, and a worker
 # with one stops instead of retrying forever; `fetch` of a running job needs --partial; `fetch`
 # of a cancelled job says it was cancelled; a second `cancel` fails with a message; `status`
-# of a finished job lists no workers and no rate.
+# of a finished job lists no workers and no rate; a scene with a 2 GB mesh is refused by
+# `submit` before anything reads it (peak memory under 200 MB).
 . "$(dirname "$0")/lib.inc"
 start_coord
 echo "some-other-token-entirely" >"$T/bad"; chmod 600 "$T/bad"
@@ -32,4 +33,15 @@ timeout 20 "$B/pcbpt-coord" wait "$J2" $H >/dev/null || fail "wait"
 "$B/pcbpt-coord" cancel "$J2" $H 2>/dev/null && fail "cancel of a finished job exited 0"
 "$B/pcbpt-coord" fetch "$J2" --out "$T/done.exr" $H >/dev/null || fail "fetch of a done job"
 [ -s "$T/done.exr" ] || fail "empty image"
+mkdir -p "$T/big"
+printf '<scene version="0.6.0"><shape type="obj"><string name="filename" value="big.obj"/></shape></scene>\n' >"$T/big/scene.xml"
+truncate -s 2000M "$T/big/big.obj"
+python3 - "$B/pcbpt-coord" "$T/big/scene.xml" "$PORT" "$T/tok" <<'PY' || fail "a 2 GB mesh"
+import resource, subprocess, sys
+r = subprocess.run([sys.argv[1], "submit", sys.argv[2], "--host", "127.0.0.1:" + sys.argv[3], "--token-file", sys.argv[4]],
+                   capture_output=True, text=True)
+peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss // 1024
+print(f"submit of a 2 GB mesh: exit {r.returncode}, peak {peak} MB: {r.stderr.strip()}")
+sys.exit(0 if r.returncode != 0 and "exceed" in r.stderr and peak < 200 else 1)
+PY
 echo PASS
