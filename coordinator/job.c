@@ -162,7 +162,8 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
   };
-  op->rc = pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err);
+  /* the image is written like the checkpoint: a failure is the data dir's (retried) */
+  if (pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err) != 0) op->rc = PC_EIO;
 }
 
 static void free_range_list_closed(pc_job *j) {
