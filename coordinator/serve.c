@@ -282,7 +282,15 @@ static void on_bundle_request(pc_peer *p, const Pcbpt__BundleRequest *b) {
   if (b->hash.len != PC_BUNDLE_HASH) { drop(p, "bundle request with a %zu-byte hash", b->hash.len); return; }
   pc_bundle_hex(b->hash.data, hex);
   snprintf(path, sizeof path, "%s/bundles/%s", p->coord->data_dir, hex);
-  if (stream_file(p, path, true, b->hash.data) != 0) drop(p, "bundle %.16s... unavailable or a transfer is already running", hex);
+  if (p->out.fd >= 0) { drop(p, "bundle %.16s... requested while a transfer is running", hex); return; }
+  if (stream_file(p, path, true, b->hash.data) == 0) return;
+  /* gone from the data dir: no worker can render the jobs on it (dropping the worker would
+   * only have it ask again) */
+  char why[200];
+  snprintf(why, sizeof why, "scene bundle %.16s... cannot be read from the data dir: %s", hex, strerror(errno));
+  for (pc_job *j = p->coord->jobs; j; j = j->next)
+    if ((j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) && memcmp(j->bundle, b->hash.data, PC_BUNDLE_HASH) == 0)
+      pc_job_fail(p->coord, j, why);
 }
 
 static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {

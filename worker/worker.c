@@ -319,6 +319,16 @@ static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
 }
 
 static void on_cancel(worker *w, const Pcbpt__Cancel *c) {
+  if (w->bun_wait && w->pending_assign && w->pending_assign->job_id == c->job_id) {
+    /* the range waits for its bundle: nothing to render or upload, only to forget */
+    w->bun_wait = false;
+    free(w->bun);
+    w->bun = NULL;
+    pcbpt__assign__free_unpacked(w->pending_assign, NULL);
+    w->pending_assign = NULL;
+    w->next_request = now_s() + 0.5;
+    return;
+  }
   /* an upload of a dropped range (this one or the last) is not waited for: nothing would
    * be uploaded after it */
   if (!c->upload_partial && w->inflight && w->in_job == c->job_id && (!c->range_id || c->range_id == w->in_range)) {
