@@ -30,7 +30,9 @@ typedef struct pc_range {
   double orphan_since;  /* when the owner went away; 0 while owned */
   bool merging;         /* an upload for it is being merged */
   bool final;           /* the owner sent its last upload: close at merged on commit */
-  double progress_at;   /* when it was assigned or its owner's last upload came (0: not owned) */
+  double progress_at;   /* its progress deadline runs from here: when it was assigned, its
+                           owner's last upload came or was acknowledged (0: not owned) */
+  double measured_at;   /* when it was assigned or its owner's last upload came */
   bool stop_asked;      /* overdue: its owner was asked to upload what it has and stop */
   bool revoked;         /* taken back from an owner that ignored that: never re-attached */
   struct pc_range *next;

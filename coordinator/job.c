@@ -261,9 +261,13 @@ static int commit_ckpt(pc_coord *c, pc_job *j, pc_op *op, pc_err *e) {
     pc_job_path(c, j, leaf, p, sizeof p);
     if (unlink(p) != 0 && errno != ENOENT) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
   }
+  double now = pc_coord_now();
   while (op->acks) {
     pc_pending_ack *a = op->acks;
     op->acks = a->next;
+    /* its next upload was held back for this: the progress deadlines restart */
+    for (pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner == a->peer && r->progress_at > 0 && r->progress_at < now) r->progress_at = now;
     if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, a->acked_end, NULL);
     pc_peer_unref(a->peer);
     free(a);

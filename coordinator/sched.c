@@ -35,7 +35,7 @@ static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
   env.assign = &a;
   r->owner = p;
   r->orphan_since = 0;
-  r->progress_at = pc_coord_now();
+  r->progress_at = r->measured_at = pc_coord_now();
   r->stop_asked = r->revoked = false;
   p->idle = false;
   /* the worker measures its rate afresh on a new job; until it reports, it is unknown */
@@ -202,17 +202,25 @@ void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {
 }
 
 void pc_sched_progress(pc_job *j, pc_range *r, pc_peer *p, uint64_t count) {
-  double now = pc_coord_now(), dt = now - r->progress_at;
+  double now = pc_coord_now(), dt = now - r->measured_at;
   if (p->mrate_job != j->id) {
     p->mrate = 0;
     p->mrate_job = j->id;
   }
-  if (count && r->progress_at > 0 && dt > 0) {
+  if (count && r->measured_at > 0 && dt > 0) {
     double inst = (double)count / dt;
     p->mrate = p->mrate > 0 ? 0.5 * (p->mrate + inst) : inst;
   }
-  r->progress_at = now;
+  r->progress_at = r->measured_at = now;
   r->stop_asked = false;
+}
+
+/* p uploads nothing more while an upload of it waits for its acknowledgement (a checkpoint,
+ * or the data dir coming back): that time is ours, not its. */
+static bool waits_for_ack(const pc_job *j, const pc_peer *p) {
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (r->owner == p && (r->merging || r->merged > r->acked)) return true;
+  return false;
 }
 
 /* Seconds r's owner may go without an upload: a few of its upload intervals, each at least
@@ -224,12 +232,12 @@ static double allowance(const pc_coord *c, const pc_job *j, const pc_peer *p) {
 }
 
 void pc_sched_check_progress(pc_coord *c, pc_job *j) {
-  if (j->state != PC_JOB_RUNNING) return; /* a stopping job has its own deadline */
+  if (j->state != PC_JOB_RUNNING || j->storage_error[0]) return; /* a stopping job has its own deadline */
   double now = pc_coord_now();
   for (pc_range *r = j->ranges; r; r = r->next) {
     pc_peer *p = r->owner;
     /* an upload arriving, or held back by our own back-pressure, is not overdue */
-    if (!p || p->closed || r->merging || r->final || p->paused || p->up_next > 0 || r->progress_at <= 0) continue;
+    if (!p || p->closed || r->final || p->paused || p->up_next > 0 || r->progress_at <= 0 || waits_for_ack(j, p)) continue;
     double idle = now - r->progress_at;
     if (idle <= allowance(c, j, p)) continue;
     if (!r->stop_asked) {

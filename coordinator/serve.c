@@ -187,7 +187,7 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   if (r && !r->owner && !r->final && !r->revoked && r->acked < r->count) {
     r->owner = p;
     r->orphan_since = 0;
-    r->progress_at = p->last_seen;
+    r->progress_at = p->last_seen; /* (measured_at stays 0: no measure across a re-attach) */
     pc_wire_log("job %llu: range %llu re-attached to %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name);
     if (j->state == PC_JOB_STOPPING) pc_peer_send_cancel(p, j->id, r->id, true);
     return;
@@ -734,6 +734,7 @@ static void loop_stalled(pc_coord *c, double by) {
     for (pc_range *r = j->ranges; r; r = r->next) {
       if (r->orphan_since > 1) r->orphan_since += by; /* 1: free at once */
       if (r->progress_at > 0) r->progress_at += by;
+      if (r->measured_at > 0) r->measured_at += by;
     }
   }
 }
