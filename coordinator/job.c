@@ -342,9 +342,12 @@ static void op_after(uv_work_t *w, int status) {
     pc_coord_buffered(c, -(long long)op->len);
   } else {
     pc_err e = {0};
-    if (op->rc == PC_EIO || (!op->rc && commit_ckpt(c, j, op, &e) != 0)) {
+    bool stored = !op->rc && commit_ckpt(c, j, op, &e) == 0;
+    if (!stored && !job_live(j)) {
+      /* the job ended while it ran: its acknowledgements are refused below */
+    } else if (!stored && (!op->rc || op->rc == PC_EIO)) {
       pc_job_storage_trouble(c, j, op, op->rc ? op->err.msg : e.msg);
-    } else if (op->rc) {
+    } else if (!stored) {
       pc_job_fail(c, j, op->err.msg);
     } else {
       if (op->write_exr) j->last_exr = pc_coord_now();
@@ -352,7 +355,7 @@ static void op_after(uv_work_t *w, int status) {
       if (j->storage_error[0]) pc_wire_log("job %llu: the data dir is writable again", (unsigned long long)j->id);
       j->storage_error[0] = 0;
     }
-    refuse_acks(&op->acks, "job failed"); /* what the failed checkpoint did not commit */
+    refuse_acks(&op->acks, "job is not running"); /* what a checkpoint of an ended job did not commit */
     free(op->snap);
     /* (an upload that came after all, or a range left open, makes it a checkpoint like others) */
     bool done = j->finishing && !op->rc && !j->storage_error[0] && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
@@ -544,6 +547,7 @@ void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
   snprintf(j->error, sizeof j->error, "%s", why);
   j->state = PC_JOB_FAILED;
   j->finishing = false;
+  j->storage_error[0] = 0;
   refuse_acks(&j->acks, "job failed");
   for (pc_range *r = j->ranges; r; r = r->next)
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
@@ -557,6 +561,7 @@ void pc_job_cancel(pc_coord *c, pc_job *j) {
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   j->state = PC_JOB_CANCELLED;
   j->finishing = false;
+  j->storage_error[0] = 0;
   refuse_acks(&j->acks, "job cancelled");
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
