@@ -165,7 +165,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->twosided = true;
     return 0;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported BSDF plugin '%s'", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt", c->file, n->line, type);
   }
   return 0;
 }
@@ -236,7 +236,7 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
                     {"color0", PC_P_COLOR, &t.color0, 0, 0}, {"color1", PC_P_COLOR, &t.color1, 0, 0}};
     if ((rc = params_only(c, n, what, p, 6))) return rc;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported texture plugin '%s'", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: texture '%s': not modelled by pcbpt", c->file, n->line, type);
   }
   if ((!isfinite(t.uscale) || !isfinite(t.vscale) || t.uscale == 0.f || t.vscale == 0.f))
     rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: uscale and vscale must be nonzero", c->file, n->line, what);

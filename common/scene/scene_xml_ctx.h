@@ -19,8 +19,17 @@ typedef struct pc_sx_id {
 } pc_sx_id;
 
 typedef struct pc_sx {
-  const char *file;  /* the scene path as given, for messages */
-  char *dir;         /* realpath of the scene's folder */
+  const char *file;  /* the file of the element being read (the scene path as given, or an
+                        included file's), for messages */
+  const char *main_file;
+  char *dir;         /* realpath of the folder confining every file reference (the root) */
+  const pc_scene_load_opts *opts; /* never NULL */
+  char **warned;     /* warnings already given (without their location), so each is given once */
+  int nwarned, cap_warned;
+  char **names;      /* display names of included files (owned; nodes point at them) */
+  int nnames, cap_names;
+  const char *incl_stack[16]; /* real paths of the files being included, for loop detection */
+  int incl_depth;
   pc_scene *s;
   pc_err *e;
   pc_sx_id *ids;
@@ -44,6 +53,8 @@ typedef enum {
   PC_P_POINT,     /* <point> -> vec3 */
   PC_P_TRANSFORM, /* <transform> -> mat4 */
   PC_P_IOR,       /* <float> or <string> with a Mitsuba IOR name -> float */
+  PC_P_IGNORED,   /* any value, accepted with a warning; out is the reason (const char *).
+                     The name "*" matches every parameter the list does not name. */
 } pc_param_kind;
 
 typedef struct pc_param {
@@ -65,6 +76,18 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
 bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np);
 /* Error for a child element the caller does not accept. */
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what);
+
+/* A warning "file:line: what: message" through opts->warn, once per distinct "what: message";
+ * with --strict it is the error instead (returns its code; 0 otherwise). */
+int pc_sx_warn(pc_sx *c, const pc_xml_node *n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* Records a file the scene read (for bundles). */
+int pc_sx_note_file(pc_sx *c, const char *real);
+
+/* <include filename=...> at scene level (its attributes already substituted): parses the file
+ * into *root (the caller splices root's children in the include's place and frees root) and
+ * pushes it on the include stack; pc_sx_include_close pops it when its children are done. */
+int pc_sx_include_open(pc_sx *c, const pc_xml_node *incl, pc_xml_node **root);
+void pc_sx_include_close(pc_sx *c);
 
 /* Registers an id (duplicates are errors). */
 int pc_sx_id_add(pc_sx *c, const char *id, pc_id_kind kind, int index, int line);
