@@ -269,7 +269,7 @@ static bool is_similarity(const mat4 *m, double *s) {
 }
 
 static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, const char *filename,
-                     pc_mesh *m) {
+                     int shape_index, bool *file_face_normals, pc_mesh *m) {
   int rc;
   if (strcmp(type, "rectangle") == 0) rc = pc_mesh_rectangle(m);
   else if (strcmp(type, "cube") == 0) rc = pc_mesh_cube(m);
@@ -278,7 +278,8 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
     if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
     char *path;
     if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
-    rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
+    if (type[0] == 's') rc = pc_mesh_load_serialized(path, shape_index, m, file_face_normals, c->e);
+    else rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
     free(path);
     return rc ? pc_sx_wrap(c, n, what, rc) : 0;
   }
@@ -289,14 +290,15 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
-  bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0;
+  bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "serialized") == 0;
   bool is_sphere = strcmp(type, "sphere") == 0;
   if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape '%s': not modelled by pcbpt", c->file, n->line, type);
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "shape '%s'", type);
   const char *filename = NULL;
-  bool face_normals = false, flip_normals = false, flip_tex = true;
+  bool face_normals = false, flip_normals = false, flip_tex = true, file_face_normals = false;
+  int shape_index = 0;
   mat4 xf = mat4_identity();
   vec3 center = v3s(0);
   float radius = 1.f;
@@ -306,6 +308,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
     p[np++] = (pc_param){"filename", PC_P_STRING, &filename, 0, 0};
     p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
     if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
+    if (type[0] == 's') p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
@@ -358,11 +361,11 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius must be positive and finite", c->file, n->line, what);
   } else {
     sh.kind = PC_SHAPE_MESH;
-    if ((rc = load_mesh(c, n, type, what, filename, &sh.mesh))) return rc;
+    if ((rc = load_mesh(c, n, type, what, filename, shape_index, &file_face_normals, &sh.mesh))) return rc;
     if (type[0] == 'o' && flip_tex && sh.mesh.uv)
       for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
     pc_mesh_transform(&sh.mesh, &xf);
-    if (face_normals) {
+    if (face_normals || file_face_normals) {
       free(sh.mesh.n);
       sh.mesh.n = NULL;
     } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {
