@@ -167,12 +167,57 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
   return rc;
 }
 
+/* Mitsuba 0.6 warns about a parameter its plugin does not read and goes on, so such a
+ * parameter cannot change the image; one it reads but pcbpt does not model stays an error. For
+ * "what" (e.g. "bsdf 'conductor'"), the reason a parameter pcbpt does not take is ignored, or
+ * NULL if it is not known to be harmless. */
+static const char *ignored_as_mitsuba(const char *what, const char *name) {
+  static const struct { const char *what, *params; } mitsuba[] = {
+      {"bsdf 'diffuse'", " reflectance "},
+      {"bsdf 'conductor'", " material eta k extEta specularReflectance "},
+      {"bsdf 'roughconductor'", " distribution alpha alphaU alphaV material eta k extEta specularReflectance sampleVisible "},
+      {"bsdf 'plastic'", " intIOR extIOR specularReflectance diffuseReflectance nonlinear "},
+      {"bsdf 'roughplastic'", " distribution alpha intIOR extIOR specularReflectance diffuseReflectance nonlinear sampleVisible "},
+      {"bsdf 'dielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
+      {"bsdf 'roughdielectric'", " distribution alpha alphaU alphaV intIOR extIOR specularReflectance specularTransmittance sampleVisible "},
+      {"bsdf 'thindielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
+      {"bsdf 'twosided'", " "},
+      {"texture 'bitmap'", " filename wrapMode wrapModeU wrapModeV gamma filterType maxAnisotropy cache uoffset voffset uscale vscale channel "},
+      {"texture 'checkerboard'", " color0 color1 uoffset voffset uscale vscale "},
+      {"emitter 'area'", " radiance samplingWeight "},
+      {"emitter 'point'", " toWorld position intensity samplingWeight "},
+      {"shape 'obj'", " filename faceNormals maxSmoothAngle flipNormals flipTexCoords toWorld collapse "},
+      {"shape 'ply'", " filename faceNormals maxSmoothAngle flipNormals toWorld srgb "},
+      {"shape 'serialized'", " filename shapeIndex faceNormals maxSmoothAngle flipNormals toWorld "},
+      {"shape 'rectangle'", " toWorld flipNormals "},
+      {"shape 'cube'", " toWorld flipNormals "},
+      {"shape 'disk'", " toWorld flipNormals "},
+      {"shape 'sphere'", " center radius toWorld flipNormals "},
+      {"sensor 'perspective'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip "},
+  };
+  /* read by Mitsuba, but only to steer its sampling */
+  if (strcmp(name, "sampleVisible") == 0 || strcmp(name, "maxAnisotropy") == 0 || strcmp(name, "cache") == 0)
+    return "it only steers Mitsuba's sampling or caching";
+  char key[80];
+  if (snprintf(key, sizeof key, " %s ", name) >= (int)sizeof key) return NULL;
+  for (size_t i = 0; i < sizeof mitsuba / sizeof mitsuba[0]; i++)
+    if (strcmp(mitsuba[i].what, what) == 0)
+      return strstr(mitsuba[i].params, key) ? NULL : "Mitsuba's plugin does not read it either";
+  return NULL;
+}
+
 int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np) {
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (!pc_sx_is_param(ch, params, np)) continue;
     const char *name = pc_xml_attr(ch, "name");
     if (!name) return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <%s> lacks a name", c->file, ch->line, what, ch->name);
     pc_param *p = find_param(params, np, name);
+    const char *unused = p ? NULL : ignored_as_mitsuba(what, name);
+    if (unused) {
+      int rc = pc_sx_warn(c, ch, "%s: parameter '%s' ignored (%s)", what, name, unused);
+      if (rc) return rc;
+      continue;
+    }
     if (!p)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unknown or unsupported parameter '%s'", c->file, ch->line, what, name);
     int rc;

@@ -204,7 +204,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    what, axis);
   if (!is_rigid(&xf))
     return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: toWorld must be rigid (rotations, translations, mirror flips); it scales or shears",
+                   "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt",
                    c->file, p[2].line, what);
   cam->fov_deg = fov;
   cam->to_world = xf;

@@ -45,7 +45,7 @@ static inline void th_put_reals(th_buf *b, const float *v, size_t count, int dbl
 /* Returns 0 on success. version 3 or 4. */
 static inline int th_write_serialized(const char *path, const th_ser_shape *shapes, int count, int version, int dbl) {
   th_buf file = {0};
-  uint64_t offsets[16];
+  uint64_t *offsets = malloc((size_t)count * sizeof *offsets);
   for (int s = 0; s < count; s++) {
     const th_ser_shape *sh = &shapes[s];
     th_buf raw = {0};
@@ -75,6 +75,7 @@ static inline int th_write_serialized(const char *path, const th_ser_shape *shap
       th_put(&file, &o, 4);
     }
   }
+  free(offsets);
   uint32_t c = (uint32_t)count;
   th_put(&file, &c, 4);
   FILE *f = fopen(path, "wb");
