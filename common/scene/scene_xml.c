@@ -64,14 +64,20 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
       return rc;
   }
   int depth = -1;
+  bool hide = false, light_image = true;
   /* maxDepth is honoured; rrDepth is ignored since pcbpt's Russian roulette is local by design;
-   * every other parameter only steers that integrator's own sampling. */
+   * the two switches that leave light out of the image are refused when set; every other
+   * parameter only steers that integrator's own sampling. */
   pc_param p[] = {{"maxDepth", PC_P_INT, &depth, 0, 0},
                   {"rrDepth", PC_P_IGNORED, "pcbpt's Russian roulette depends on local vertex data only", 0, 0},
+                  {"hideEmitters", PC_P_BOOL, &hide, 0, 0}, {"lightImage", PC_P_BOOL, &light_image, 0, 0},
                   {"*", PC_P_IGNORED, "it steers that integrator's own sampling, not the image", 0, 0}};
-  if ((rc = pc_sx_params(c, n, what, p, 3))) return rc;
+  if ((rc = pc_sx_params(c, n, what, p, 5))) return rc;
+  if (hide || !light_image)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: '%s' (leaving light out of the image): not modelled by pcbpt", c->file,
+                   hide ? p[2].line : p[3].line, what, hide ? "hideEmitters" : "lightImage");
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next)
-    if (!pc_sx_is_param(ch, p, 3) && (rc = pc_sx_warn(c, ch, "%s: nested <%s> ignored", what, ch->name))) return rc;
+    if (!pc_sx_is_param(ch, p, 5) && (rc = pc_sx_warn(c, ch, "%s: nested <%s> ignored", what, ch->name))) return rc;
   if (depth == 0 || depth < -1)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
   c->s->max_depth = depth;

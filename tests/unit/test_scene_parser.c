@@ -253,6 +253,8 @@ static const bad_case bad_cases[] = {
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><film type=\"hdrfilm\">\n<integer name=\"cropWidth\" value=\"8\"/></film></sensor>", 3, "crop"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<sampler type=\"independent\"><integer name=\"sampleCount\" value=\"0\"/></sampler></sensor>", 3, "sampleCount"},
     {"<integrator type=\"path\"/>\n<integrator type=\"path\"/>", 3, "integrator"},
+    {"<integrator type=\"path\">\n<boolean name=\"hideEmitters\" value=\"true\"/></integrator>", 3, "hideEmitters"},
+    {"<integrator type=\"bdpt\">\n<boolean name=\"lightImage\" value=\"false\"/></integrator>", 3, "lightImage"},
     {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"5x\"/></integrator>", 2, "integer"},
     {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"99999999999\"/></integrator>", 2, "integer"},
     /* sensor */
