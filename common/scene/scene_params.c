@@ -44,6 +44,8 @@ bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np) {
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
   static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", NULL};
   const char *type = pc_xml_attr(ch, "type");
+  if (strcmp(ch->name, "animation") == 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: animation (motion blur): not modelled by pcbpt (in %s)", c->file, ch->line, what);
   for (const char *const *u = unmodelled; type && *u; u++)
     if (strcmp(ch->name, *u) == 0)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s '%s': not modelled by pcbpt (in %s)", c->file, ch->line, ch->name,

@@ -15,7 +15,7 @@
 
 /* id_ok: the element can be referred to; elsewhere an id is accepted with a warning. */
 static int object_type(pc_sx *c, const pc_xml_node *n, bool id_ok, const char **type) {
-  static const char *const with_id[] = {"type", "id", NULL};
+  static const char *const with_id[] = {"type", "id", "name", NULL}; /* Mitsuba's schema allows a name on any object */
   int rc = pc_xml_check_attrs(c->file, n, with_id, c->e);
   if (rc) return rc;
   if (!id_ok && pc_xml_attr(n, "id") && (rc = pc_sx_warn(c, n, "<%s>: id ignored (nothing refers to it)", n->name)))
@@ -327,6 +327,9 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (pc_sx_is_param(ch, p, np)) continue;
     if (strcmp(ch->name, "bsdf") == 0 || strcmp(ch->name, "ref") == 0) {
+      if (material >= 0 && pc_xml_attr(ch, "name"))
+        return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: BSDFs named after the file's materials (usemtl): not modelled by pcbpt",
+                       c->file, ch->line, what);
       if (material >= 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one BSDF", c->file, ch->line, what);
       if (ch->name[0] == 'b') {
         if ((rc = pc_sx_bsdf(c, ch, &material))) return rc;

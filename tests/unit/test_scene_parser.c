@@ -341,7 +341,7 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"diffuse\"/>\n<bsdf/>", 3, "type"},
     /* textures */
     {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<string name=\"wrapMode\" value=\"clamp\"/></texture>", 2, "repeat"},
-    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"gamma\" value=\"2.2\"/></texture>", 3, "gamma"},
+    {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"gamma\" value=\"-2\"/></texture>", 3, "gamma"},
     {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex.png\"/>\n<string name=\"filterType\" value=\"cubic\"/></texture>", 2, "filterType"},
     {"<texture type=\"bitmap\" id=\"t\"/>", 2, "filename"},
     {"<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"nothere.png\"/></texture>", 2, "cannot find"},
@@ -688,6 +688,21 @@ static void test_bitmap_texture(void **state) {
   assert_true(fabsf(s.textures[0].img.rgb[0] - 1.f) < 1e-3f && s.textures[0].img.rgb[3] < 1e-3f);
   assert_int_equal(s.materials[0].reflectance.tex, 0);
   pc_scene_free(&s);
+  /* Mitsuba's gamma: the 8-bit values are v^(1/gamma)-encoded instead of sRGB */
+  const float grey[3] = {0.5f, 0.5f, 0.5f};
+  assert_int_equal(pc_png_write_preview(png, 1, 1, grey, 0.f, &e), 0); /* written sRGB-encoded: byte 188 */
+  for (int g = 0; g < 3; g++) {
+    static const char *const gam[] = {"", "<float name=\"gamma\" value=\"1\"/>", "<float name=\"gamma\" value=\"2.2\"/>"};
+    char b[1024];
+    snprintf(b, sizeof b, SENSOR "<texture type=\"bitmap\" id=\"t\"><string name=\"filename\" value=\"tex/checker.png\"/>%s</texture>",
+             gam[g]);
+    assert_int_equal(load_body(&t, b, &s, &e), 0);
+    float v = s.textures[0].img.rgb[0], byte = roundf(255.f * (1.055f * powf(0.5f, 1 / 2.4f) - 0.055f)) / 255.f;
+    float want = g == 0 ? 0.5f : g == 1 ? byte : powf(byte, 2.2f);
+    if (fabsf(v - want) > 3e-3f) print_error("gamma case %d: %g, expected %g\n", g, v, want);
+    assert_true(fabsf(v - want) < 3e-3f);
+    pc_scene_free(&s);
+  }
   th_rm_rf(t.root);
 }
 
