@@ -31,7 +31,7 @@ static const char render_help[] =
     "  --out FILE.exr        output image (default: <scene folder name>.exr); the preview is FILE.png\n"
     "  --exposure E          preview exposure in stops (default 0)\n"
     "  --quiet               no progress bar\n"
-    "Without --spp or --time, renders 64 iterations.\n";
+    "Without --spp, --time or --halt-noise, renders 64 iterations.\n";
 
 /* SIGINT/SIGTERM so far: the first stops the render and writes what it has, the second
  * abandons that and ends without an image, and any after it kill the process (the handler
@@ -133,6 +133,7 @@ static int submit_job(pc_client *cl, const char *scene_path, const pc_render_req
   if (rc) return rc;
   Pcbpt__Settings ps;
   pc_wire_settings_to_proto(&req->set, &ps);
+  ps.halt_noise = req->halt_noise;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)scene_path;
   sub.bundle_hash.data = hash;
@@ -216,6 +217,12 @@ static double attr_number(const pc_exr_file *x, const char *name) {
   return 0;
 }
 
+static bool has_attr(const pc_exr_file *x, const char *name) {
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], name) == 0) return true;
+  return false;
+}
+
 int pc_cmd_render(int argc, char **argv) {
   pc_render_request req;
   pc_render_request_default(&req);
@@ -269,7 +276,7 @@ int pc_cmd_render(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord render: missing SCENE.xml (see --help)\n");
     return 2;
   }
-  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
+  if (req.spp == 0 && req.seconds == 0 && req.halt_noise == 0) req.spp = 64;
 
   int status = 1;
   pc_scene scene = {0};
@@ -325,9 +332,12 @@ int pc_cmd_render(int argc, char **argv) {
   double it = attr_number(&img, "pcbpt.iterations"), rays = attr_number(&img, "pcbpt.rays");
   double dropped = attr_number(&img, "pcbpt.dropped_nonfinite");
   double samples = it * img.w * img.h;
-  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
+  char est[48] = "";
+  if (has_attr(&img, "pcbpt.relmse_estimate"))
+    snprintf(est, sizeof est, ", est. relMSE %.4g", attr_number(&img, "pcbpt.relmse_estimate"));
+  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
          pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
-         threads ? (int)threads : pc_cpu_count(), dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
+         threads ? (int)threads : pc_cpu_count(), est, dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
   if (it > 0)
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,

@@ -16,6 +16,7 @@ typedef struct pc_render_request {
   bool method_set, depth_set, width_set, height_set; /* overrides of the scene's own values */
   uint64_t spp;      /* iterations to render (0: not given) */
   double seconds;    /* wall-time budget (0: not given) */
+  double halt_noise; /* stop at this estimated relMSE (0: not given) */
 } pc_render_request;
 
 void pc_render_request_default(pc_render_request *r);
