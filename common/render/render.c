@@ -255,9 +255,12 @@ static void fold_rows(void *arg, int thread, int item) {
                  *s3 = r->scratch.layers[3].sum;
     const double *c = j->beauty_scale;
     uint64_t bad = 0;
+    /* each square is rounded to single precision (relative 6e-8, far below any variance
+     * worth estimating): a few iterations' sum then leaves the low byte planes of an upload
+     * zero, which halves what beauty_sq adds to its compressed size (docs/variance.md) */
     for (size_t k = lo; k < hi; k++) {
       double b = s0[k] * c[0] + s1[k] * c[1] + s2[k] * c[2] + s3[k] * c[3];
-      double b2 = b * b;
+      double b2 = (double)(float)(b * b);
       if (isfinite(b2)) q[k] += b2;
       else bad++;
     }
