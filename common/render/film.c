@@ -145,9 +145,10 @@ static void put_variance(void *user, size_t j, double v, double m) {
 
 bool pc_film_variance(const pc_film *f, float *out) { return each_variance(f, put_variance, out); }
 
+/* E[m^2] = exact^2 + v, so the denominator subtracts v (docs/variance.md). */
 static void add_relative(void *user, size_t j, double v, double m) {
   (void)j;
-  *(double *)user += v / (m * m + PC_RELMSE_EPS);
+  *(double *)user += v / (fmax(m * m - v, 0.0) + PC_RELMSE_EPS);
 }
 
 bool pc_film_relmse_estimate(const pc_film *f, double *out) {

@@ -70,8 +70,10 @@ void pc_film_beauty(const pc_film *f, float *out);
  * sums have (a job resumed from a checkpoint written before beauty_sq existed). */
 bool pc_film_variance(const pc_film *f, float *out);
 /* The beauty's relMSE as `compare` would measure it against the exact image, estimated from
- * the film alone: mean of variance / (mean^2 + PC_RELMSE_EPS). Returns false like
- * pc_film_variance (*out = NAN). */
+ * the film alone: the mean over pixels and channels of variance / (max(mean^2 - variance, 0) +
+ * PC_RELMSE_EPS), where mean^2 - variance is the unbiased estimate of the exact value's square
+ * (mean^2 alone overestimates it by the variance and biases the estimate low). Returns false
+ * like pc_film_variance (*out = NAN). */
 bool pc_film_relmse_estimate(const pc_film *f, double *out);
 /* Writes the beauty and every layer (each normalized by its count) to a multi-layer EXR, with
  * the per-layer counts and `extra` attributes in the header; when the film can tell, also the
