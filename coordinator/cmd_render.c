@@ -95,7 +95,8 @@ typedef struct progress_state {
   uint64_t done_before;
 } progress_state;
 
-static void draw_progress(progress_state *p, int fd, uint64_t done) {
+/* relmse: the merged image's estimated relMSE (< 0: not known yet). */
+static void draw_progress(progress_state *p, int fd, uint64_t done, double relmse) {
   if (!p->show) return;
   double el = now_s() - p->t0;
   double frac = p->target ? (double)done / (double)p->target : (p->seconds > 0 ? el / p->seconds : 0);
@@ -103,6 +104,7 @@ static void draw_progress(progress_state *p, int fd, uint64_t done) {
   int bar = (int)(frac * 30);
   dprintf(fd, "\r[%.*s%*s] %3d%%  %llu it  %.1fs ", bar, "==============================", 30 - bar, "",
           (int)(frac * 100), (unsigned long long)done, el);
+  if (relmse >= 0) dprintf(fd, " relMSE~%.3g ", relmse);
 }
 
 static void sleep_s(double s) {
@@ -194,7 +196,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
       pcbpt__envelope__free_unpacked(env, NULL);
       break;
     }
-    draw_progress(prog, farm->term_fd, st->iterations_done);
+    draw_progress(prog, farm->term_fd, st->iterations_done, st->relmse_estimate);
     pcbpt__envelope__free_unpacked(env, NULL);
     if (atomic_load(&g_interrupts) && !halted) {
       halted = true;
