@@ -24,6 +24,7 @@ check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
 grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }
 check compare-json 0 '"layer": "inner"' -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr" --json
 grep -q '"layer": "variance"' "$tmp/out" || { echo "FAIL render: no variance layer"; fail=1; }
+grep -q '"relmse_estimate": [0-9]' "$tmp/out" || { echo "FAIL compare: no estimate from the header"; fail=1; }
 # --halt-noise alone bounds the render: it stops once the estimated relMSE is at most 0.05 (from
 # 16 iterations on), and the image it writes says about that much
 check halt-noise 0 "est. relMSE" -- "$bin" render "$scene" --method pt --halt-noise 0.05 --width 32 --height 24 --threads 2 \
