@@ -1,15 +1,18 @@
 /* bench_variance.c: benchmark (not a test) of what the beauty_sq layer costs (docs/variance.md).
- *   bench_variance SCENE.xml [ITERATIONS [THREADS]]     (defaults 8, 2)
+ *   bench_variance SCENE.xml [ITERATIONS [THREADS [with|without]]]     (defaults 8, 2)
  * Renders the scene (its own method and size) one iteration at a time, alternating a film with
  * beauty_sq and one without it (pc_film_drop_square: the fold then skips the squares), so
  * both see the same machine load; prints the mean CPU time of an iteration of each and the
  * difference.
  * Then packs a 4-iteration delta both ways and prints the raw and zstd bytes of an upload.
  * Other load still disturbs CPU times (caches, memory bandwidth): the difference is only
- * meaningful against its printed spread. */
+ * meaningful against its printed spread. With `with` or `without` it renders only into that
+ * film and prints nothing else: run both under `valgrind --tool=callgrind` and compare the
+ * instructions collected, a figure no other load disturbs. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "render.h"
@@ -37,7 +40,7 @@ static int upload_bytes(const pc_film *f, size_t *raw_n, size_t *z_n, pc_err *e)
 
 int main(int argc, char **argv) {
   if (argc < 2) {
-    fprintf(stderr, "usage: bench_variance SCENE.xml [ITERATIONS [THREADS]]\n");
+    fprintf(stderr, "usage: bench_variance SCENE.xml [ITERATIONS [THREADS [with|without]]]\n");
     return 2;
   }
   int n = argc > 2 ? atoi(argv[2]) : 8, threads = argc > 3 ? atoi(argv[3]) : 2;
@@ -61,6 +64,13 @@ int main(int argc, char **argv) {
     return 1;
   }
   pc_film_drop_square(&without);
+  if (argc > 4) { /* one variant only, for instruction counts */
+    if (strcmp(argv[4], "with") != 0 && strcmp(argv[4], "without") != 0) return 2;
+    pc_film *f = strcmp(argv[4], "without") == 0 ? &without : &with;
+    rc = pc_render_iterations(r, 0, (uint64_t)n, f, NULL, NULL, NULL, NULL, &e);
+    if (rc) fprintf(stderr, "bench_variance: %s\n", e.msg);
+    return rc ? 1 : 0;
+  }
   /* both films render the same iterations (same index, so the same work): the paired
    * differences cancel most of the iteration-to-iteration variation */
   double t[2] = {0, 0}, d = 0, d2 = 0;
