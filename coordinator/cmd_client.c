@@ -152,7 +152,10 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g}", j->halt_noise);
+    printf(", \"halt_noise\": %.6g, \"auto\": ", j->halt_noise);
+    if (*j->auto_report) json_str(j->auto_report);
+    else printf("null");
+    printf("}");
     return;
   }
   char est[32] = "-";
@@ -161,6 +164,7 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
          (unsigned long long)j->job_id, j->state, j->method, (unsigned long long)j->iterations_done,
          (unsigned long long)j->halt_iterations, j->elapsed, j->iterations_per_second, j->eta_seconds, est, j->workers, j->name,
          *j->error ? "  error: " : "", j->error);
+  if (*j->auto_report) printf("       auto: %s\n", j->auto_report);
 }
 
 static int status_like(const char *verb, int argc, char **argv, bool workers) {

@@ -28,7 +28,8 @@ static const char study_help[] =
     "left out of that layer's comparison.\n"
     "Without --reference the beauty's relMSE and RMSE are each image's own estimates from the spread of\n"
     "its iterations (docs/variance.md; L1 and the other layers are not measured), and the output says so.\n\n"
-    "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt (each at most once)\n"
+    "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt, auto (each at most once;\n"
+    "                        auto: the pilot of --method auto, its time counted, then the winner)\n"
     "  --seconds S           render time per method (snapshots and metrics are not counted)\n"
     "  --reference REF.exr   reference image of the same size (its layers are compared by name);\n"
     "                        without it, errors are estimated\n"
@@ -59,7 +60,7 @@ static int parse_methods(study_args *a, const char *list, pc_err *e) {
   for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
     pc_method m;
     if (pc_method_parse(tok, &m) != PC_OK)
-      return pc_errf(e, PC_EINVAL, "--methods: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt)", tok);
+      return pc_errf(e, PC_EINVAL, "--methods: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt, auto)", tok);
     for (int i = 0; i < a->nmethods; i++)
       if (a->methods[i] == m) return pc_errf(e, PC_EINVAL, "--methods: '%s' given twice", tok);
     a->methods[a->nmethods++] = m;
@@ -126,7 +127,7 @@ static int parse_args(study_args *a, int argc, char **argv, pc_err *e) {
     return pc_errf(e, PC_EINVAL, "--layer: only the beauty's error is estimated without --reference");
   if (!a->out) return pc_errf(e, PC_EINVAL, "--out: required");
   a->req.method_set = true; /* the scene's integrator element does not choose the methods */
-  a->req.set.method = a->methods[0];
+  a->req.set.method = a->methods[0] == PC_METHOD_AUTO ? PC_METHOD_PCBPT : a->methods[0];
   return 1;
 }
 
@@ -216,7 +217,7 @@ static int write_images(const study_args *a, const pc_film *film, const pc_study
 static int check_methods(const study_args *a, const pc_scene *scene, pc_err *e) {
   for (int m = 0; m < a->nmethods; m++) {
     pc_render_settings set = a->req.set;
-    set.method = a->methods[m];
+    set.method = a->methods[m] == PC_METHOD_AUTO ? PC_METHOD_PCBPT : a->methods[m]; /* auto: its candidates */
     pc_renderer *r = NULL;
     int rc = pc_renderer_create(scene, &set, (int)a->threads, &r, e);
     pc_renderer_destroy(r);
@@ -263,7 +264,10 @@ static int run_study(study_args *a, pc_err *e) {
     rc = pc_film_init(&film, set.width, set.height, set.strategy_layers, e);
     if (rc == PC_OK) {
       nruns++;
-      rc = pc_study_render(&scene, &set, (int)a->threads, a->seconds, (int)a->snapshots, &ref, &film, &runs[m], e);
+      rc = set.method == PC_METHOD_AUTO
+               ? pc_study_render_auto(&scene, &set, (int)a->threads, a->seconds, (int)a->snapshots, &ref, &film, &runs[m], e)
+               : pc_study_render(&scene, &set, (int)a->threads, a->seconds, (int)a->snapshots, &ref, &film, &runs[m], e);
+      if (rc == PC_OK && runs[m].auto_report[0]) printf("auto: %s\n", runs[m].auto_report);
     }
     if (rc == PC_OK) rc = write_images(a, &film, &runs[m], e);
     if (rc == PC_OK) {

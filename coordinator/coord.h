@@ -55,6 +55,7 @@ typedef struct pc_job {
   double halt_seconds;       /* 0: none */
   double halt_noise;         /* 0: none; else halt once the estimated relMSE is at most this */
   double relmse_est;         /* the merged film's estimated relMSE, < 0 while it cannot tell */
+  char auto_report[1024];    /* Settings.auto_report (--method auto's choice), control chars replaced */
   uint64_t noise_check_at;   /* iterations merged before --halt-noise looks again */
   int priority;
   pc_job_state state;
@@ -182,6 +183,9 @@ void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out
 void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
                   uint64_t first, uint64_t count, bool final, const pc_render_stats *stats);
 void pc_job_free(pc_job *j);
+/* Takes what the coordinator keeps from a job's stored settings besides the render settings:
+ * --halt-noise and --method auto's report. */
+void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s);
 
 /* sched.c: handing out ranges and taking them back. */
 void pc_sched_request(pc_coord *c, pc_peer *p);

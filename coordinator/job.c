@@ -186,9 +186,11 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
+    {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report}, /* last: only when set */
   };
+  int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - (j->auto_report[0] ? 0 : 1);
   /* the image is written like the checkpoint: a failure is the data dir's (retried) */
-  if (pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err) != 0) op->rc = PC_EIO;
+  if (pc_film_write_exr(&j->film, img, attrs, nattrs, &op->err) != 0) op->rc = PC_EIO;
 }
 
 static void free_range_list_closed(pc_job *j) {
@@ -643,4 +645,11 @@ void pc_job_free(pc_job *j) {
   free(j->wire_buf);
   free(j->settings_blob);
   free(j);
+}
+
+void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
+  j->halt_noise = s->halt_noise;
+  snprintf(j->auto_report, sizeof j->auto_report, "%s", s->auto_report ? s->auto_report : "");
+  for (char *q = j->auto_report; *q; q++) /* it reaches logs, JSON and image headers */
+    if ((unsigned char)*q < 0x20 || *q == 0x7f || *q == '"' || *q == '\\') *q = '?';
 }

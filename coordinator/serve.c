@@ -509,7 +509,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pcbpt__settings__pack(s->settings, j->settings_blob);
   j->halt_iterations = s->halt_iterations;
   j->halt_seconds = s->halt_seconds;
-  j->halt_noise = s->settings->halt_noise;
+  pc_job_take_stored_settings(j, s->settings);
   j->relmse_est = -1;
   j->priority = s->priority;
   j->state = PC_JOB_QUEUED;
@@ -526,6 +526,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pc_wire_log("job %llu: submitted by %s: '%s' %s %dx%d, %llu iterations, %.1f s", (unsigned long long)j->id, p->name,
               j->name, pc_method_name(j->set.method), j->set.width, j->set.height,
               (unsigned long long)j->halt_iterations, j->halt_seconds);
+  if (j->auto_report[0]) pc_wire_log("job %llu: --method auto %s", (unsigned long long)j->id, j->auto_report);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__SubmitReply r = PCBPT__SUBMIT_REPLY__INIT;
   r.job_id = j->id;
@@ -560,6 +561,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_seconds = j->halt_seconds;
     s->halt_noise = j->halt_noise;
     s->relmse_estimate = j->relmse_est;
+    s->auto_report = j->auto_report;
     s->elapsed = j->elapsed;
     for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
@@ -817,7 +819,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
-    if (s) j->halt_noise = s->halt_noise;
+    if (s) pc_job_take_stored_settings(j, s);
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0 || pc_job_activate(c, j, &je) != 0)
       pc_job_fail(c, j, s ? je.msg : "stored settings do not decode");
     else
@@ -829,7 +831,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_QUEUED) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
-    if (s) j->halt_noise = s->halt_noise;
+    if (s) pc_job_take_stored_settings(j, s);
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0) pc_job_fail(c, j, "stored settings do not decode");
     if (s) pcbpt__settings__free_unpacked(s, NULL);
   }

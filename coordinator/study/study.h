@@ -53,6 +53,7 @@ typedef struct pc_study_run {
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
+  char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
 } pc_study_run;
 
 /* Renders set->method for `seconds` of render time into film (initialised for the settings'
@@ -64,6 +65,13 @@ typedef struct pc_study_run {
 int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int threads, double seconds,
                     int max_snaps, const pc_study_ref *ref, pc_film *film, pc_study_run *run, pc_err *e);
 void pc_study_run_free(pc_study_run *run);
+/* Method auto (study_auto.c): the pilot (pc_pilot_run, in this process on `threads`) and then
+ * the winner for the rest of `seconds`; the pilot's wall time counts as render time (every
+ * snapshot is shifted by it) and its iterations are not in the film. run->method is
+ * PC_METHOD_AUTO, run->auto_report says what the pilot chose. `set` gives everything but the
+ * method. */
+int pc_study_render_auto(const pc_scene *scene, const pc_render_settings *set, int threads, double seconds,
+                         int max_snaps, const pc_study_ref *ref, pc_film *film, pc_study_run *run, pc_err *e);
 
 /* How a method reached a target error. */
 typedef enum {

@@ -96,7 +96,12 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
             (unsigned long long)run->stats.rays, pc_method_name(run->method), pc_method_name(run->method));
     for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
       if (run->layer_empty[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
-    fputs("],\n     \"snapshots\": [\n", f);
+    fputs("]", f);
+    if (run->auto_report[0]) {
+      fputs(", \"auto\": ", f);
+      json_string(f, run->auto_report);
+    }
+    fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];
       fprintf(f, "       {\"seconds\": %.6f, \"iterations\": %llu, \"layers\": {", sn->seconds,
