@@ -268,6 +268,7 @@ static int run_study(study_args *a, pc_err *e) {
                ? pc_study_render_auto(&scene, &set, (int)a->threads, a->seconds, (int)a->snapshots, &ref, &film, &runs[m], e)
                : pc_study_render(&scene, &set, (int)a->threads, a->seconds, (int)a->snapshots, &ref, &film, &runs[m], e);
       if (rc == PC_OK && runs[m].auto_report[0]) printf("auto: %s\n", runs[m].auto_report);
+      if (rc == PC_OK) pc_study_tails_print(stdout, pc_method_name(set.method), &runs[m].tails);
     }
     if (rc == PC_OK) rc = write_images(a, &film, &runs[m], e);
     if (rc == PC_OK) {

@@ -7,11 +7,13 @@
 #include <string.h>
 #include <time.h>
 
-static double now_s(void) {
+static double clock_s(clockid_t id) {
   struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
+  if (clock_gettime(id, &ts) != 0) return 0;
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+static double now_s(void) { return clock_s(CLOCK_MONOTONIC); }
 
 /* Stage 1 has at most 5 candidates and stage 2 at most 1: the budget is split over 6. */
 #define PILOT_SLICES 6
@@ -109,7 +111,7 @@ void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
   for (int i = 0; i < p->n && n < size; i++) {
     const pc_pilot_candidate *c = &p->c[i];
     double ms = c->iterations ? 1e3 * c->seconds / (double)c->iterations : 0;
-    n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g ms/it %.1f it %llu", c->label, c->efficiency,
+    n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g cost ms/it %.1f it %llu", c->label, c->efficiency,
                           c->relmse, ms, (unsigned long long)c->iterations);
   }
 }
@@ -125,18 +127,26 @@ int pc_pilot_local_render(void *user, const pc_render_settings *set, double seco
   s.strategy_layers = 0;
   rc = pc_renderer_create(l->scene, &s, l->threads, &r, e);
   pc_render_stats st = {0};
-  double spent = 0;
+  double spent = 0, cpu = 0, cpu_first = 0;
   uint64_t it = 0;
-  /* one iteration at a time, so a slow candidate overruns its slice by one iteration at most */
+  /* one iteration at a time, so a slow candidate overruns its slice by one iteration at most.
+   * The cost is the process's CPU time, not wall time: on a shared machine the wall time of a
+   * few iterations mostly measures the other processes (the renderer's phases all run on its
+   * pool, so on an idle machine CPU time / threads is the wall time) */
   while (!rc && (it < min_iterations || spent < seconds)) {
-    double t0 = now_s();
+    double t0 = now_s(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
     rc = pc_render_iterations(r, it, 1, &film, &st, NULL, NULL, NULL, e);
     spent += now_s() - t0;
+    cpu += clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
+    if (it == 0) cpu_first = cpu;
     it++;
   }
+  /* the first iteration also warms caches and allocators: the cost per iteration comes from
+   * the others when there are any */
+  if (it >= 2 && cpu > cpu_first) cpu = (cpu - cpu_first) * (double)it / (double)(it - 1);
   if (!rc) {
     c->iterations = it;
-    c->seconds = spent;
+    c->seconds = cpu > 0 ? cpu : spent;
     if (!pc_film_relmse_estimate(&film, &c->relmse)) c->relmse = -1;
   }
   pc_renderer_destroy(r);

@@ -28,7 +28,8 @@ typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2", "pcbpt K=2 mix=0.2" */
   uint64_t iterations;  /* rendered by the pilot */
-  double seconds;       /* their render time (a farm: wall time of the pilot job) */
+  double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), wall
+                           seconds of the pilot job on a farm */
   double relmse;        /* estimated relMSE of their mean (< 0: could not tell) */
   double efficiency;    /* 1 / (relmse * seconds); 0 when it could not tell */
 } pc_pilot_candidate;

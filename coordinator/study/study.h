@@ -14,6 +14,7 @@
 #include "metrics.h"
 #include "render.h"
 #include "scene.h"
+#include "tails.h"
 
 #define PC_STUDY_MAX_METHODS 5
 #define PC_STUDY_MAX_SNAPSHOTS 1000
@@ -54,6 +55,7 @@ typedef struct pc_study_run {
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
+  pc_study_tails tails;   /* per-iteration errors and fireflies (tails.h) */
 } pc_study_run;
 
 /* Renders set->method for `seconds` of render time into film (initialised for the settings'

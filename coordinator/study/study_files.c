@@ -101,6 +101,8 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       fputs(", \"auto\": ", f);
       json_string(f, run->auto_report);
     }
+    fputs(",\n     \"tails\": ", f);
+    pc_study_tails_json(f, &run->tails);
     fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];

@@ -83,7 +83,8 @@ int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int th
     free(img);
     return pc_errf(e, PC_ENOMEM, "study: out of memory for the snapshots");
   }
-  int rc = pc_renderer_create(scene, set, threads, &rend, e);
+  int rc = pc_study_tails_init(&run->tails, film->w, film->h, e);
+  if (rc == PC_OK) rc = pc_renderer_create(scene, set, threads, &rend, e);
   if (rc == PC_OK) run->threads = pc_renderer_threads(rend);
   double render_time = 0;
   uint64_t it = 0;
@@ -92,6 +93,7 @@ int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int th
     double t0 = now_s();
     rc = pc_render_iterations(rend, it, 1, film, &run->stats, NULL, NULL, NULL, e);
     render_time += now_s() - t0;
+    if (rc == PC_OK) rc = pc_study_tails_observe(&run->tails, film, ref->rgb[PC_STUDY_BEAUTY], e);
     if (rc != PC_OK) break;
     it++;
     if (render_time < snapshot_time(seconds, next, max_snaps) || (ref->estimated && it < 2)) continue;
@@ -101,6 +103,7 @@ int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int th
     s->iterations = it;
     rc = measure(film, ref, img, s, e);
   }
+  if (rc == PC_OK) pc_study_tails_finish(&run->tails, film);
   if (rc == PC_OK)
     for (int slot = 1; slot < PC_STUDY_NLAYERS; slot++) run->layer_empty[slot] = layer_is_empty(film, slot - 1);
   pc_renderer_destroy(rend);
@@ -111,6 +114,7 @@ int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int th
 void pc_study_run_free(pc_study_run *run) {
   if (!run) return;
   free(run->snaps);
+  pc_study_tails_free(&run->tails);
   run->snaps = NULL;
   run->nsnaps = 0;
 }
