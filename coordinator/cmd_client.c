@@ -10,6 +10,7 @@
 
 #include "bundle.h"
 #include "client.h"
+#include "pilot.h"
 #include "render_flags.h"
 #include "cli_scene.h"
 #include "scene.h"
@@ -56,6 +57,76 @@ static int connect_or_say(const char *verb, const common_opts *o, pc_client *cl)
 
 static int parse_job_id(const char *s, uint64_t *id) { return pc_parse_u64(s, 1, UINT64_MAX, id) ? 0 : -1; }
 
+typedef struct farm_pilot {
+  pc_client *cl;
+  const uint8_t *hash;
+  const char *name;
+  int priority;
+} farm_pilot;
+
+/* Submits one job of the uploaded bundle. */
+static int submit_one(const farm_pilot *fp, const pc_render_settings *set, const char *name, uint64_t spp, double seconds,
+                      double halt_noise, const char *auto_report, uint64_t *job, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Settings ps;
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(set, &ps, &psb);
+  ps.halt_noise = halt_noise;
+  ps.auto_report = (char *)auto_report;
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  sub.name = (char *)name;
+  sub.bundle_hash.data = (uint8_t *)fp->hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = spp;
+  sub.halt_seconds = seconds;
+  sub.priority = fp->priority;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = &sub;
+  Pcbpt__Envelope *in = NULL;
+  int rc = pc_client_send(fp->cl, &env, e);
+  if (!rc) rc = pc_client_recv(fp->cl, 60, &in, e);
+  if (!rc && in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "unexpected reply to submit");
+  if (!rc) *job = in->submit_reply->job_id;
+  if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  return rc;
+}
+
+/* pc_pilot_render_fn on a farm: one short job per candidate, waited for. A farm job cannot be
+ * bound by "at least N iterations and at least T seconds": it gets T (at least 1 s, for the
+ * scheduling round trips) when the job is time-bound, else N iterations. */
+static int farm_pilot_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
+                             pc_pilot_candidate *c, pc_err *e) {
+  const farm_pilot *fp = user;
+  char name[200];
+  snprintf(name, sizeof name, "%.120s [auto pilot: %s]", fp->name, c->label);
+  uint64_t job = 0;
+  int rc = submit_one(fp, set, name, seconds > 0 ? 0 : min_iterations, seconds > 0 ? (seconds > 1 ? seconds : 1) : 0, 0, "",
+                      &job, e);
+  while (!rc) {
+    Pcbpt__Envelope *in = NULL;
+    if ((rc = pc_client_status(fp->cl, job, &in, e)) != 0) break;
+    if (in->status_reply->n_jobs != 1) {
+      pcbpt__envelope__free_unpacked(in, NULL);
+      return pc_errf(e, PC_EIO, "auto pilot: job %llu vanished", (unsigned long long)job);
+    }
+    const Pcbpt__JobStatus *j = in->status_reply->jobs[0];
+    bool done = strcmp(j->state, "done") == 0;
+    if (done || strcmp(j->state, "failed") == 0 || strcmp(j->state, "cancelled") == 0) {
+      if (!done) rc = pc_errf(e, PC_EIO, "auto pilot: job %llu (%s) %s: %s", (unsigned long long)job, c->label, j->state, j->error);
+      c->iterations = j->iterations_done;
+      c->seconds = j->elapsed;
+      c->relmse = j->relmse_estimate;
+      pcbpt__envelope__free_unpacked(in, NULL);
+      break;
+    }
+    pcbpt__envelope__free_unpacked(in, NULL);
+    struct timespec ts = {0, 50000000};
+    nanosleep(&ts, NULL);
+  }
+  return rc;
+}
+
 int pc_cmd_submit(int argc, char **argv) {
   common_opts o;
   opts_default(&o);
@@ -96,34 +167,35 @@ int pc_cmd_submit(int argc, char **argv) {
   if (rc) { free(blob); return rc; }
   rc = pc_client_send_bundle(&cl, blob, n, hash, &e);
   free(blob);
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-  Pcbpt__Settings ps;
-  pc_wire_settings_buf psb;
-  pc_wire_settings_to_proto(&req.set, &ps, &psb);
-  ps.halt_noise = req.halt_noise;
-  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   const char *base = strrchr(scene_path, '/');
-  sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);
-  sub.bundle_hash.data = hash;
-  sub.bundle_hash.len = PC_BUNDLE_HASH;
-  sub.settings = &ps;
-  sub.halt_iterations = req.spp;
-  sub.halt_seconds = req.seconds;
-  sub.priority = (int32_t)o.priority;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  Pcbpt__Envelope *in = NULL;
-  if (!rc) rc = pc_client_send(&cl, &env, &e);
-  if (!rc) rc = pc_client_recv(&cl, 60, &in, &e);
+  farm_pilot fp = {.cl = &cl, .hash = hash, .name = o.name ? o.name : base ? base + 1 : scene_path, .priority = (int)o.priority};
+  char report[1024] = "";
+  if (!rc && req.method_auto) {
+    /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
+     * them; the client waits for each and takes its cost from the job's wall time */
+    pc_pilot pilot;
+    double slice;
+    uint64_t min_it;
+    pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
+    rc = pc_pilot_run(&pilot, &req.set, slice, min_it, farm_pilot_render, &fp, &e);
+    if (!rc) {
+      uint64_t seed = req.set.seed;
+      req.set = pilot.c[pilot.best].set;
+      req.set.seed = seed;
+      pc_pilot_report(&pilot, report, sizeof report);
+      fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
+      if (req.seconds > 0) req.seconds = req.seconds > pilot.seconds + 1e-3 ? req.seconds - pilot.seconds : 1e-3;
+    }
+  }
+  uint64_t job = 0;
+  if (!rc) rc = submit_one(&fp, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, report, &job, &e);
   pc_client_close(&cl);
-  if (rc || in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) {
-    fprintf(stderr, "pcbpt-coord submit: %s\n", rc ? e.msg : "unexpected reply");
-    if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  if (rc) {
+    fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
     return 1;
   }
-  if (o.json) printf("{\"job\": %llu}\n", (unsigned long long)in->submit_reply->job_id);
-  else printf("%llu\n", (unsigned long long)in->submit_reply->job_id);
-  pcbpt__envelope__free_unpacked(in, NULL);
+  if (o.json) printf("{\"job\": %llu}\n", (unsigned long long)job);
+  else printf("%llu\n", (unsigned long long)job);
   return 0;
 }
 
