@@ -184,7 +184,7 @@ int pc_cmd_submit(int argc, char **argv) {
       req.set.seed = seed;
       pc_pilot_report(&pilot, report, sizeof report);
       fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
-      if (req.seconds > 0) req.seconds = req.seconds > pilot.seconds + 1e-3 ? req.seconds - pilot.seconds : 1e-3;
+      if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot.seconds);
     }
   }
   uint64_t job = 0;

@@ -316,7 +316,7 @@ int pc_cmd_render(int argc, char **argv) {
     printf("auto: %s\n", auto_report);
     fflush(stdout);
     pilot_s = now_s() - t_start;
-    if (req.seconds > 0) req.seconds = req.seconds > pilot_s + 1e-3 ? req.seconds - pilot_s : 1e-3;
+    if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot_s);
   }
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);

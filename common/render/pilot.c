@@ -32,6 +32,11 @@ void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64
   }
 }
 
+double pc_pilot_remaining(double seconds, double pilot_seconds) {
+  double rest = seconds - pilot_seconds;
+  return rest > 0.1 * seconds ? rest : 0.1 * seconds;
+}
+
 uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
 
 static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k, float mix) {

@@ -50,6 +50,12 @@ typedef int (*pc_pilot_render_fn)(void *user, const pc_render_settings *set, dou
  * iterations only (an iteration-bound job pays the pilot on top). */
 void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64_t *min_iterations);
 
+/* What is left of a --time budget of `seconds` after a pilot that took `pilot_seconds`: the rest,
+ * but at least a tenth of the budget, so a pilot that overran a tiny budget (each candidate
+ * renders at least 2 iterations) still leaves the job time for an image; the overrun is
+ * reported with the pilot's time. */
+double pc_pilot_remaining(double seconds, double pilot_seconds);
+
 /* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
 uint64_t pc_pilot_seed(uint64_t job_seed);
 

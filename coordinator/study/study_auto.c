@@ -19,9 +19,7 @@ int pc_study_render_auto(const pc_scene *scene, const pc_render_settings *set, i
   if (rc != PC_OK) return rc;
   pc_render_settings chosen = pilot.c[pilot.best].set;
   chosen.seed = set->seed;
-  /* a pilot that overran the budget leaves the winner a sliver: one iteration, then stop */
-  double rest = seconds - pilot.seconds > 1e-3 ? seconds - pilot.seconds : 1e-3;
-  rc = pc_study_render(scene, &chosen, threads, rest, max_snaps, ref, film, run, e);
+  rc = pc_study_render(scene, &chosen, threads, pc_pilot_remaining(seconds, pilot.seconds), max_snaps, ref, film, run, e);
   if (rc != PC_OK) return rc;
   for (int i = 0; i < run->nsnaps; i++) run->snaps[i].seconds += pilot.seconds;
   run->method = PC_METHOD_AUTO;
