@@ -58,8 +58,10 @@ typedef struct pc_worker worker;
 
 static double now_s(void) { return (double)uv_hrtime() * 1e-9; }
 
+/* Only once authenticated: the coordinator opens every frame after the AuthResponse as sealed,
+ * and a range's messages belong to the connection it was assigned on anyway. */
 static void send_env(worker *w, Pcbpt__Envelope *env) {
-  if (w->conn && w->connected) pc_conn_send(w->conn, env);
+  if (w->conn && w->connected && w->authed) pc_conn_send(w->conn, env);
 }
 
 static void request_work(worker *w) {

@@ -253,5 +253,6 @@ int main(void) {
     cmocka_unit_test(round_trip), cmocka_unit_test(tampered_byte), cmocka_unit_test(replayed_reordered_dropped),
     cmocka_unit_test(wrong_keys), cmocka_unit_test(limits),
   };
+  if (pc_auth_init(NULL) != 0) return 1;
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
