@@ -6,7 +6,7 @@ pkgs=(
   libembree-dev libopenexr-dev libuv1-dev libprotobuf-c-dev protobuf-c-compiler
   libexpat1-dev libsqlite3-dev libzstd-dev libsodium-dev libcmocka-dev
   libpng-dev libjpeg-dev libcairo2-dev libclang-rt-14-dev
-  slurm-wlm munge systemd
+  slurm-wlm munge systemd iproute2 iptables libnetfilter-queue-dev
 )
 missing=()
 for p in "${pkgs[@]}"; do

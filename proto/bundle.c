@@ -7,6 +7,7 @@
 #include <ftw.h>
 #include <libgen.h>
 #include <sodium.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -82,12 +83,32 @@ static void XMLCALL on_start(void *ud, const XML_Char *el, const XML_Char **attr
     else if (strcmp(attr[i], "value") == 0) value = attr[i + 1];
   }
   if (!name || !value || strcmp(name, "filename") != 0) return;
-  if (!pc_bundle_path_ok(value)) {
+  /* "./m.obj" and "sub//m.obj" name files the loader finds: bundled as "m.obj", "sub/m.obj" */
+  char norm[PC_BUNDLE_MAX_PATH + 1];
+  size_t k = 0;
+  for (const char *s = value; *s && k < sizeof norm - 1;) {
+    const char *slash = strchr(s, '/');
+    size_t cl = slash ? (size_t)(slash - s) : strlen(s);
+    bool skip = cl == 0 || (cl == 1 && s[0] == '.');
+    if (!skip && k + cl + 1 < sizeof norm) {
+      if (k) norm[k++] = '/';
+      memcpy(norm + k, s, cl);
+      k += cl;
+    } else if (!skip) {
+      k = sizeof norm - 1;
+    }
+    s += cl + (slash ? 1 : 0);
+  }
+  norm[k] = 0;
+  if (value[0] == '/' || !pc_bundle_path_ok(norm)) {
     r->error = PC_EINVAL;
-    snprintf(r->bad, sizeof r->bad, "line %lu: referenced file '%.200s' is not a relative path inside the scene directory",
-             (unsigned long)XML_GetCurrentLineNumber(r->parser), value);
+    snprintf(r->bad, sizeof r->bad, "line %lu: referenced file '%.200s' %s", (unsigned long)XML_GetCurrentLineNumber(r->parser),
+             value, value[0] == '/' ? "is an absolute path (paths are relative to the scene's folder)"
+                    : strlen(value) >= PC_BUNDLE_MAX_PATH ? "is a path too long"
+                    : "is not a path inside the scene's folder");
     return;
   }
+  value = norm;
   for (int i = 0; i < r->n; i++)
     if (strcmp(r->paths[i], value) == 0) return;
   if (r->n >= PC_BUNDLE_MAX_FILES) {
@@ -125,7 +146,23 @@ int pc_bundle_unhex(const char *hex, uint8_t hash[PC_BUNDLE_HASH]) {
   return 0;
 }
 
-int pc_bundle_create(const char *scene_path, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
+/* The real path of the file dir/rel, which must lie inside dir (itself a real path): a
+ * symlink may point anywhere within the scene's folder, never out of it. */
+static int resolve_inside(const char *scene_path, const char *dir, const char *rel, char out[PATH_MAX], pc_err *e) {
+  char full[PATH_MAX];
+  if ((size_t)snprintf(full, sizeof full, "%s/%s", dir, rel) >= sizeof full)
+    return pc_errf(e, PC_ELIMIT, "%s: path of '%s' too long", scene_path, rel);
+  if (!realpath(full, out)) return pc_errf(e, PC_EIO, "%s: referenced file '%s': %s", scene_path, rel, strerror(errno));
+  size_t dn = strlen(dir);
+  if (strncmp(out, dir, dn) != 0 || (out[dn] != '/' && dn != 1))
+    return pc_errf(e, PC_EINVAL, "%s: referenced file '%s' is a link out of the scene's folder %s", scene_path, rel, dir);
+  return 0;
+}
+
+int pc_bundle_create(const char *scene_arg, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
+  /* resolved once: the scene's folder is where the scene file really is, as for the loader */
+  char scene_path[PATH_MAX];
+  if (!realpath(scene_arg, scene_path)) return pc_errf(e, PC_EIO, "%s: %s", scene_arg, strerror(errno));
   uint8_t *xml = NULL;
   size_t xml_n = 0;
   int rc = read_file(scene_path, &xml, &xml_n, e);
@@ -157,13 +194,21 @@ int pc_bundle_create(const char *scene_path, uint8_t **blob, size_t *n, uint8_t 
     files[0].data.len = xml_n;
     fp[0] = &files[0];
     nfiles = 1;
+    /* the sizes first: a scene too large to bundle is refused before anything is read */
+    unsigned long long sum = xml_n;
+    for (int i = 0; i < r.n && !rc; i++) {
+      char full[PATH_MAX];
+      struct stat st;
+      if (strcmp(r.paths[i], base) == 0) continue;
+      if ((rc = resolve_inside(scene_arg, dir, r.paths[i], full, e)) != 0) break;
+      if (stat(full, &st) == 0 && st.st_size > 0) sum += (unsigned long long)st.st_size;
+      if (sum > PC_BUNDLE_MAX)
+        rc = pc_errf(e, PC_ELIMIT, "%s: scene and its files exceed %zu bytes (at '%s')", scene_arg, PC_BUNDLE_MAX, r.paths[i]);
+    }
     for (int i = 0; i < r.n && !rc; i++) {
       if (strcmp(r.paths[i], base) == 0) continue;
       char full[PATH_MAX];
-      if ((size_t)snprintf(full, sizeof full, "%s/%s", dir, r.paths[i]) >= sizeof full) {
-        rc = pc_errf(e, PC_ELIMIT, "%s: path of '%s' too long", scene_path, r.paths[i]);
-        break;
-      }
+      if ((rc = resolve_inside(scene_arg, dir, r.paths[i], full, e)) != 0) break;
       uint8_t *d;
       size_t dn;
       if ((rc = read_file(full, &d, &dn, e)) != 0) break;

@@ -53,8 +53,9 @@ typedef struct pc_worker_opts {
 } pc_worker_opts;
 
 int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);
-/* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals). */
-void pc_worker_run(pc_worker *w);
+/* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals); an error
+ * when it stopped because the coordinator holds a different token. */
+int pc_worker_run(pc_worker *w, pc_err *e);
 /* Thread-safe: makes pc_worker_run return. */
 void pc_worker_stop(pc_worker *w);
 void pc_worker_destroy(pc_worker *w);
