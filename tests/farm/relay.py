@@ -1,9 +1,9 @@
 """relay.py: a recording TCP relay for the farm tests: listens on an ephemeral loopback port
 (written to PORT_FILE), forwards each connection to the coordinator frame by frame (the 4-byte
 length prefixes travel in the clear) and appends every frame, in each direction, to
-CAPTURE_DIR/<connection>.<c2s|s2c>. If CAPTURE_DIR/corrupt exists when a connection is accepted,
-it is removed and that connection's third client frame (its first sealed one) gets one payload
-bit flipped on the way."""
+CAPTURE_DIR/<connection>.<c2s|s2c>. If CAPTURE_DIR/corrupt (or corrupt-s2c) exists when a
+connection is accepted, it is removed and that connection's third frame from the client (or from
+the coordinator), its first sealed one, gets one payload bit flipped on the way."""
 import os, socket, struct, sys, threading
 
 target_port, port_file, cap = int(sys.argv[1]), sys.argv[2], sys.argv[3]
@@ -48,12 +48,13 @@ while True:
     cli, _ = lsn.accept()
     srv = socket.create_connection(("127.0.0.1", target_port))
     conn_id += 1
-    corrupt = -1
-    try:
-        os.unlink(os.path.join(cap, "corrupt"))
-        corrupt = 2
-    except FileNotFoundError:
-        pass
+    corrupt = {}
+    for direction in ("c2s", "s2c"):
+        try:
+            os.unlink(os.path.join(cap, "corrupt" if direction == "c2s" else "corrupt-s2c"))
+            corrupt[direction] = 2
+        except FileNotFoundError:
+            pass
     base = os.path.join(cap, str(conn_id))
-    threading.Thread(target=pump, args=(cli, srv, base + ".c2s", corrupt), daemon=True).start()
-    threading.Thread(target=pump, args=(srv, cli, base + ".s2c", -1), daemon=True).start()
+    threading.Thread(target=pump, args=(cli, srv, base + ".c2s", corrupt.get("c2s", -1)), daemon=True).start()
+    threading.Thread(target=pump, args=(srv, cli, base + ".s2c", corrupt.get("s2c", -1)), daemon=True).start()

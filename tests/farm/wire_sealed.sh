@@ -6,6 +6,8 @@
 # zstd magic that starts every upload, the EXR magic, any 24-byte window of the fetched image).
 # The bundle travels zstd-compressed, so its windows, not the markers, are the decisive check:
 # with sealing switched off this test reports both magics and every bundle and image window.
+# Each worker's first connection has one bit flipped in its first sealed frame, one towards the
+# coordinator, one from it: that connection alone is dropped and the worker reconnects.
 # Then: a recorded AuthResponse replayed on a new connection is refused; a version-2 hello is
 # refused with a clear message; a sealed frame with one flipped bit drops that connection only.
 . "$(dirname "$0")/lib.inc"
@@ -18,10 +20,21 @@ MARK=pcbpt-unpublished-scene-7f3a9c1e; MAT=pcbpt_secret_material_7f3a9c1e
 cp -r "$S/scenes/cornell-box" "$T/scene"
 sed -i "s|<scene version=\"0.6.0\">|<scene version=\"0.6.0\">\n  <!-- $MARK -->|; s|<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.63, 0.065, 0.05\"/>|<bsdf type=\"diffuse\" id=\"$MAT\"><rgb name=\"reflectance\" value=\"0.63, 0.065, 0.05\"/>|" "$T/scene/scene.xml"
 grep -q "$MARK" "$T/scene/scene.xml" && grep -q "$MAT" "$T/scene/scene.xml" || fail "scene markers not added"
+# each worker's first connection is tampered with: wsealed1's first sealed frame to the
+# coordinator and the coordinator's first sealed frame to wsealed2 have one bit flipped; each
+# side drops that connection only, and the workers reconnect and render their share
 for w in wsealed1 wsealed2; do
+  if [ $w = wsealed1 ]; then touch "$T/cap/corrupt"; else touch "$T/cap/corrupt-s2c"; fi
   "$B/pcbpt-worker" --connect 127.0.0.1:$RPORT --token-file "$T/tok" --threads 1 --name $w --cache-dir "$T/cache-$w" >>"$T/$w.log" 2>&1 &
   PIDS+=("$!")
+  for _ in $(seq 50); do [ -e "$T/cap/corrupt" ] || [ -e "$T/cap/corrupt-s2c" ] || break; sleep 0.1; done
 done
+for _ in $(seq 100); do
+  [ "$(grep -c "connected to" "$T/wsealed1.log")" -ge 2 ] && [ "$(grep -c "connected to" "$T/wsealed2.log")" -ge 2 ] && break
+  sleep 0.1
+done
+[ "$(grep -c "connected to" "$T/wsealed1.log")" -ge 2 ] && [ "$(grep -c "connected to" "$T/wsealed2.log")" -ge 2 ] \
+  || fail "a worker did not reconnect after its tampered connection"
 J=$("$B/pcbpt-coord" submit "$T/scene/scene.xml" --spp 16 --method pt --width 64 --height 64 $HR | tail -1)
 timeout 60 "$B/pcbpt-coord" wait "$J" $HR >/dev/null || fail "wait"
 [ "$(job_field "$J" iterations)" = 16 ] || fail "iterations $(job_field "$J" iterations) != 16"
@@ -30,6 +43,8 @@ CK=$(ls "$T/data/jobs/$J"/ckpt.* | sort -t. -k2 -n | tail -1)
   || fail "the farm's sums differ from a single-process render"
 "$B/pcbpt-coord" fetch "$J" --out "$T/out.exr" $HR >/dev/null || fail "fetch"
 for w in wsealed1 wsealed2; do grep -q "range .* -> $w" "$T/coord.log" || fail "worker $w got no range"; done
+grep -q "closing: seal: frame 0 does not authenticate" "$T/coord.log" || fail "the coordinator took wsealed1's tampered frame"
+grep -q "closing: seal: frame 0 does not authenticate" "$T/wsealed2.log" || fail "wsealed2 took the coordinator's tampered frame"
 python3 - "$T/cap" "$T/data/bundles" "$T/out.exr" "$MARK" "$MAT" <<'PY' || fail "capture check"
 import collections, glob, os, sys
 cap, bundles, exr, mark, mat = sys.argv[1:]
@@ -94,6 +109,6 @@ grep -q "protocol version 2, this coordinator speaks" "$T/coord.log" || fail "no
 touch "$T/cap/corrupt"
 "$B/pcbpt-coord" status "$J" $HR >/dev/null 2>&1 && fail "a corrupted sealed frame was accepted"
 [ -e "$T/cap/corrupt" ] && fail "the relay did not corrupt the status connection"
-grep -q "closing: seal: frame 0 does not authenticate" "$T/coord.log" || fail "no log line for the corrupted frame"
+[ "$(grep -c "closing: seal: frame 0 does not authenticate" "$T/coord.log")" = 2 ] || fail "no log line for the corrupted frame"
 [ "$(job_field "$J" iterations)" = 16 ] || fail "the coordinator does not answer after the corrupted frame"
 echo PASS
