@@ -11,6 +11,7 @@
 #include "bundle.h"
 #include "client.h"
 #include "render_flags.h"
+#include "cli_scene.h"
 #include "scene.h"
 #include "verbs.h"
 #include "wire_settings.h"
@@ -77,18 +78,19 @@ int pc_cmd_submit(int argc, char **argv) {
     scene_path = argv[i];
   }
   if (!scene_path) { fprintf(stderr, "pcbpt-coord submit: missing SCENE.xml\n"); return 2; }
-  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
-  /* bundled first: a scene too large to submit (or reaching out of its folder) is refused
-   * before the loader reads it whole */
-  uint8_t *blob, hash[PC_BUNDLE_HASH];
-  size_t n;
-  if (pc_bundle_create(scene_path, &blob, &n, hash, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
   /* the scene supplies what the flags left open, so every worker gets complete settings */
   pc_scene scene = {0};
-  if (pc_scene_load(scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); free(blob); return 1; }
-  pc_render_request_apply_scene(&req, &scene);
+  if (pc_cli_load_scene("submit", &req, scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  if (pc_render_settings_check(&req.set, &e) != 0) {
+    pc_scene_free(&scene);
+    fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
+    return 2;
+  }
+  uint8_t *blob, hash[PC_BUNDLE_HASH];
+  size_t n;
+  int brc = pc_cli_scene_bundle(&scene, &blob, &n, hash, &e);
   pc_scene_free(&scene);
-  if (pc_render_settings_check(&req.set, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); free(blob); return 2; }
+  if (brc != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
   pc_client cl;
   int rc = connect_or_say("submit", &o, &cl);
   if (rc) { free(blob); return rc; }
@@ -96,7 +98,8 @@ int pc_cmd_submit(int argc, char **argv) {
   free(blob);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Settings ps;
-  pc_wire_settings_to_proto(&req.set, &ps);
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(&req.set, &ps, &psb);
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   const char *base = strrchr(scene_path, '/');
   sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);

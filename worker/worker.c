@@ -241,8 +241,11 @@ static void on_pump(uv_timer_t *t) {
 static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
   pc_render_settings s;
   pc_err e;
-  if (pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
-      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, &e) != 0) {
+  char root[1200];
+  /* the bundle's folder is the scene's root there, as the client's root folder was */
+  int bad = pc_bundle_dir(w->cache, a->bundle_hash.data, root, sizeof root) != 0 ? pc_errf(&e, PC_ELIMIT, "cache path too long") : 0;
+  if (bad || pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
+      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, root, &e) != 0) {
     pc_wire_log("job %llu: cannot start range %llu: %s", (unsigned long long)a->job_id, (unsigned long long)a->range_id, e.msg);
     give_back(w, a->job_id, a->range_id, e.msg);
     return;

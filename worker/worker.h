@@ -23,6 +23,7 @@ typedef struct pc_wrender {
   uint64_t job_id, range_id, first, count;
   pc_render_settings set;
   char scene_path[1200];
+  char scene_root[1200];   /* the bundle's folder: what the scene's files may come from */
   atomic_bool cancel;
   /* progress (thread writes, loop reads and takes, under mu) */
   uint64_t rendered;       /* iterations of the range rendered so far */
@@ -38,7 +39,7 @@ int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
 void pc_wrender_stop(pc_wrender *w);
 /* Starts a range (the thread must be idle). */
 int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
-                      const pc_render_settings *s, const char *scene_path, pc_err *e);
+                      const pc_render_settings *s, const char *scene_path, const char *scene_root, pc_err *e);
 
 /* A worker connected to one coordinator (reconnecting with backoff while it is away). */
 typedef struct pc_worker pc_worker;

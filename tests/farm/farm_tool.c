@@ -74,7 +74,9 @@ static int cmd_exact(int argc, char **argv) {
   pc_renderer *r = NULL;
   pc_film mine = {0}, farm = {0};
   pc_render_stats st = {0};
-  int rc = pc_scene_load(argv[1], &scene, &e);
+  pc_scene_load_opts lo;
+  pc_render_request_load_opts(&req, &lo);
+  int rc = pc_scene_load_with(argv[1], &lo, &scene, &e);
   if (!rc) {
     pc_render_request_apply_scene(&req, &scene);
     rc = pc_scene_build(&scene, &e);
@@ -388,10 +390,11 @@ static int cmd_badbundle(int argc, char **argv) {
     Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
     Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
     Pcbpt__Settings ps;
+    pc_wire_settings_buf psb;
     pc_render_settings s;
     pc_render_settings_default(&s);
     s.width = s.height = 16;
-    pc_wire_settings_to_proto(&s, &ps);
+    pc_wire_settings_to_proto(&s, &ps, &psb);
     sub.name = (char *)kind;
     sub.bundle_hash.data = hash;
     sub.bundle_hash.len = PC_BUNDLE_HASH;
@@ -431,9 +434,10 @@ static int cmd_bundle(int argc, char **argv) {
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   Pcbpt__Settings ps;
+  pc_wire_settings_buf psb;
   pc_render_settings s;
   pc_render_settings_default(&s);
-  pc_wire_settings_to_proto(&s, &ps);
+  pc_wire_settings_to_proto(&s, &ps, &psb);
   sub.name = "bad-bundle";
   sub.bundle_hash.data = hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
