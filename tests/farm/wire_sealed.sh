@@ -13,8 +13,9 @@
 # Then the handshake is replay-proof: a recorded hello and AuthResponse replayed on a new
 # connection are refused (while an honest handshake computed by the test from the token is
 # accepted), a sealed frame recorded on one connection is refused on another, and a client and a
-# worker refuse an impostor that replays a recorded Challenge. A version-2 hello is refused with
-# a clear message; a sealed frame with one flipped bit drops that connection only.
+# worker refuse an impostor that replays a recorded Challenge. A hello of the previous protocol
+# version (unsealed) is refused with a clear message; a sealed frame with one flipped bit drops
+# that connection only.
 . "$(dirname "$0")/lib.inc"
 start_coord
 python3 "$S/tests/farm/relay.py" "$PORT" "$T/rport" "$T/cap" 2>>"$T/relay.log" &
@@ -189,17 +190,18 @@ assert r.returncode != 0 and "holds a different token" in open(tmp + "/wimpostor
     "worker took a replayed challenge (exit %d)" % r.returncode
 assert after_hello == [None, None], "a peer answered a replayed challenge: %r" % after_hello
 
-# 4. a version-2 hello is refused with the versions named
+# 4. a hello of the previous version (whose frames travel in the clear) is refused with the
+# versions named
 c = dial()
-c.s.sendall(hello(bytes(32), v=2))
+c.s.sendall(hello(bytes(32), v=version - 1))
 err = c.recv()
-want = b"protocol version 2, this coordinator speaks %d" % version
-assert err and want in err, "v2 hello: %r" % err
+want = b"protocol version %d, this coordinator speaks %d" % (version - 1, version)
+assert err and want in err, "older hello: %r" % err
 print("replayed handshake refused (an honest one accepted); a sealed frame from another connection dropped; "
-      "client and worker refuse a replayed challenge; v2 hello refused: %s" % want.decode())
+      "client and worker refuse a replayed challenge; older hello refused: %s" % want.decode())
 PY
 grep -q "authentication failed (wrong token)" "$T/coord.log" || fail "no log line for the replayed auth_response"
-grep -q "protocol version 2, this coordinator speaks" "$T/coord.log" || fail "no log line for the v2 hello"
+grep -q "closing: protocol version [0-9]*, this coordinator speaks" "$T/coord.log" || fail "no log line for the older hello"
 # one flipped bit in a sealed frame: that connection is dropped with a reason, nothing else
 touch "$T/cap/corrupt"
 "$B/pcbpt-coord" status "$J" $HR >/dev/null 2>&1 && fail "a corrupted sealed frame was accepted"
