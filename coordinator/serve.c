@@ -169,6 +169,8 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
   r.ok = true;
   r.reason = "";
   pc_conn_send(&p->conn, &env);
+  /* the last clear frame: the peer sends nothing more until it has read it */
+  if (pc_conn_seal(&p->conn, p->coord->key, true, p->client_nonce, p->nonce) != 0) return;
   if (p->role == PCBPT__ROLE__ROLE_WORKER)
     pc_wire_log("%s: worker '%s' joined (%u threads)", p->conn.peer, p->name, p->threads);
 }

@@ -33,12 +33,12 @@ struct pc_worker {
   bool handle_signals, shutting_down;
   bool wrong_token;          /* the coordinator holds another token: retrying cannot help */
   pc_conn *conn;
-  bool connected, authed, waiting_work;
+  bool connected, challenged, authed, waiting_work;
   double backoff, last_upload, next_request;
   char host[256];
   int port;
   char name[64], cache[1024];
-  uint8_t key[PC_AUTH_KEY], cnonce[PC_AUTH_NONCE];
+  uint8_t key[PC_AUTH_KEY], cnonce[PC_AUTH_NONCE], snonce[PC_AUTH_NONCE];
   int threads;
   pc_wrender r;
   /* current range, as the loop sees it */
@@ -56,8 +56,10 @@ typedef struct pc_worker worker;
 
 static double now_s(void) { return (double)uv_hrtime() * 1e-9; }
 
+/* Only once authenticated: the coordinator opens every frame after the AuthResponse as sealed,
+ * and a range's messages belong to the connection it was assigned on anyway. */
 static void send_env(worker *w, Pcbpt__Envelope *env) {
-  if (w->conn && w->connected) pc_conn_send(w->conn, env);
+  if (w->conn && w->connected && w->authed) pc_conn_send(w->conn, env);
 }
 
 static void request_work(worker *w) {
@@ -383,6 +385,8 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     }
     uint8_t mac[PC_AUTH_MAC];
     if (pc_auth_mac(w->key, false, ch->nonce.data, w->cnonce, mac) != 0) { pc_conn_close(c, "auth: MAC failed"); return; }
+    memcpy(w->snonce, ch->nonce.data, PC_AUTH_NONCE);
+    w->challenged = true;
     Pcbpt__Envelope out = PCBPT__ENVELOPE__INIT;
     Pcbpt__AuthResponse ar = PCBPT__AUTH_RESPONSE__INIT;
     ar.mac.data = mac;
@@ -394,6 +398,8 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
   }
   case PCBPT__ENVELOPE__MSG_AUTH_RESULT:
     if (!env->auth_result->ok) { token_mismatch(w, c); return; }
+    if (w->authed || !w->challenged) { pc_conn_close(c, "auth_result out of order"); return; }
+    if (pc_conn_seal(c, w->key, false, w->cnonce, w->snonce) != 0) return;
     w->authed = true;
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
@@ -435,7 +441,7 @@ static void on_closed(pc_conn *c) {
   free(c);
   w->conn = NULL;
   if (w->shutting_down) return;
-  w->connected = w->authed = w->waiting_work = false;
+  w->connected = w->challenged = w->authed = w->waiting_work = false;
   if (w->bun_wait) {
     /* the range was never started: the coordinator takes it back */
     w->bun_wait = false;
