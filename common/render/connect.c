@@ -20,6 +20,14 @@ void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int
   }
 }
 
+void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v) {
+  pc_film_queue_add(q, layer, x, y, v);
+  if (strategy_layers > 0 && s + t - 1 <= strategy_layers) {
+    int l = pc_film_strategy_layer(q->film, s, t);
+    if (l >= 0) pc_film_queue_add(q, l, x, y, v);
+  }
+}
+
 /* Weight of strategy (s,t) given the sums of the strategies on the light side (sl) and on the
  * eye side (se) of its connection, each relative to its pdf. */
 static float weight_of(const pc_mis_counts *n, int s, int t, float sl, float se) {
