@@ -105,36 +105,41 @@ static void merge_work(uv_work_t *w) {
   op->rc = pc_wire_film_add(raw, want, &j->film, judge_counts, op, &op->err);
 }
 
+/* The film, compressed, to dir/ckpt.GEN through a synced temporary and a rename. */
+static int write_ckpt_file(pc_op *op, pc_job *j, uint8_t *raw, const char *dir) {
+  char path[600], tmp[640];
+  snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  uint8_t *z = NULL;
+  size_t zn;
+  pc_wire_film_pack_to(&j->film, raw);
+  int rc = pc_wire_compress(raw, pc_wire_film_size(&j->film), &z, &zn, &op->err);
+  if (rc) return rc;
+  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0 || pc_write_all(fd, z, zn) != 0 || fsync(fd) != 0) {
+    rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
+    if (fd >= 0) close(fd);
+    free(z);
+    return rc;
+  }
+  free(z);
+  if (close(fd) != 0 || rename(tmp, path) != 0) return pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
+  int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0 || fsync(dfd) != 0) rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
+  if (dfd >= 0) close(dfd);
+  return rc;
+}
+
 static void ckpt_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
-  char dir[512], path[600], tmp[640];
+  char dir[512];
   pc_job_path(op->c, j, NULL, dir, sizeof dir);
-  snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
-  snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  uint8_t *raw = wire_buf(j, &op->err), *z = NULL;
-  size_t zn;
+  uint8_t *raw = wire_buf(j, &op->err);
   if (!raw) { op->rc = op->err.code; return; }
-  pc_wire_film_pack_to(&j->film, raw);
-  if ((op->rc = pc_wire_compress(raw, pc_wire_film_size(&j->film), &z, &zn, &op->err)) != 0) return;
-  bool sync = !op->c->volatile_store;
-  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
-    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
-    if (fd >= 0) close(fd);
-    free(z);
-    return;
-  }
-  free(z);
-  if (close(fd) != 0 || rename(tmp, path) != 0) {
-    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
-    return;
-  }
-  if (sync) {
-    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
-    if (dfd >= 0) close(dfd);
-  }
+  /* a volatile store is thrown away with its coordinator, which never restarts from it: there
+   * the checkpoint only commits the acks, and a film file would never be read */
+  if (!op->c->volatile_store) op->rc = write_ckpt_file(op, j, raw, dir);
   if (op->rc || !op->write_exr) return;
   /* the same header as a standalone `render` writes, plus the job id */
   char img[600], idbuf[32], seed[32], version[64];
