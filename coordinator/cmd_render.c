@@ -20,6 +20,7 @@
 #include "thread_pool.h"
 #include "wire_settings.h"
 #include "render_flags.h"
+#include "cli_scene.h"
 #include "scene.h"
 #include "verbs.h"
 
@@ -31,7 +32,7 @@ static const char render_help[] =
     "  --out FILE.exr        output image (default: <scene folder name>.exr); the preview is FILE.png\n"
     "  --exposure E          preview exposure in stops (default 0)\n"
     "  --quiet               no progress bar\n"
-    "Without --spp or --time, renders 64 iterations.\n";
+    "Without --spp, --time or --halt-noise, renders 64 iterations.\n";
 
 /* SIGINT/SIGTERM so far: the first stops the render and writes what it has, the second
  * abandons that and ends without an image, and any after it kill the process (the handler
@@ -95,7 +96,8 @@ typedef struct progress_state {
   uint64_t done_before;
 } progress_state;
 
-static void draw_progress(progress_state *p, int fd, uint64_t done) {
+/* relmse: the merged image's estimated relMSE (< 0: not known yet). */
+static void draw_progress(progress_state *p, int fd, uint64_t done, double relmse) {
   if (!p->show) return;
   double el = now_s() - p->t0;
   double frac = p->target ? (double)done / (double)p->target : (p->seconds > 0 ? el / p->seconds : 0);
@@ -103,6 +105,7 @@ static void draw_progress(progress_state *p, int fd, uint64_t done) {
   int bar = (int)(frac * 30);
   dprintf(fd, "\r[%.*s%*s] %3d%%  %llu it  %.1fs ", bar, "==============================", 30 - bar, "",
           (int)(frac * 100), (unsigned long long)done, el);
+  if (relmse >= 0) dprintf(fd, " relMSE~%.3g ", relmse);
 }
 
 static void sleep_s(double s) {
@@ -123,19 +126,17 @@ static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt_
   return 0;
 }
 
-static int submit_job(pc_client *cl, const char *scene_path, const pc_render_request *req, uint64_t *job, pc_err *e) {
-  uint8_t *blob, hash[PC_BUNDLE_HASH];
-  size_t n;
-  int rc = pc_bundle_create(scene_path, &blob, &n, hash, e);
-  if (rc) return rc;
-  rc = pc_client_send_bundle(cl, blob, n, hash, e);
-  free(blob);
+static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob, size_t n, const uint8_t *hash,
+                      const pc_render_request *req, uint64_t *job, pc_err *e) {
+  int rc = pc_client_send_bundle(cl, blob, n, hash, e);
   if (rc) return rc;
   Pcbpt__Settings ps;
-  pc_wire_settings_to_proto(&req->set, &ps);
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(&req->set, &ps, &psb);
+  ps.halt_noise = req->halt_noise;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)scene_path;
-  sub.bundle_hash.data = hash;
+  sub.bundle_hash.data = (uint8_t *)hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
   sub.halt_iterations = req->spp;
@@ -166,8 +167,9 @@ static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
 
 /* Submits the job to the embedded farm, shows progress until it ends and fetches the image to
  * `out`. *secs is the wall time from submission to the end of the job. */
-static int run_job(pc_embedded *farm, int threads, const char *scene_path, const pc_render_request *req,
-                   const char *out, progress_state *prog, double *secs, pc_err *e) {
+static int run_job(pc_embedded *farm, int threads, const char *scene_path, const uint8_t *blob, size_t blob_n,
+                   const uint8_t *hash, const pc_render_request *req, const char *out, progress_state *prog, double *secs,
+                   pc_err *e) {
   pc_client cl;
   int rc = pc_client_connect(farm->hostport, farm->token, &cl, e);
   if (rc) return rc;
@@ -175,7 +177,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
   double t0 = now_s();
   prog->t0 = t0;
   bool halted = false;
-  rc = submit_job(&cl, scene_path, req, &job, e);
+  rc = submit_job(&cl, scene_path, blob, blob_n, hash, req, &job, e);
   if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
   while (!rc) {
     Pcbpt__Envelope *env = NULL;
@@ -193,7 +195,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
       pcbpt__envelope__free_unpacked(env, NULL);
       break;
     }
-    draw_progress(prog, farm->term_fd, st->iterations_done);
+    draw_progress(prog, farm->term_fd, st->iterations_done, st->relmse_estimate);
     pcbpt__envelope__free_unpacked(env, NULL);
     if (atomic_load(&g_interrupts) && !halted) {
       halted = true;
@@ -214,6 +216,12 @@ static double attr_number(const pc_exr_file *x, const char *name) {
   for (int i = 0; i < x->nattrs; i++)
     if (strcmp(x->attr_names[i], name) == 0) return strtod(x->attr_values[i], NULL);
   return 0;
+}
+
+static bool has_attr(const pc_exr_file *x, const char *name) {
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], name) == 0) return true;
+  return false;
 }
 
 int pc_cmd_render(int argc, char **argv) {
@@ -269,17 +277,17 @@ int pc_cmd_render(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord render: missing SCENE.xml (see --help)\n");
     return 2;
   }
-  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
-
   int status = 1;
   pc_scene scene = {0};
   pc_exr_file img = {0};
+  uint8_t *blob = NULL, hash[PC_BUNDLE_HASH];
+  size_t blob_n = 0;
   pc_embedded farm;
   bool farm_up = false;
   char *out_owned = NULL, *png = NULL;
   /* the scene is checked here so a bad one is one clear line, before any farm starts */
-  if (pc_scene_load(scene_path, &scene, &err) != PC_OK) goto fail;
-  pc_render_request_apply_scene(&req, &scene);
+  if (pc_cli_load_scene("render", &req, scene_path, &scene, &err) != PC_OK) goto fail;
+  if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
   {
@@ -307,7 +315,7 @@ int pc_cmd_render(int argc, char **argv) {
   if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
   farm_up = true;
   double secs = 0;
-  int rc = run_job(&farm, (int)threads, scene_path, &req, out, &prog, &secs, &err);
+  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, out, &prog, &secs, &err);
   pc_embedded_stop(&farm);
   farm_up = false;
   if (prog.show) fputc('\n', stderr);
@@ -325,9 +333,12 @@ int pc_cmd_render(int argc, char **argv) {
   double it = attr_number(&img, "pcbpt.iterations"), rays = attr_number(&img, "pcbpt.rays");
   double dropped = attr_number(&img, "pcbpt.dropped_nonfinite");
   double samples = it * img.w * img.h;
-  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
+  char est[48] = "";
+  if (has_attr(&img, "pcbpt.relmse_estimate"))
+    snprintf(est, sizeof est, ", est. relMSE %.4g", attr_number(&img, "pcbpt.relmse_estimate"));
+  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
          pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
-         threads ? (int)threads : pc_cpu_count(), dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
+         threads ? (int)threads : pc_cpu_count(), est, dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
   if (it > 0)
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
@@ -343,6 +354,7 @@ fail:
 done:
   pc_exr_file_free(&img);
   pc_scene_free(&scene);
+  free(blob);
   free(out_owned);
   free(png);
   return status;

@@ -42,17 +42,19 @@ export PCBPT_BIN=$B PCBPT_LISTEN=127.0.0.1 PCBPT_ADVERTISE=127.0.0.1 PCBPT_THREA
 CJ=$(sbatch --parsable -c1 -o "$F/coord-%j.out" "$S/deploy/slurm/pcbpt-coord.sbatch" "$F" 0) || fail "sbatch coordinator"
 WJ=$(sbatch --parsable --array=1-2 -n1 -c1 -o "$F/worker-%A_%a.out" "$S/deploy/slurm/pcbpt-workers.sbatch" "@$F/coord.addr" "$F/token") \
   || fail "sbatch workers"
-for _ in $(seq 150); do [ -s "$F/coord.addr" ] && break; sleep 0.2; done
+for _ in $(seq 300); do [ -s "$F/coord.addr" ] && break; sleep 0.2; done
 [ -s "$F/coord.addr" ] || fail "the coordinator job $CJ published no address"
 H="--host $(cat "$F/coord.addr") --token-file $F/token"
 workers() { "$B/pcbpt-coord" workers $H --json | python3 -c 'import json,sys; print(len(json.load(sys.stdin)))'; }
-for _ in $(seq 150); do [ "$(workers 2>/dev/null || echo 0)" = 2 ] && break; sleep 0.2; done
+for _ in $(seq 300); do [ "$(workers 2>/dev/null || echo 0)" = 2 ] && break; sleep 0.2; done
 [ "$(workers)" = 2 ] || fail "two workers did not connect"
-SPP=240
+# Long enough (seconds) that the scancel, which Slurm may deliver a second or two late on a busy
+# machine, lands while the worker still holds a range.
+SPP=960
 J=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method pt --spp $SPP --width 64 --height 64 $H | tail -1) \
   || fail "submit"
 field() { "$B/pcbpt-coord" status "$J" $H --json | python3 -c "import json,sys; print(json.load(sys.stdin)['$1'])"; }
-for _ in $(seq 100); do [ "$(field iterations)" -gt 0 ] && break; sleep 0.1; done
+for _ in $(seq 300); do [ "$(field iterations)" -gt 0 ] && break; sleep 0.1; done
 [ "$(field state)" = running ] || fail "the job is $(field state) before the cancel"
 scancel "${WJ}_1" || fail "scancel ${WJ}_1"
 timeout 120 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "wait"
