@@ -45,28 +45,21 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   }
 }
 
-/* Reading the clock around every phase of every pixel costs a few per cent: one pixel in
- * TIMED_EVERY is timed and counts that many times (the stats only split the render time by the
- * phases' proportions). A prime, so the timed pixels do not line up in columns. */
-#define TIMED_EVERY 17
-
-static inline double stamp(bool timed) { return timed ? pc_seconds() : 0.0; }
-
 void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
   const pc_render_settings *set = c->set;
   const pc_mis_counts *n = &c->counts;
   uint64_t j = (uint64_t)y * (uint64_t)set->width + (uint64_t)x;
-  bool timed = j % TIMED_EVERY == 0;
-  double t0 = stamp(timed);
+  bool timed = pc_timed(j);
+  double t0 = pc_stamp(timed);
   int nl = j < c->n_light ? pc_light_subpath(c, n, j, c->light_path) : 0;
-  double t1 = stamp(timed);
+  double t1 = pc_stamp(timed);
   if (nl > 0) pc_lt_splat(c, c->light_path, nl);
-  double t2 = stamp(timed);
+  double t2 = pc_stamp(timed);
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, j);
   pc_rng crng = pc_rng_make(set->seed, c->iteration, PC_STREAM_CONNECT, j);
   pc_pixel_target h = {x, y};
   int ne = pc_eye_subpath(c, n, &rng, x, y, c->max_segments + 1, c->eye_path, pc_emitter_hit, &h);
-  double t3 = stamp(timed);
+  double t3 = pc_stamp(timed);
   for (int t = 2; t <= ne && t <= c->max_segments; t++) {
     const pc_path_vertex *ev = &c->eye_path[t - 1];
     if (ev->delta) continue;
@@ -74,8 +67,8 @@ void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
     connect_stored(c, x, y, &crng, ev);
   }
   if (timed) {
-    c->t_paths += TIMED_EVERY * ((t1 - t0) + (t3 - t2));
-    c->t_lt += TIMED_EVERY * (t2 - t1);
-    c->t_connect += TIMED_EVERY * (pc_seconds() - t3);
+    c->t_paths += PC_TIMED_EVERY * ((t1 - t0) + (t3 - t2));
+    c->t_lt += PC_TIMED_EVERY * (t2 - t1);
+    c->t_connect += PC_TIMED_EVERY * (pc_seconds() - t3);
   }
 }
