@@ -22,12 +22,20 @@ static void add_inner(pc_tctx *c, int x, int y, const pc_path_vertex *lv, const 
 typedef struct candidates {
   pc_tctx *c;
   const pc_path_vertex *ev;
+  const pc_irec_lookup *L;
   int v[PC_IREC_MAX_CANDIDATES];
   pc_connection k[PC_IREC_MAX_CANDIDATES];
 } candidates;
 
 /* Target of the resampling: the luminance of the weighted contribution without visibility,
- * > 0 wherever the contribution is non-zero (so the resampled estimate stays unbiased). */
+ * times the share of the interpolated records that see the light vertex (their PMF is > 0
+ * there), floored at RESAMPLE_UNSEEN: > 0 wherever the contribution is non-zero, so the
+ * resampled estimate stays unbiased. Measured on ajar-door at 128x128 (inner relMSE after 64
+ * iterations, K = 1, 4 candidates; plain cache 0.237, exact PMF 0.131): the unoccluded
+ * contribution alone 0.231 (geometry is not what the cache blurs; visibility is), times an
+ * unseen floor of 0.01 / 0.05 / 0.1 / 0.2: 0.239 / 0.188 / 0.181 / 0.185 (too low a floor
+ * starves light vertices the records miss, as a uniform mix that is too small does). */
+#define RESAMPLE_UNSEEN 0.1
 static float candidate_target(void *user, int slot, int v) {
   candidates *cs = user;
   pc_tctx *c = cs->c;
@@ -37,6 +45,8 @@ static float candidate_target(void *user, int slot, int v) {
   pc_connection *k = &cs->k[slot];
   if (!pc_connect_unoccluded(c, &c->counts, lv, cs->ev, c->weighted, k)) return 0.f;
   float h = v3_luminance(k->f) * k->weight;
+  /* The records know visibility, blurred; the candidate's own h knows geometry, sharply. */
+  h *= (float)(RESAMPLE_UNSEEN + (1.0 - RESAMPLE_UNSEEN) * pc_irec_interp_seen(cs->L, v));
   return h > 0.f ? h : FLT_MIN; /* non-zero contribution whose luminance underflowed */
 }
 
@@ -48,7 +58,7 @@ static float candidate_target(void *user, int slot, int v) {
 static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev, const pc_irec_lookup *L,
                             double xi) {
   const pc_render_settings *set = c->set;
-  candidates cs = {.c = c, .ev = ev};
+  candidates cs = {.c = c, .ev = ev, .L = L};
   int slot[PC_IREC_MAX_CANDIDATES];
   double factor[PC_IREC_MAX_CANDIDATES];
   int n = pc_irec_resample(L, set->pcbpt_candidates, set->pcbpt_k, xi, crng, candidate_target, &cs, slot, factor);

@@ -401,6 +401,13 @@ double pc_irec_interp_pmf(const pc_irec_lookup *L, int i) {
   return p;
 }
 
+double pc_irec_interp_seen(const pc_irec_lookup *L, int i) {
+  double w = 0.0;
+  for (int j = 0; j < L->n; j++)
+    if (L->pmf[j][i] > 0.f) w += L->w[j];
+  return w;
+}
+
 double pc_irec_interp_cmf(const pc_irec_lookup *L, int i) {
   double c = 0.0;
   for (int j = 0; j < L->n; j++) c += L->w[j] * (double)L->cmf[j][i];

@@ -146,5 +146,8 @@ int pc_irec_resample(const pc_irec_lookup *L, int ncand, int nsel, double xi_mix
 double pc_irec_interp_pmf(const pc_irec_lookup *L, int i);
 double pc_irec_interp_cmf(const pc_irec_lookup *L, int i);
 int pc_irec_interp_sample(const pc_irec_lookup *L, double xi);
+/* The summed weight (in [0, 1]) of the interpolated records whose PMF is > 0 at i: the
+ * records' blurred estimate of whether light vertex i is visible from here (0 when n == 0). */
+double pc_irec_interp_seen(const pc_irec_lookup *L, int i);
 
 #endif

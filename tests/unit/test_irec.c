@@ -124,13 +124,13 @@ static void test_record_rows(void **state) {
 }
 
 /* At random eye points the interpolated PMF sums to 1, p_conn sums to 1 and is > 0 for every
- * light vertex when u > 0. */
+ * light vertex when u > 0, and the seen share is the weight of the records that see v. */
 static void test_interpolated_pmf(void **state) {
   (void)state;
   scene sc = make_scene(120, 300, 2);
   pc_irec_store *s = build(&sc, NULL);
   pc_rng r = pc_rng_make(2, 0, PC_STREAM_MISC, 7);
-  int interpolated = 0, multi = 0;
+  int interpolated = 0, multi = 0, partly = 0;
   for (int q = 0; q < 500; q++) {
     pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL, false};
     pc_irec_lookup L;
@@ -145,6 +145,20 @@ static void test_interpolated_pmf(void **state) {
       for (int v = 0; v < sc.V; v++) sp += pc_irec_interp_pmf(&L, v);
       assert_true(fabs(sp - 1.0) < 1e-5);
       assert_true(fabs(pc_irec_interp_cmf(&L, sc.V - 1) - 1.0) < 1e-6);
+      /* The seen share is the weight of the records with a PMF > 0 at v, by its definition
+       * written out: 0 exactly where the interpolated PMF is 0, 1 where every record sees v. */
+      for (int v = 0; v < sc.V; v++) {
+        double seen = pc_irec_interp_seen(&L, v), want = 0.0;
+        bool all = true;
+        for (int j = 0; j < L.n; j++) {
+          if (L.pmf[j][v] > 0.f) want += L.w[j];
+          else all = false;
+        }
+        assert_true(fabs(seen - want) < 1e-12 && seen <= 1.0 + 1e-12);
+        assert_true((seen == 0.0) == (pc_irec_interp_pmf(&L, v) == 0.0));
+        if (all) assert_true(fabs(seen - 1.0) < 1e-12);
+        partly += seen > 0.0 && seen < 1.0 - 1e-9;
+      }
     }
     for (int v = 0; v < sc.V; v++) {
       double pc = pc_irec_pconn(&L, v);
@@ -155,6 +169,7 @@ static void test_interpolated_pmf(void **state) {
   }
   assert_true(interpolated > 400);
   assert_true(multi > 300);
+  assert_true(partly > 0); /* the scene has light vertices some records see and others do not */
   pc_irec_destroy(s);
   free_scene(&sc);
 }
