@@ -23,6 +23,7 @@ typedef struct pc_light {
   float *tri_cdf;     /* ntris+1 entries, area CDF over the shape's triangles */
   uint32_t ntris;
   float power;        /* luminance of emitted flux, for light selection */
+  float sampling_weight; /* Mitsuba's samplingWeight: scales power in the choice (0 is read as 1) */
 } pc_light;
 
 struct pc_scene;
