@@ -11,6 +11,8 @@ const char pc_render_flags_help[] =
     "  --method M            pt, lt, bdpt, cbdpt or pcbpt (default: the scene's integrator)\n"
     "  --spp N               iterations to render, one sample per pixel each\n"
     "  --time SECONDS        render for this wall time (with --spp: whichever comes first)\n"
+    "  --halt-noise E        stop once the image's estimated relMSE is at most E (--spp and\n"
+    "                        --time stay upper bounds; docs/variance.md)\n"
     "  --seed N              job seed (default 1); iteration i is seeded from (seed, i)\n"
     "  --max-depth D         Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly\n"
     "  --width W --height H  film size (default: the scene's hdrfilm)\n"
@@ -38,7 +40,8 @@ void pc_render_request_default(pc_render_request *r) {
 int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e) {
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
-                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--pcbpt-candidates", NULL};
+                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
+                                      "--pcbpt-candidates", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -138,6 +141,9 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     else return pc_errf(e, PC_EINVAL, "%s: '%s' is not cached or exact", flag, v);
     break;
   case 17:
+    if (!pc_parse_f64(v, 1e-9, 1e6, &r->halt_noise)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a relMSE > 0", flag, v);
+    break;
+  case 18:
     if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
     s->pcbpt_candidates = (int)ll;
     break;
