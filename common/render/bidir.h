@@ -47,6 +47,13 @@ typedef struct pc_connection {
 bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
                 pc_connection *out);
 
+/* pc_connect in two steps, for callers that look at the unoccluded contribution before paying
+ * for the shadow ray (PCBPT's resampling): pc_connect_unoccluded is everything but the
+ * visibility test, pc_connect_visible the test itself (counted in c->rays). */
+bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,
+                           bool weighted, pc_connection *out);
+bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev);
+
 /* Adds to the layer of the strategy class and, with --strategy-layers, to layer s%dt%d. */
 /* Strategy s=1 at eye vertex ev (its t): a fresh light sample from rng, connected and added to
  * the nee layer of pixel (x,y). */

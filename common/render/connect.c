@@ -58,6 +58,16 @@ float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path
 
 bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
                 pc_connection *out) {
+  return pc_connect_unoccluded(c, n, lv, ev, weighted, out) && pc_connect_visible(c, lv, ev);
+}
+
+bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev) {
+  c->rays++;
+  return pc_scene_visible(c->scene, lv->p, lv->ng, ev->p, ev->ng);
+}
+
+bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,
+                           bool weighted, pc_connection *out) {
   if (lv->delta || ev->delta) return false;
   const pc_scene *s = c->scene;
   vec3 d = v3_sub(ev->p, lv->p);
@@ -124,8 +134,6 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
     weight = weight_of(n, sl, tl, sum_l, sum_e);
     if (weight == 0.f) return false;
   }
-  c->rays++;
-  if (!pc_scene_visible(s, lv->p, lv->ng, ev->p, ev->ng)) return false;
   out->f = f;
   out->weight = weight;
   return true;

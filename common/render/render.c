@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "bidir.h"
+#include "irec.h"
 #include "pcbpt.h"
 #include "thread_pool.h"
 
@@ -49,6 +50,7 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->strategy_layers = 0;
   s->pcbpt_m = 100;
   s->pcbpt_k = 1;
+  s->pcbpt_candidates = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
   /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
@@ -82,6 +84,11 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (s->strategy_layers < 0 || s->strategy_layers > 8) return pc_errf(e, PC_EINVAL, "strategy-layers %d out of range 0..8", s->strategy_layers);
   if (s->pcbpt_m < 1 || s->pcbpt_m > 100000) return pc_errf(e, PC_EINVAL, "pcbpt-m %d out of range 1..100000", s->pcbpt_m);
   if (s->pcbpt_k < 1 || s->pcbpt_k > 1000000) return pc_errf(e, PC_EINVAL, "pcbpt-k %d out of range 1..1000000", s->pcbpt_k);
+  if (s->pcbpt_candidates < 1 || s->pcbpt_candidates > PC_IREC_MAX_CANDIDATES)
+    return pc_errf(e, PC_EINVAL, "pcbpt-candidates %d out of range 1..%d", s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
+  if (s->pcbpt_candidates > 1 && s->pcbpt_k > PC_IREC_MAX_CANDIDATES)
+    return pc_errf(e, PC_EINVAL, "pcbpt-k %d with resampling (pcbpt-candidates %d) out of range 1..%d", s->pcbpt_k,
+                   s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
