@@ -38,8 +38,9 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
       cos_out = v3_absdot(prev->ng, da);
       if (!delta) {
         const pc_material *pm = &s->materials[prev->material];
-        pdf_fwd = pc_bsdf_pdf(pm, s->textures, &prev->sh, prev->wo, da) * prev->q;
-        pdf_rev = pc_bsdf_pdf(pm, s->textures, &prev->sh, da, prev->wo) * prev->q;
+        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pdf_fwd, &pdf_rev);
+        pdf_fwd *= prev->q;
+        pdf_rev *= prev->q;
         if (!(pdf_fwd > 0.f)) break;
       }
     } else if (prev->kind == PC_VTX_LIGHT && cos_out > 0.f) {
