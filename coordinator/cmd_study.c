@@ -502,8 +502,10 @@ static int write_scene(const study_args *a, scene_study *s, FILE *f, pc_err *e) 
       pc_study_headline(&table, m, line, sizeof line);
       fprintf(f, "%s%s\n", line, a->runs > 1 ? " (median curves)" : "");
     }
-    fprintf(f, "\n");
-    print_spread(f, a, s, big, &table);
+    if (a->runs > 1) {
+      fprintf(f, "\n");
+      print_spread(f, a, s, big, &table);
+    }
     print_reruns(f, a, s);
   }
   if (!rc && a->nsizes > 1) {
@@ -579,10 +581,39 @@ static int study_scene(const study_args *a, pc_study_farm *farm, int k, pc_repor
   return rc;
 }
 
+/* Every scene loads, its methods can render and its given reference fits, before any folder
+ * is made or budget spent. */
+static int precheck(const study_args *a, pc_err *e) {
+  for (int k = 0; k < a->nscenes; k++) {
+    pc_render_request req = a->req;
+    pc_scene scene = {0};
+    int rc = pc_cli_load_scene("study", &req, a->scenes[k], &scene, e);
+    if (!rc) rc = pc_render_settings_check(&req.set, e);
+    if (!rc) rc = pc_scene_build(&scene, e);
+    if (!rc) rc = check_methods(a, &req, &scene, e);
+    pc_scene_free(&scene);
+    if (!rc && a->nreferences) {
+      pc_exr_file ref = {0};
+      pc_study_ref slots;
+      rc = pc_exr_read_layers(a->references[k], &ref, e);
+      if (!rc) rc = reference_slots(&ref, a->references[k], &slots, e);
+      if (!rc && !pc_study_ref_has(&slots, a->layer))
+        rc = pc_errf(e, PC_EINVAL, "--layer: %s has no '%s' layer", a->references[k], pc_study_layer_name(a->layer));
+      if (!rc && (req.set.width != ref.w || req.set.height != ref.h))
+        rc = pc_errf(e, PC_EINVAL, "reference %s is %dx%d but the study renders %dx%d (set --width/--height to match)",
+                     a->references[k], ref.w, ref.h, req.set.width, req.set.height);
+      pc_exr_file_free(&ref);
+    }
+    if (rc) return rc;
+  }
+  return PC_OK;
+}
+
 static int run_study(study_args *a, pc_err *e) {
   pc_study_farm farm;
   pc_report report;
-  int rc = make_dir(a->out, e);
+  int rc = precheck(a, e);
+  if (!rc) rc = make_dir(a->out, e);
   if (rc) return rc;
   rc = pc_study_farm_open(&farm, a->host, a->token, (int)a->threads, e);
   if (rc) return rc;

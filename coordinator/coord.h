@@ -118,9 +118,10 @@ struct pc_peer {
                                 here (0: none yet): bounds the range sizes its claim earns and
                                 sets its ranges' progress deadlines */
   uint64_t mrate_job;
-  struct { uint64_t job; double seconds, mrate; } served[8]; /* per job of its latest ones: the
-                                worker-seconds it rendered (a study group's jobs rotate over
-                                it) and its measured rate there (kept across switches) */
+  struct { uint64_t job, iterations; double seconds, mrate; } served[8]; /* per job of its
+                                latest ones: the iterations and worker-seconds it rendered (a
+                                study group's jobs rotate over it, its ranges there start
+                                small) and its measured rate there (kept across switches) */
   uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
   double hb_time;            /* ... at this time */
   /* upload being assembled */
@@ -216,8 +217,8 @@ void pc_sched_check_progress(pc_coord *c, pc_job *j);
 /* Tells the workers told NoWork that there is work to ask for. */
 void pc_sched_nudge(pc_coord *c);
 pc_range *pc_sched_find_range(pc_job *j, uint64_t id);
-/* p's upload of study job `job` carried `seconds` of its render time (rotation, sched.c). */
-void pc_sched_served(pc_peer *p, uint64_t job, double seconds);
+/* p's upload of `iterations` of job `job` carried `seconds` of its render time (sched.c). */
+void pc_sched_served(pc_peer *p, uint64_t job, uint64_t iterations, double seconds);
 
 /* serve.c helpers used by the others. */
 void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const char *refused);

@@ -108,13 +108,15 @@ static double served_by(const pc_peer *p, uint64_t job) {
   return i >= 0 ? p->served[i].seconds : 0;
 }
 
-void pc_sched_served(pc_peer *p, uint64_t job, double seconds) {
+void pc_sched_served(pc_peer *p, uint64_t job, uint64_t iterations, double seconds) {
   int i = served_slot(p, job, false);
   if (i < 0) {
     i = served_slot(p, job, true);
     p->served[i].job = job;
+    p->served[i].iterations = 0;
     p->served[i].seconds = p->served[i].mrate = 0;
   }
+  p->served[i].iterations += iterations;
   p->served[i].seconds += seconds;
 }
 
@@ -150,7 +152,15 @@ static double study_range_seconds(const pc_coord *c, const pc_job *j, double now
 
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
   pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds};
-  if (j->halt_worker_seconds > 0) in.range_seconds = study_range_seconds(c, j, now);
+  if (j->halt_worker_seconds > 0) {
+    in.range_seconds = study_range_seconds(c, j, now);
+    /* a study's worker-seconds are counted per upload: a range sized on a one-iteration probe
+     * (often several times too fast) would overrun the early snapshots and the interleaving,
+     * so a worker's ranges of a study job grow from the probe by at most doubling */
+    int i = served_slot(p, j->id, false);
+    uint64_t cap = 2 * (i >= 0 ? p->served[i].iterations : 0) + 1, n = pc_range_size(&in);
+    return n < cap ? n : cap;
+  }
   if (j->halt_iterations) {
     in.bounded = true;
     in.unassigned = j->halt_iterations - j->next_iter;

@@ -153,7 +153,14 @@ static int fetch_point(pc_client *cl, const pc_study_group *g, uint64_t job, uin
   if (!rc && g->ref) {
     pc_study_snap *s = &run->snaps[run->nsnaps];
     rc = pc_study_measure_exr(&x, path, g->ref, g->workers, s, k == 0 ? run->layer_empty : NULL, e);
-    if (!rc) run->nsnaps++;
+    /* the final image replaces a last snapshot of the same film (taken as the budget ran out) */
+    if (!rc && k == 0 && run->nsnaps && run->snaps[run->nsnaps - 1].iterations == s->iterations) {
+      run->snaps[run->nsnaps - 1] = *s;
+      s = &run->snaps[run->nsnaps - 1];
+    } else if (!rc && (k == 0 || !g->ref->estimated || s->m[PC_STUDY_BEAUTY].relmse >= 0)) {
+      /* an estimate needs 2 iterations: a film of one tells nothing (the final image always counts) */
+      run->nsnaps++;
+    }
     if (!rc && k == 0) run->stats.rays = (uint64_t)pc_study_exr_number(&x, "pcbpt.rays");
   }
   if (!rc && keep) rc = write_png(&x, path, e);
@@ -177,7 +184,9 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
     rc = pc_embedded_start_worker(&f->emb, f->threads, e);
     f->worker_started = rc == PC_OK;
   }
+  double t0 = now_s();
   if (!rc) rc = wait_group(f, &cl, g, jobs, rerun, e);
+  double group_wall = now_s() - t0;
   for (int m = 0; !rc && m < g->nmethods; m++) {
     pc_study_run *run = &runs[m];
     memset(run, 0, sizeof *run);
@@ -185,6 +194,7 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
     run->workers = g->workers;
     run->seed = g->seed;
     run->ranges_rerun = rerun[m];
+    run->group_wall = group_wall;
     run->threads = f->embedded ? f->threads : 0;
     if (!(run->snaps = calloc((size_t)g->snapshots + 1, sizeof *run->snaps))) {
       rc = pc_errf(e, PC_ENOMEM, "out of memory for the snapshots");

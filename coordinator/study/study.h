@@ -1,8 +1,9 @@
-/* study.h: the equal-time study behind `pcbpt-coord study` (DESIGN.md §6): each method renders
- * the same scene for the same render time, the film is compared with a reference at
- * logarithmically spaced snapshots (study_run.c), and the error curves are summarised as final
- * error ratios and time-to-error ratios (study_table.c) and written as CSV, JSON and charts
- * (study_files.c). */
+/* study.h: the equal-time study behind `pcbpt-coord study` (DESIGN.md §6, docs/farm-study.md):
+ * each method renders the same scene for the same render time as a farm job, the farm keeps
+ * its film at logarithmically spaced times and each is compared with a reference
+ * (study_measure.c); several runs give median curves and spreads (study_spread.c); the curves
+ * are summarised as final error ratios and time-to-error ratios (study_table.c) and written as
+ * CSV, JSON and charts (study_files.c). */
 #ifndef PC_STUDY_H
 #define PC_STUDY_H
 
@@ -57,20 +58,13 @@ typedef struct pc_study_run {
   int run;              /* which of --runs (0-based) */
   uint64_t seed;
   uint32_t ranges_rerun;/* ranges re-run after a worker vanished or fell silent */
+  double group_wall;    /* seconds from submitting the run's jobs to the end of the last */
   int nsnaps;
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
 } pc_study_run;
 
-/* Renders set->method for `seconds` of render time into film (initialised for the settings'
- * size, empty), one iteration at a time, taking up to max_snaps snapshots (with an estimated
- * reference, none before 2 iterations: one iteration cannot tell its error) at times
- * seconds * PC_STUDY_FIRST_FRACTION^((K-1-k)/(K-1)), each after whole iterations. When one
- * iteration passes several snapshot times only one snapshot is taken, so run->nsnaps may be
- * smaller than max_snaps; the last one is always at the end of the budget. */
-int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int threads, double seconds,
-                    int max_snaps, const pc_study_ref *ref, pc_film *film, pc_study_run *run, pc_err *e);
 void pc_study_run_free(pc_study_run *run);
 
 /* One point of a farm study's curve from an image the farm wrote (study_measure.c): errors

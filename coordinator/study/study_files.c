@@ -90,9 +90,9 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
     const pc_study_run *run = &runs[r];
     const pc_study_snap *last = run->nsnaps ? &run->snaps[run->nsnaps - 1] : NULL;
     fprintf(f, "    {\"method\": \"%s\", \"workers\": %d, \"run\": %d, \"seed\": %llu, \"ranges_rerun\": %u, "
-               "\"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
+               "\"group_wall_seconds\": %.6f, \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
             pc_method_name(run->method), run->workers, run->run + 1, (unsigned long long)run->seed, run->ranges_rerun,
-            run->threads, last ? (unsigned long long)last->iterations : 0ULL);
+            run->group_wall, run->threads, last ? (unsigned long long)last->iterations : 0ULL);
     json_number(f, last ? last->seconds : NAN);
     fprintf(f, ", \"rays\": %llu, \"exr\": \"%s.exr\", \"png\": \"%s.png\", \"empty_layers\": [",
             (unsigned long long)run->stats.rays, pc_method_name(run->method), pc_method_name(run->method));

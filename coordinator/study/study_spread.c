@@ -44,7 +44,8 @@ static double at_time(const pc_study_run *r, int slot, int field, double t, bool
     if (i == 0) return tb <= t * 1.0001 ? yb : NAN;
     const pc_study_snap *a = &r->snaps[i - 1];
     double ta = time_of(a, wall), ya = field_of(a, slot, field);
-    if (!(ta > 0) || !(ya > 0) || !(yb > 0) || tb <= ta) return yb;
+    if (tb == t) return yb;
+    if (!(ta > 0) || !(ya > 0) || !(yb > 0) || tb <= ta) return NAN; /* no log-log line through them */
     double u = (log(t) - log(ta)) / (log(tb) - log(ta));
     return exp(log(ya) + u * (log(yb) - log(ya)));
   }
