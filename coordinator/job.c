@@ -688,28 +688,12 @@ void pc_job_halt(pc_coord *c, pc_job *j) {
   pc_wire_log("job %llu: halting; collecting what is rendered", (unsigned long long)j->id);
 }
 
-/* A study job's worker-seconds: merged, plus the time each worker holding a range has spent
- * on it since its last upload (or since it got the range), so the job halts when its budget
- * is rendered rather than an upload later. A range's first seconds load the scene and are
- * not render time: the halt may come that much early, never late. */
-static double live_worker_seconds(const pc_job *j, double now) {
-  double s = j->stats_merged.t_total;
-  for (const pc_range *r = j->ranges; r; r = r->next)
-    if (r->owner && !r->final && r->merged < r->count && r->measured_at > 0) s += now - r->measured_at;
-  return s;
-}
-
 void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
   if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) return;
   double now = pc_coord_now();
   if (j->state == PC_JOB_RUNNING && !j->storage_error[0]) { /* paused time is not render time */
     j->elapsed += dt;
     if (j->halt_seconds > 0 && j->elapsed >= j->halt_seconds) pc_job_halt(c, j);
-    else if (j->halt_worker_seconds > 0 && live_worker_seconds(j, now) >= j->halt_worker_seconds) {
-      pc_wire_log("job %llu: %.2f worker-seconds merged and about %.2f in hand (budget %.2f): halting", (unsigned long long)j->id,
-                  j->stats_merged.t_total, live_worker_seconds(j, now) - j->stats_merged.t_total, j->halt_worker_seconds);
-      pc_job_halt(c, j);
-    }
   }
   if (j->state == PC_JOB_STOPPING) {
     /* ranges nobody will finish are closed at what is merged */

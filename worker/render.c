@@ -1,4 +1,6 @@
-/* render.c: the worker's render thread: loads and builds the job's scene once per job, then
+/* render.c: the worker's render thread: loads and builds the job's scene once per job (kept
+ * for the next job of the same scene bundle, -D values and film size: a study's interleaved
+ * jobs differ in method and seed only, and switch often), then
  * renders the assigned range in batches of about half a second into a scratch film and adds
  * each finished batch to the pending film the loop uploads. Cancel is polled by the renderer
  * between work items, so it takes effect well within a second. */
@@ -23,6 +25,10 @@ typedef struct job_ctx {
   pc_scene scene;
   pc_renderer *rend;
   pc_film work;
+  /* what the built scene depends on */
+  char path[1200], root[1200];
+  int width, height;
+  pc_scene_defines defines;
 } job_ctx;
 
 static void ctx_free(job_ctx *c) {
@@ -33,10 +39,43 @@ static void ctx_free(job_ctx *c) {
   c->loaded = false;
 }
 
+static bool same_scene(const job_ctx *c, const pc_render_settings *set, const char *path, const char *root) {
+  return c->loaded && strcmp(c->path, path) == 0 && strcmp(c->root, root) == 0 && c->width == set->width &&
+         c->height == set->height && c->defines.n == set->defines.n && c->defines.used == set->defines.used &&
+         memcmp(c->defines.buf, set->defines.buf, (size_t)set->defines.used) == 0;
+}
+
+/* A renderer for the loaded scene with the new job's settings (method, seed, depth ...). */
+static int ctx_renew(job_ctx *c, const pc_wrender *w, const pc_render_settings *set, pc_err *e) {
+  pc_renderer *r = NULL;
+  int rc = pc_renderer_create(&c->scene, set, w->threads, &r, e);
+  if (rc) {
+    ctx_free(c);
+    return rc;
+  }
+  pc_renderer_destroy(c->rend);
+  c->rend = r;
+  pc_film_free(&c->work);
+  rc = pc_film_init(&c->work, set->width, set->height, set->strategy_layers, e);
+  if (rc) {
+    pc_renderer_destroy(c->rend);
+    c->rend = NULL;
+    pc_scene_free(&c->scene);
+    c->loaded = false;
+  }
+  return rc;
+}
+
 static int ctx_load(job_ctx *c, const pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
                     pc_err *e) {
+  if (same_scene(c, set, path, root)) return ctx_renew(c, w, set, e);
   ctx_free(c);
   memset(&c->scene, 0, sizeof c->scene);
+  snprintf(c->path, sizeof c->path, "%s", path);
+  snprintf(c->root, sizeof c->root, "%s", root);
+  c->width = set->width;
+  c->height = set->height;
+  c->defines = set->defines;
   /* The client checked the scene and showed its warnings; the worker loads the same files with
    * the same -D values and needs no warnings. */
   pc_scene_load_opts o = {.root = root, .defines = &set->defines};

@@ -49,9 +49,8 @@ for r in runs:
     assert 2 <= len(s) <= 6, (r["method"], len(s))
     ws = [p["worker_seconds"] for p in s]
     assert ws == sorted(ws), ws
-    # halted at its budget (1 s on the farm = workers worker-seconds): early by at most a
-    # worker's scene load and unfinished batch, late by at most a tick and an upload
-    assert 0.6 * r["workers"] <= ws[-1] < 1.5 * r["workers"], (r["workers"], ws[-1])
+    # halted at its budget (1 s on the farm = workers worker-seconds), late by the last uploads
+    assert r["workers"] <= ws[-1] < 1.6 * r["workers"] + 0.5, (r["workers"], ws[-1])
     assert all(p["layers"]["beauty"]["relmse"] is not None for p in s)
 # on 1 worker the group never had two workers at once: its wall time covers both jobs' work
 # (on 2 workers it does not: the check can tell)
@@ -122,7 +121,7 @@ d = json.load(open(sys.argv[1]))
 log = open(sys.argv[2]).read()
 out = open(sys.argv[3]).read()
 for r in d["methods"]:
-    assert r["snapshots"][-1]["worker_seconds"] >= 0.8 * 2 * 3.0, r["snapshots"][-1]
+    assert r["snapshots"][-1]["worker_seconds"] >= 2 * 3.0, r["snapshots"][-1]
 lost = [m for m in re.finditer(r"job (\d+): range \d+ orphaned \(w2 gone\), (\d+) of (\d+) iterations", log)
         if int(m.group(2)) < int(m.group(3))]
 rerun = sum(r["ranges_rerun"] for r in d["methods"])
