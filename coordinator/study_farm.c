@@ -58,7 +58,7 @@ int pc_study_farm_workers(pc_study_farm *f, int *n, pc_err *e) {
   if (!rc) rc = pc_client_status(&cl, (uint64_t)-1, &env, e);
   if (!rc) *n = (int)env->status_reply->n_workers;
   if (env) pcbpt__envelope__free_unpacked(env, NULL);
-  if (!rc || cl.fd >= 0) pc_client_close(&cl);
+  pc_client_close(&cl); /* (connect leaves fd -1 when it fails) */
   return rc;
 }
 
@@ -173,11 +173,11 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
   uint64_t jobs[PC_STUDY_MAX_METHODS] = {0}, group;
   uint32_t rerun[PC_STUDY_MAX_METHODS] = {0};
   if (g->nmethods < 1 || g->nmethods > PC_STUDY_MAX_METHODS) return pc_errf(e, PC_EINVAL, "study: bad method count");
+  pc_client cl;
+  int rc = pc_client_connect(f->hostport, f->token, &cl, e); /* (initialises libsodium) */
+  if (rc) return rc;
   randombytes_buf(&group, sizeof group);
   group |= 1; /* never 0 (no group) */
-  pc_client cl;
-  int rc = pc_client_connect(f->hostport, f->token, &cl, e);
-  if (rc) return rc;
   rc = pc_client_send_bundle(&cl, g->blob, g->blob_n, g->hash, e);
   for (int m = 0; !rc && m < g->nmethods; m++) rc = submit(&cl, g, g->methods[m], group, &jobs[m], e);
   if (!rc && f->embedded && !f->worker_started) {
