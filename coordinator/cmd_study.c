@@ -322,8 +322,8 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
                           .methods = &a->ref_method, .nmethods = 1, .seed = a->req.set.seed + 0x5eed0000u,
                           .seconds = a->ref_seconds, .workers = farm_size, .keep_dir = s->dir, .keep_path = path,
                           .label = label};
-      dprintf(farm->log_fd, "%s: rendering the reference (%s, %g s on %d workers)\n", s->name, pc_method_name(a->ref_method),
-              a->ref_seconds, farm_size);
+      dprintf(farm->log_fd, "%s: rendering the reference (%s, %g s on %d worker%s)\n", s->name,
+              pc_method_name(a->ref_method), a->ref_seconds, farm_size, farm_size > 1 ? "s" : "");
       int rc = pc_study_farm_group(farm, &g, &run, e);
       pc_study_run_free(&run);
       if (rc) return rc;
