@@ -641,6 +641,10 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   }
   uint64_t n;
   film_estimate(&j->film, &j->relmse_est, &n);
+  /* the checkpoint's film holds the committed uploads: their worker-seconds are stored */
+  j->film_seconds = j->stats_merged.t_total;
+  for (int k = 0; k < (int)j->snapshots; k++)
+    if (j->stats_merged.t_total >= pc_job_snapshot_time(j, k)) j->snaps_queued = (uint32_t)k + 1;
   j->film_ready = true;
   if (j->state == PC_JOB_QUEUED) {
     j->state = PC_JOB_RUNNING;

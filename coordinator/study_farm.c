@@ -96,6 +96,21 @@ static const Pcbpt__JobStatus *find_job(const Pcbpt__StatusReply *r, uint64_t id
   return NULL;
 }
 
+/* A coordinator that went away (restarted: its jobs resume from their checkpoints) is
+ * reconnected to for up to RECONNECT_SECONDS. */
+#define RECONNECT_SECONDS 120
+static int reconnect(pc_study_farm *f, pc_client *cl, pc_err *e) {
+  pc_client_close(cl);
+  dprintf(f->log_fd, "  lost the coordinator (%s): reconnecting for up to %d s\n", e->msg, RECONNECT_SECONDS);
+  double until = now_s() + RECONNECT_SECONDS;
+  for (;;) {
+    pc_err ce = {0};
+    if (pc_client_connect(f->hostport, f->token, cl, &ce) == PC_OK) return PC_OK;
+    if (now_s() > until) return pc_errf(e, ce.code ? ce.code : PC_EIO, "coordinator gone: %s", ce.msg);
+    sleep_s(1);
+  }
+}
+
 /* Waits for every job of the group to end; a failed or cancelled one is an error. */
 static int wait_group(pc_study_farm *f, pc_client *cl, const pc_study_group *g, const uint64_t *jobs, uint32_t *rerun,
                       pc_err *e) {
@@ -103,6 +118,7 @@ static int wait_group(pc_study_farm *f, pc_client *cl, const pc_study_group *g, 
   for (;;) {
     Pcbpt__Envelope *env = NULL;
     int rc = pc_client_status(cl, 0, &env, e);
+    if (rc && !f->embedded && (rc = reconnect(f, cl, e)) == PC_OK) continue;
     if (rc) return rc;
     bool all_done = true, show = now_s() - last_line >= 10;
     if (show) dprintf(f->log_fd, "  %s:", g->label);

@@ -10,6 +10,8 @@
 # 2. A second study reuses the reference; one worker is killed mid-study: the study finishes
 #    on the other, every job still reaches its worker-seconds, and a range the dead worker held
 #    unacknowledged is re-run (counted in study.json and said in the output).
+# 3. The coordinator is killed mid-study and restarted: the study reconnects, the jobs resume
+#    with their worker-seconds (stored) and their curves stay monotonic.
 . "$(dirname "$0")/lib.inc"
 start_coord
 start_worker w1
@@ -134,5 +136,28 @@ rerun = sum(r["ranges_rerun"] for r in d["methods"])
 print("ranges orphaned with work left:", len(lost), "re-run:", rerun)
 assert not lost or rerun >= 1, (lost, rerun)
 assert not rerun or "re-run after a worker went away" in out
+EOF
+
+# 3: the coordinator is killed mid-study and restarted: the study reconnects and finishes, and
+# the jobs' worker-seconds carry on from their checkpoints (stored), not from zero
+# (one worker is left: the budget is 3 worker-seconds)
+last=$(ls "$T/data/jobs" | sort -n | tail -1)
+"$B/pcbpt-coord" study "$scene" "${common[@]}" --seconds 3 --out "$T/r" >"$T/study3.out" 2>&1 &
+STUDY=$!; PIDS+=("$STUDY")
+for _ in $(seq 300); do [ -e "$T/data/jobs/$((last + 1))/snap.2.exr" ] && break; sleep 0.1; done
+[ -e "$T/data/jobs/$((last + 1))/snap.2.exr" ] || fail "study 3 kept no second snapshot"
+kill -9 "$COORD"
+sleep 1
+start_coord "$PORT"
+wait "$STUDY" || { cat "$T/study3.out"; fail "study 3 (the coordinator restarted) failed"; }
+grep -q "reconnecting" "$T/study3.out" || fail "study 3 did not see the coordinator go"
+grep -q "resumed" "$T/coord.log" || fail "study 3: no job resumed"
+python3 - "$T/r/cornell-box/study.json" <<'EOF' || fail "study 3: the figures"
+import json, sys
+for r in json.load(open(sys.argv[1]))["methods"]:
+    ws = [p["worker_seconds"] for p in r["snapshots"]]
+    it = [p["iterations"] for p in r["snapshots"]]
+    assert ws == sorted(ws) and it == sorted(it), (ws, it)
+    assert 3.0 <= ws[-1] < 3 + 2.5, ws
 EOF
 echo PASS
