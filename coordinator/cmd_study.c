@@ -423,10 +423,24 @@ static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
       pc_study_spread c;
       pc_study_spread_cell(per[size], (int)a->runs, per[0], slot, target, true, &c);
       if (size == 0) t_base = c.time_med;
-      fprintf(f, "  %-6s %3d worker%s: %.3g s [%.3g..%.3g] to relMSE %.3g; vs %d worker%s %.2fx (ideal %.2fx)\n",
+      /* why a speed-up falls short: workers idle (busy < size) or slower per second (it/ws) */
+      double busy[PC_STUDY_MAX_RUNS], speed[PC_STUDY_MAX_RUNS];
+      for (int r = 0; r < a->runs; r++) {
+        double ws = 0;
+        for (int k = 0; k < a->nmethods; k++) {
+          const pc_study_run *o = run_at(a, s, size, r, k);
+          if (o->nsnaps) ws += o->snaps[o->nsnaps - 1].worker_seconds;
+        }
+        const pc_study_run *o = &per[size][r];
+        busy[r] = o->group_wall > 0 ? ws / o->group_wall : NAN;
+        speed[r] = o->nsnaps ? (double)o->snaps[o->nsnaps - 1].iterations / o->snaps[o->nsnaps - 1].worker_seconds : NAN;
+      }
+      double busy_med = pc_study_median(busy, (int)a->runs, NULL, NULL), speed_med = pc_study_median(speed, (int)a->runs, NULL, NULL);
+      fprintf(f, "  %-6s %3d worker%s: %.3g s [%.3g..%.3g] to relMSE %.3g; vs %d worker%s %.2fx (ideal %.2fx), speed-up %.2fx; "
+                 "%.2f workers busy, %.3g iterations per worker-second\n",
               pc_method_name(a->methods[m]), a->workers[size], a->workers[size] > 1 ? "s" : " ", c.time_med, c.time_lo,
               c.time_hi, target, a->workers[0], a->workers[0] > 1 ? "s" : "", c.time_med / t_base,
-              (double)a->workers[0] / a->workers[size]);
+              (double)a->workers[0] / a->workers[size], t_base / c.time_med, busy_med, speed_med);
       double t_end = 0;
       for (int r = 0; r < a->runs; r++)
         if (per[size][r].nsnaps) t_end = fmax(t_end, per[size][r].snaps[per[size][r].nsnaps - 1].wall);

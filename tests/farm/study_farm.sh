@@ -37,7 +37,7 @@ for f in "$T/s/report.html" "$d/reference-bdpt-2s.exr" "$d/pt.exr" "$d/pt.png" "
   [ -s "$f" ] || fail "study 1: $f missing"
 done
 grep -q "rendering the reference" "$T/study1.out" || fail "study 1: no reference render"
-grep -q "^scaling" "$T/study1.out" || { cat "$T/study1.out"; fail "study 1: no scaling table"; }
+grep -q "^scaling" "$T/study1.out" && grep -q "2 workers: .* speed-up .* workers busy" "$T/study1.out" || { cat "$T/study1.out"; fail "study 1: no scaling table"; }
 grep -q "over 2 runs on 2 workers" "$T/study1.out" || { cat "$T/study1.out"; fail "study 1: no spread table"; }
 python3 - "$d/study.json" "$T/coord.log" <<'EOF' || fail "study 1: the figures"
 import collections, json, re, sys
