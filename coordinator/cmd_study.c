@@ -58,7 +58,7 @@ static const char study_help[] =
     "  --snapshots K         points per curve (default 12)\n"
     "  --target-error E      target relMSE of the --layer comparison (default: the worst method's final)\n"
     "  --layer NAME          layer of the headline comparison: beauty (default), pt, nee, lt, inner\n"
-    "Render flags (apply to every method; --method, --spp and --time are not accepted):\n"
+    "Render flags (apply to every method; --method, --spp, --time and --halt-noise are not accepted):\n"
     "%s";
 
 #define MAX_SCENES 16
@@ -142,7 +142,7 @@ static int parse_args(study_args *a, int argc, char **argv, pc_err *e) {
     const char *f = argv[i];
     const char *v = i + 1 < argc ? argv[i + 1] : NULL;
     if (strcmp(f, "--method") == 0) return pc_errf(e, PC_EINVAL, "--method: a study takes --methods LIST");
-    if (strcmp(f, "--spp") == 0 || strcmp(f, "--time") == 0)
+    if (strcmp(f, "--spp") == 0 || strcmp(f, "--time") == 0 || strcmp(f, "--halt-noise") == 0)
       return pc_errf(e, PC_EINVAL, "%s: a study is bound by --seconds per method", f);
     int r = pc_render_flag_parse(&a->req, argc, argv, &i, e);
     if (r < 0) return r;

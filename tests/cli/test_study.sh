@@ -17,6 +17,7 @@ check verbs 0 "study" -- "$bin" --help
 check unknown-flag 2 "--frob" -- "$bin" study "$scene" "${ok[@]}" --frob
 check method-refused 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --method pt
 check spp-refused 2 "--spp" -- "$bin" study "$scene" "${ok[@]}" --spp 4
+check halt-noise-refused 2 "--halt-noise" -- "$bin" study "$scene" "${ok[@]}" --halt-noise 0.1
 check bad-methods 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --methods pt,magic
 check twice-methods 2 "twice" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pt
 check bad-seconds 2 "--seconds" -- "$bin" study "$scene" "${ok[@]}" --seconds 0
