@@ -6,7 +6,8 @@
 # the size of one film (layers x W x H x 3 doubles), the workers' peak memory, the bytes per
 # upload (the workers' /proc/PID/io wchar: uploads, heartbeats and requests), and how long
 # `status` took while the job ran (polled every 0.2 s; each figure includes starting the
-# client process and its authentication). Exact counts are checked at the end.
+# client process and its authentication). Exact counts are checked at the end. The workers run
+# at nice 19: they stand in for other machines, and here share the coordinator's cores.
 # Usage: tests/bench/bench_scale.sh [BUILD_DIR] [many|4k|both] (env: MANY_N, MANY_SIZE,
 # MANY_SPP, K4_SPP)
 set -euo pipefail
@@ -31,7 +32,7 @@ run() { # label nworkers width height spp
   for _ in $(seq 100); do [ -s "$dir/port" ] && break; sleep 0.1; done
   local H="--host 127.0.0.1:$(cat "$dir/port") --token-file $T/tok"
   for i in $(seq "$n"); do
-    "$B/pcbpt-worker" --connect "127.0.0.1:$(cat "$dir/port")" --token-file "$T/tok" --threads 1 --name "w$i" \
+    nice -n 19 "$B/pcbpt-worker" --connect "127.0.0.1:$(cat "$dir/port")" --token-file "$T/tok" --threads 1 --name "w$i" \
       --cache-dir "$dir/cache$i" >"$dir/w$i.log" 2>&1 &
     W+=($!); PIDS+=($!)
   done
