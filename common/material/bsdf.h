@@ -19,6 +19,7 @@
 
 #include <stdbool.h>
 
+#include "microfacet.h"
 #include "texture.h"
 #include "vecmath.h"
 
@@ -42,7 +43,8 @@ typedef struct pc_material {
   pc_tex_slot specular;      /* conductor/plastic/dielectric: specularReflectance */
   pc_tex_slot transmittance; /* dielectric: specularTransmittance */
   vec3 eta, k;               /* conductor: complex index of refraction relative to extEta */
-  float alpha;               /* rough*: GGX roughness (isotropic) */
+  float alpha;               /* rough*: roughness (isotropic) */
+  pc_mf_type distribution;   /* rough*: microfacet distribution (Mitsuba's default: beckmann) */
   float int_ior, ext_ior;    /* dielectric and plastic */
   bool nonlinear;            /* plastic: Mitsuba's `nonlinear` */
   /* Derived at scene build by pc_material_prepare (plastic): diffuse Fresnel reflectance of the

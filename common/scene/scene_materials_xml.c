@@ -39,13 +39,13 @@ static int check_max1(pc_sx *c, const pc_param *p, const pc_tex_slot *s, const c
 }
 
 static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
-                       float a, float u, float v, const char *dist, bool dist_set, float *out) {
-  if (!dist_set)
-    return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: no 'distribution' given; Mitsuba's default is beckmann, which pcbpt does not model: "
-                   "write <string name=\"distribution\" value=\"ggx\"/>", c->file, n->line, what);
-  if (strcmp(dist, "ggx") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' unsupported (only ggx)", c->file, n->line, what, dist);
+                       float a, float u, float v, const char *dist, pc_material *m) {
+  /* Mitsuba's default when no distribution is given is beckmann. */
+  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
+  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
+  else
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
+                   n->line, what, dist);
   if (au->set != av->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both alphaU and alphaV or neither", c->file, n->line, what);
   if (au->set) {
@@ -56,7 +56,7 @@ static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_para
   }
   if (!(a > 0.f && a <= 1.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);
-  *out = a;
+  m->alpha = a;
   return 0;
 }
 
@@ -81,7 +81,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if ((rc = params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
   } else if (strcmp(type, "conductor") == 0 || strcmp(type, "roughconductor") == 0) {
     bool rough = type[0] == 'r';
-    const char *material = "Cu", *dist = "";
+    const char *material = "Cu", *dist = "beckmann";
     float alpha = 0.1f, au = 0, av = 0, ext = 1.f;
     vec3 eta = v3s(0), k = v3s(0);
     pc_param p[] = {{"material", PC_P_STRING, &material, 0, 0}, {"eta", PC_P_COLOR, &eta, 0, 0},
@@ -91,7 +91,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
     m->type = rough ? PC_MAT_ROUGHCONDUCTOR : PC_MAT_CONDUCTOR;
     if ((rc = params_only(c, n, what, p, rough ? 9 : 5))) return rc;
-    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, p[5].set, &m->alpha))) return rc;
+    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, m))) return rc;
     if (p[1].set != p[2].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both eta and k or neither", c->file, n->line, what);
     if (p[1].set && p[0].set)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give a material name or eta and k, not both", c->file, n->line, what);
@@ -102,7 +102,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->k = v3_scale(k, 1.f / ext);
   } else if (strcmp(type, "plastic") == 0 || strcmp(type, "roughplastic") == 0) {
     bool rough = type[0] == 'r';
-    const char *dist = "";
+    const char *dist = "beckmann";
     float au = 0, av = 0;
     m->type = rough ? PC_MAT_ROUGHPLASTIC : PC_MAT_PLASTIC;
     m->int_ior = 1.49f;
@@ -117,7 +117,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if ((rc = params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
         (rc = check_ior(c, n, what, "intIOR", m->int_ior)) || (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
-    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, p[5].set, &m->alpha))) return rc;
+    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, m))) return rc;
   } else if (strcmp(type, "dielectric") == 0) {
     m->type = PC_MAT_DIELECTRIC;
     m->int_ior = 1.5046f;

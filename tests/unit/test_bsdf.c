@@ -14,6 +14,7 @@
 #include "bsdf.h"
 #include "chi2.h"
 #include "fresnel.h"
+#include "microfacet.h"
 #include "rng.h"
 
 /* ---- material and geometry fixtures ---- */
@@ -46,11 +47,25 @@ static pc_material mk_conductor(const char *name, float alpha) {
   m.alpha = alpha;
   return m;
 }
+static pc_material mk_beckmann_conductor(const char *name, float alpha) {
+  pc_material m = mk_conductor(name, alpha);
+  m.distribution = PC_MF_BECKMANN;
+  return m;
+}
 static pc_material mk_plastic(float alpha, bool nonlinear) {
   pc_material m = base_material(alpha > 0 ? PC_MAT_ROUGHPLASTIC : PC_MAT_PLASTIC);
   m.reflectance = slot(0.9f, 0.5f, 0.1f);
   m.alpha = alpha;
   m.nonlinear = nonlinear;
+  pc_material_prepare(&m);
+  return m;
+}
+static pc_material mk_beckmann_plastic(float alpha, bool nonlinear) {
+  pc_material m = base_material(PC_MAT_ROUGHPLASTIC);
+  m.reflectance = slot(0.9f, 0.5f, 0.1f);
+  m.alpha = alpha;
+  m.nonlinear = nonlinear;
+  m.distribution = PC_MF_BECKMANN;
   pc_material_prepare(&m);
   return m;
 }
@@ -79,7 +94,7 @@ typedef struct tcase {
   pc_shading sh;
 } tcase;
 
-#define MAX_CASES 32
+#define MAX_CASES 64
 static int all_cases(tcase *c) {
   int n = 0;
   pc_shading flat = mk_shading(0), tilted = mk_shading(0.35f);
@@ -94,6 +109,11 @@ static int all_cases(tcase *c) {
       {"plastic-nonlinear", mk_plastic(0, true)},
       {"roughplastic-0.1", mk_plastic(0.1f, false)},
       {"roughplastic-0.4", mk_plastic(0.4f, true)},
+      {"roughconductor-beckmann-0.05", mk_beckmann_conductor("Cu", 0.05f)},
+      {"roughconductor-beckmann-0.3", mk_beckmann_conductor("Al", 0.3f)},
+      {"roughconductor-beckmann-0.7", mk_beckmann_conductor("Au", 0.7f)},
+      {"roughplastic-beckmann-0.1", mk_beckmann_plastic(0.1f, false)},
+      {"roughplastic-beckmann-0.4", mk_beckmann_plastic(0.4f, true)},
       {"dielectric", mk_dielectric(1.5f, 1.0f)},
   };
   for (size_t i = 0; i < sizeof mats / sizeof mats[0]; i++) {
@@ -106,6 +126,8 @@ static int all_cases(tcase *c) {
   c[n++] = (tcase){"diffuse-tilted", mk_diffuse(), tilted};
   c[n++] = (tcase){"roughconductor-0.3-tilted", mk_conductor("Al", 0.3f), tilted};
   c[n++] = (tcase){"roughplastic-0.1-tilted", mk_plastic(0.1f, false), tilted};
+  c[n++] = (tcase){"roughconductor-beckmann-0.3-tilted", mk_beckmann_conductor("Al", 0.3f), tilted};
+  c[n++] = (tcase){"roughplastic-beckmann-0.1-tilted", mk_beckmann_plastic(0.1f, false), tilted};
   c[n++] = (tcase){"plastic-tilted", mk_plastic(0, false), tilted};
   c[n++] = (tcase){"conductor-tilted", mk_conductor("Cu", 0), tilted};
   c[n++] = (tcase){"dielectric-tilted", mk_dielectric(1.5f, 1.0f), tilted};
@@ -564,6 +586,32 @@ static void test_known_values(void **state) {
     assert_true(fabsf(rp.rough_trans_in[i] - (1 - pc_fresnel_dielectric(mu, eta_p, NULL))) < 5e-3f);
   }
   assert_true(fabsf(rp.rough_trans_avg_int - (1 - rp.fdr_int)) < 1e-2f);
+  pc_material rb = mk_beckmann_plastic(0.002f, false);
+  for (int i = 8; i < PC_PLASTIC_TABLE; i++) {
+    float mu = (float)(i * i) / ((PC_PLASTIC_TABLE - 1) * (PC_PLASTIC_TABLE - 1));
+    assert_true(fabsf(rb.rough_trans_in[i] - (1 - pc_fresnel_dielectric(mu, eta_p, NULL))) < 5e-3f);
+  }
+  assert_true(fabsf(rb.rough_trans_avg_int - (1 - rb.fdr_int)) < 1e-2f);
+
+  /* Beckmann: projected normals integrate to 1 (midpoint rule in cos theta), and Mitsuba's
+   * rational G1 is within 0.35% of the exact 1 / (1 + Lambda(a)), a = 1 / (alpha tan theta). */
+  const float alphas[] = {0.05f, 0.3f, 0.7f, 1.f};
+  for (size_t i = 0; i < sizeof alphas / sizeof alphas[0]; i++) {
+    pc_microfacet mf = pc_mf_make(PC_MF_BECKMANN, alphas[i]);
+    double integral = 0;
+    const int NC = 200000;
+    for (int k = 0; k < NC; k++) {
+      double c = (k + 0.5) / NC;
+      integral += pc_mf_d(&mf, v3((float)sqrt(1 - c * c), 0, (float)c)) * c * 2 * M_PI / NC;
+    }
+    assert_true(fabs(integral - 1.0) < 2e-3);
+    for (int k = 1; k < 40; k++) {
+      double th = k * (M_PI / 2) / 40, a = 1.0 / (alphas[i] * tan(th));
+      double lambda = 0.5 * (erf(a) - 1) + exp(-a * a) / (2 * a * sqrt(M_PI));
+      vec3 v = v3((float)sin(th), 0, (float)cos(th));
+      assert_true(fabs(pc_mf_g1(&mf, v, v3(0, 0, 1)) - 1 / (1 + lambda)) < 4e-3);
+    }
+  }
   /* Preparation is cheap. */
   clock_t t0 = clock();
   for (int i = 0; i < 10; i++) rp = mk_plastic(0.3f, false);

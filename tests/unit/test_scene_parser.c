@@ -70,6 +70,7 @@ static void test_full_scene(void **state) {
   assert_int_equal(m[1].reflectance.tex, 0);
   assert_int_equal(m[2].type, PC_MAT_ROUGHCONDUCTOR);
   assert_true(fabsf(m[2].alpha - 0.25f) < 1e-7f);
+  assert_int_equal(m[2].distribution, PC_MF_GGX);
   vec3 eta, k;
   assert_true(pc_conductor_ior("Au", &eta, &k));
   near3(m[2].eta, eta, 1e-6f);
@@ -86,6 +87,7 @@ static void test_full_scene(void **state) {
   near3(m[5].reflectance.value, v3s(0.5f), 0);
   assert_int_equal(m[6].type, PC_MAT_ROUGHPLASTIC);
   assert_true(fabsf(m[6].alpha - 0.3f) < 1e-7f);
+  assert_int_equal(m[6].distribution, PC_MF_BECKMANN); /* Mitsuba's default */
   assert_int_equal(m[6].reflectance.tex, 1);
   assert_int_equal(m[7].type, PC_MAT_CONDUCTOR);
   assert_true(pc_conductor_ior("Cu", &eta, &k));
@@ -323,8 +325,7 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
     {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
     {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
-    {"<bsdf type=\"roughconductor\"/>", 2, "ggx"},
-    {"<bsdf type=\"roughplastic\">\n<string name=\"distribution\" value=\"beckmann\"/></bsdf>", 2, "beckmann"},
+    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"phong\"/></bsdf>", 2, "phong"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
     {"<bsdf type=\"conductor\"><string name=\"material\" value=\"Xx\"/></bsdf>", 2, "Xx"},
