@@ -44,6 +44,9 @@ int pc_env_prepare(pc_light *l, float radius, const char *what, pc_err *e) {
     double col_sum = 0.0;
     col[0] = 0.f;
     for (int x = 0; x < w; x++) {
+      const float *t = img->rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+      if (!isfinite(t[0]) || !isfinite(t[1]) || !isfinite(t[2]))
+        return pc_errf(e, PC_EINVAL, "%s: texel (%d, %d) is NaN or infinite", what, x, y);
       col_sum += luminance_at(img, x, y);
       col[x + 1] = (float)col_sum;
     }
@@ -52,7 +55,7 @@ int pc_env_prepare(pc_light *l, float radius, const char *what, pc_err *e) {
     l->env_row_cdf[y + 1] = (float)row_sum;
   }
   if (!(row_sum > 0.0) || !isfinite(row_sum))
-    return pc_errf(e, PC_EINVAL, "%s: the image is black or holds a NaN or infinite value", what);
+    return pc_errf(e, PC_EINVAL, "%s: the image is black", what);
   for (int y = 1; y <= h; y++) l->env_row_cdf[y] = (float)(l->env_row_cdf[y] / row_sum);
   l->env_row_cdf[h] = 1.f;
   l->env_norm = (float)(1.0 / (row_sum * (2.0 * PC_PI / w) * (PC_PI / h)));

@@ -124,7 +124,7 @@ static void compare_blocks(const char *what, const multi *a, int la, const multi
   assert_true(nz == 0 || z2 / nz < 2.0);
 }
 
-static void agree(const char *scene, int iters, bool lt) {
+static void agree(const char *scene, int iters, bool lt, bool pcbpt) {
   int beauty = -1;
   multi *pt = malloc(sizeof *pt), *bd = malloc(sizeof *bd), *l = malloc(sizeof *l);
   /* PT is cheaper and its caustics (s=0 only) heavy-tailed: 4x the iterations keep its
@@ -139,6 +139,15 @@ static void agree(const char *scene, int iters, bool lt) {
     snprintf(what, sizeof what, "%s lt vs bdpt", scene);
     compare_blocks(what, l, 0, bd, 0, 5.0);
   }
+  if (pcbpt) {
+    pc_render_settings set = settings(PC_METHOD_PCBPT, 64, 6, 14);
+    set.pcbpt_m = 50;
+    set.pcbpt_k = 2;
+    set.cache_fraction = 0.02f;
+    render_multi(scene, set, iters, &beauty, 1, 8, NULL, l);
+    snprintf(what, sizeof what, "%s pcbpt vs bdpt", scene);
+    compare_blocks(what, l, 0, bd, 0, 5.0);
+  }
   free(pt);
   free(bd);
   free(l);
@@ -146,28 +155,34 @@ static void agree(const char *scene, int iters, bool lt) {
 
 static void test_agree_cornell(void **state) {
   (void)state;
-  agree("cornell-box", 128, true);
+  agree("cornell-box", 128, true, false);
 }
 static void test_agree_glossy_glass(void **state) {
   (void)state;
-  agree("glossy-glass", 128, false); /* the glass sphere in view: light tracing cannot see it */
+  agree("glossy-glass", 128, false, false); /* the glass sphere in view: light tracing cannot see it */
 }
 static void test_agree_open_room(void **state) {
   (void)state;
-  agree("open-room", 96, true);
+  agree("open-room", 96, true, false);
 }
 static void test_agree_slit_room(void **state) {
   (void)state;
-  agree("slit-room", 96, false);
+  agree("slit-room", 96, false, false);
 }
 static void test_agree_ajar_door(void **state) {
   (void)state;
-  agree("ajar-door", 96, false);
+  agree("ajar-door", 96, false, false);
 }
 
-/* Totals of every strategy of path lengths 2 and 3 (segments) on the Cornell box. */
-static void test_strategies(void **state) {
+/* The environment (a sky envmap with a sun) seen directly and lighting Beckmann rough
+ * conductor and plastic: PT, LT, BDPT and PCBPT agree. */
+static void test_agree_env_objects(void **state) {
   (void)state;
+  agree("env-objects", 128, true, true);
+}
+
+/* Totals of every strategy of path lengths 2 and 3 (segments) on a scene. */
+static void strategies(const char *scene) {
   pc_render_settings set = settings(PC_METHOD_BDPT, 32, 3, 21);
   set.strategy_layers = 3;
   pc_film probe;
@@ -179,16 +194,16 @@ static void test_strategies(void **state) {
     multi *un = malloc(sizeof *un), *wt = malloc(sizeof *wt);
     set.unweighted = true;
     set.seed = 21;
-    render_multi("cornell-box", set, 96, layers, nl, 32, NULL, un);
+    render_multi(scene, set, 96, layers, nl, 32, NULL, un);
     set.unweighted = false;
     set.seed = 22;
-    render_multi("cornell-box", set, 96, layers, nl, 32, NULL, wt);
+    render_multi(scene, set, 96, layers, nl, 32, NULL, wt);
     /* Reference: the unweighted s=1 estimate (NEE, the least noisy here). */
     int ref = nl - 2;
     for (int l = 0; l < nl; l++) {
       double d = mean_of(un, l, 0) - mean_of(un, ref, 0);
       double se = sqrt(se_of(un, l, 0) * se_of(un, l, 0) + se_of(un, ref, 0) * se_of(un, ref, 0));
-      printf("length %d  %-5s unweighted %.5f +- %.5f  (z %+.2f)  weighted %.5f\n", k, probe.layers[layers[l]].name,
+      printf("%s length %d  %-5s unweighted %.5f +- %.5f  (z %+.2f)  weighted %.5f\n", scene, k, probe.layers[layers[l]].name,
              mean_of(un, l, 0), se_of(un, l, 0), se > 0 ? d / se : 0.0, mean_of(wt, l, 0));
       assert_true(mean_of(un, l, 0) > 0);
       assert_true(fabs(d) < 4.5 * se);
@@ -197,12 +212,18 @@ static void test_strategies(void **state) {
      * from another seed than the reference). */
     double sw = mean_of(wt, nl, 0);
     double se = sqrt(se_of(wt, nl, 0) * se_of(wt, nl, 0) + se_of(un, ref, 0) * se_of(un, ref, 0));
-    printf("length %d  weighted sum %.5f vs %.5f (z %+.2f)\n", k, sw, mean_of(un, ref, 0), (sw - mean_of(un, ref, 0)) / se);
+    printf("%s length %d  weighted sum %.5f vs %.5f (z %+.2f)\n", scene, k, sw, mean_of(un, ref, 0), (sw - mean_of(un, ref, 0)) / se);
     assert_true(fabs(sw - mean_of(un, ref, 0)) < 4.5 * se);
     free(un);
     free(wt);
   }
   pc_film_free(&probe);
+}
+
+static void test_strategies(void **state) {
+  (void)state;
+  strategies("cornell-box");
+  strategies("env-objects"); /* s=0 escapes, s=1 and t=1 at infinity, light paths from the disk */
 }
 
 /* The furnace (exact radiance Le * sum_{k<d} a^k, see test_furnace.c) with the power heuristic
@@ -249,7 +270,8 @@ static void edge_on(pc_scene *s) {
 
 static void test_finite(void **state) {
   (void)state;
-  static const char *const scenes[] = {"cornell-box", "furnace", "ajar-door", "slit-room", "open-room", "glossy-glass"};
+  static const char *const scenes[] = {"cornell-box", "furnace", "ajar-door", "slit-room", "open-room", "glossy-glass",
+                                       "env-constant", "env-white-map", "env-objects"};
   static const pc_method methods[] = {PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT};
   int beauty = -1;
   multi *m = malloc(sizeof *m);
@@ -274,7 +296,7 @@ int main(void) {
       cmocka_unit_test(test_strategies),
       cmocka_unit_test(test_agree_cornell),  cmocka_unit_test(test_agree_glossy_glass),
       cmocka_unit_test(test_agree_open_room), cmocka_unit_test(test_agree_ajar_door),
-      cmocka_unit_test(test_agree_slit_room),
+      cmocka_unit_test(test_agree_slit_room), cmocka_unit_test(test_agree_env_objects),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
