@@ -9,11 +9,11 @@
  *  - For PC_IMPORTANCE transport, f already includes Veach's shading-normal correction
  *    |wo.ns||wi.ng| / (|wo.ng||wi.ns|) and omits the radiance eta^2 scaling of refraction,
  *    so light sub-path throughputs are correct as is.
- *  - Delta lobes (smooth conductor/dielectric/plastic's specular) are never returned by eval
+ *  - Delta lobes (smooth conductor/dielectric/thindielectric/plastic's specular) are never returned by eval
  *    or pdf; only sample produces them, flagged is_delta, with pdf the discrete lobe
  *    probability (the Dirac factors cancel in f*cos/pdf and in MIS ratios).
  *  - A material that is not twosided reflects only on the front side of the shading frame
- *    (as in Mitsuba); dielectric is two-sided by nature. */
+ *    (as in Mitsuba); the dielectrics are two-sided by nature. */
 #ifndef PC_BSDF_H
 #define PC_BSDF_H
 
@@ -30,6 +30,8 @@ typedef enum {
   PC_MAT_PLASTIC,
   PC_MAT_ROUGHPLASTIC,
   PC_MAT_DIELECTRIC,
+  PC_MAT_ROUGHDIELECTRIC,
+  PC_MAT_THINDIELECTRIC,
 } pc_mat_type;
 
 typedef enum { PC_RADIANCE = 0, PC_IMPORTANCE = 1 } pc_transport;
@@ -41,11 +43,11 @@ typedef struct pc_material {
   bool twosided;             /* the Mitsuba `twosided` wrapper */
   pc_tex_slot reflectance;   /* diffuse: reflectance; plastic: diffuseReflectance */
   pc_tex_slot specular;      /* conductor/plastic/dielectric: specularReflectance */
-  pc_tex_slot transmittance; /* dielectric: specularTransmittance */
+  pc_tex_slot transmittance; /* dielectrics: specularTransmittance */
   vec3 eta, k;               /* conductor: complex index of refraction relative to extEta */
   float alpha;               /* rough*: roughness (isotropic) */
   pc_mf_type distribution;   /* rough*: microfacet distribution (Mitsuba's default: beckmann) */
-  float int_ior, ext_ior;    /* dielectric and plastic */
+  float int_ior, ext_ior;    /* dielectrics and plastic */
   bool nonlinear;            /* plastic: Mitsuba's `nonlinear` */
   /* Derived at scene build by pc_material_prepare (plastic): diffuse Fresnel reflectance of the
    * interface from inside, and for roughplastic the tabulated rough transmittance. */

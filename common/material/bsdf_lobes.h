@@ -4,8 +4,9 @@
  * correction and the final finiteness guard.
  *
  * Lobe functions see local unit directions; opaque lobes return zeros unless both are above
- * the surface. eval and pdf cover non-delta lobes only, in radiance transport (every non-delta
- * lobe here is a reflection, so it is reciprocal and the same in both modes). */
+ * the surface. eval and pdf cover non-delta lobes only; reflection lobes are reciprocal and the
+ * same in both modes, refraction (roughdielectric) differs by the eta^2 of radiance transport
+ * (c->mode). */
 #ifndef PC_BSDF_LOBES_H
 #define PC_BSDF_LOBES_H
 
@@ -54,5 +55,9 @@ bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, f
 void pc_plastic_prepare(pc_material *m);
 
 bool pc_dielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+bool pc_thindielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
 #endif

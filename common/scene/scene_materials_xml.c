@@ -118,16 +118,24 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
         (rc = check_ior(c, n, what, "intIOR", m->int_ior)) || (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, m))) return rc;
-  } else if (strcmp(type, "dielectric") == 0) {
-    m->type = PC_MAT_DIELECTRIC;
+  } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "roughdielectric") == 0 ||
+             strcmp(type, "thindielectric") == 0) {
+    bool rough = type[0] == 'r';
+    m->type = rough ? PC_MAT_ROUGHDIELECTRIC : (type[0] == 't' ? PC_MAT_THINDIELECTRIC : PC_MAT_DIELECTRIC);
     m->int_ior = 1.5046f;
     m->ext_ior = 1.000277f;
+    m->alpha = 0.1f;
+    const char *dist = "beckmann";
+    float au = 0, av = 0;
     pc_param p[] = {{"intIOR", PC_P_IOR, &m->int_ior, 0, 0}, {"extIOR", PC_P_IOR, &m->ext_ior, 0, 0},
                     {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
-                    {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
+                    {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0},
+                    {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
+                    {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
+    if ((rc = params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
         (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
+    if (rough && (rc = check_alpha(c, n, what, &p[5], &p[6], &p[7], m->alpha, au, av, dist, m))) return rc;
     if (m->int_ior == m->ext_ior)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: intIOR equals extIOR (an invisible interface)", c->file, n->line, what);
   } else if (strcmp(type, "twosided") == 0) {
@@ -160,7 +168,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
       }
     }
     if (m->twosided) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps another twosided BSDF", c->file, inner->line, what);
-    if (m->type == PC_MAT_DIELECTRIC)
+    if (m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cannot wrap a dielectric (it is two-sided already)", c->file, inner->line, what);
     m->twosided = true;
     return 0;

@@ -349,7 +349,7 @@ def env_objects():
     write_png(os.path.join(d, "sky.png"), 64, 32, sky_pixel)
     s = Scene("env-objects", "pcbpt", -1,
               "Objects on a floor under a sky envmap (rotated 30 degrees about +y) with a small sun: "
-              "Beckmann rough conductor and plastic (Mitsuba's default distribution), diffuse; "
+              "Beckmann rough conductor, plastic and glass (Mitsuba's default distribution), diffuse; "
               "PT, BDPT and PCBPT must agree")
     s.preview = False
     s.camera((0, 1.4, 3.6), (0, 0.4, 0), (0, 1, 0), 45)
@@ -359,8 +359,30 @@ def env_objects():
     s.sphere((0.2, 0.35, 0.6), 0.35, diffuse((0.2, 0.5, 0.8)))
     s.box((0.6, 0.0, -0.7), (1.3, 0.7, 0.0), '<bsdf type="roughplastic"><float name="alpha" value="0.3"/>'
           '<rgb name="diffuseReflectance" value="0.7, 0.3, 0.1"/></bsdf>', rot_y=20)
+    s.sphere((-0.1, 0.3, -0.9), 0.3, '<bsdf type="roughdielectric"><float name="alpha" value="0.25"/>'
+             '<float name="intIOR" value="1.5"/><float name="extIOR" value="1"/></bsdf>')
     s.raw('  <emitter type="envmap"><string name="filename" value="sky.png"/><float name="scale" value="1.5"/>'
           '<transform name="toWorld"><rotate x="0" y="1" z="0" angle="30"/></transform></emitter>')
+    return s
+
+
+def thin_glass():
+    """A closed room lit by a ceiling panel; the camera looks through a thin glass pane
+    (thindielectric) standing across the room at a rough GGX glass cube and a diffuse sphere."""
+    s = Scene("thin-glass", "pcbpt", -1,
+              "Thin glass pane (thindielectric) in front of a rough glass cube (roughdielectric, GGX) "
+              "and a diffuse sphere in a closed room lit by a ceiling panel")
+    s.preview = False
+    s.camera((0.0, 1.3, 2.6), (0.0, 0.7, -0.5), (0, 1, 0), 60)
+    s.bsdf("wall", ("diffuse", '<rgb name="reflectance" value="0.7, 0.7, 0.7"/>'))
+    shell(s, (-2.0, 0.0, -2.0), (2.0, 3.0, 3.0), ref("wall"))
+    s.rect((0.0, 2.99, 0.0), 0.6, 0.6, "-y", BLACK, emit=(15, 15, 15))
+    s.rect((0.0, 0.8, 0.9), 1.2, 0.8, "+z", '<bsdf type="thindielectric"><float name="intIOR" value="1.5"/>'
+           '<float name="extIOR" value="1"/></bsdf>')
+    s.box((-0.9, 0.0, -0.8), (-0.2, 0.7, -0.1), '<bsdf type="roughdielectric"><string name="distribution" '
+          'value="ggx"/><float name="alpha" value="0.15"/><float name="intIOR" value="1.5"/>'
+          '<float name="extIOR" value="1"/></bsdf>', rot_y=25)
+    s.sphere((0.6, 0.4, -0.6), 0.4, diffuse((0.8, 0.4, 0.2)))
     return s
 
 
@@ -377,7 +399,7 @@ def check_door(preview, path):
     return 0 if xmax <= -0.0499 else 1
 
 
-SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, env_constant, env_white_map, env_objects]
+SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, env_constant, env_white_map, env_objects, thin_glass]
 
 
 def main():

@@ -181,6 +181,12 @@ static void test_agree_env_objects(void **state) {
   agree("env-objects", 128, true, true);
 }
 
+/* A thin glass pane (delta, so light tracing cannot see through it) and a rough glass cube. */
+static void test_agree_thin_glass(void **state) {
+  (void)state;
+  agree("thin-glass", 96, false, true);
+}
+
 /* Totals of every strategy of path lengths 2 and 3 (segments) on a scene. */
 static void strategies(const char *scene) {
   pc_render_settings set = settings(PC_METHOD_BDPT, 32, 3, 21);
@@ -271,7 +277,7 @@ static void edge_on(pc_scene *s) {
 static void test_finite(void **state) {
   (void)state;
   static const char *const scenes[] = {"cornell-box", "furnace", "ajar-door", "slit-room", "open-room", "glossy-glass",
-                                       "env-constant", "env-white-map", "env-objects"};
+                                       "env-constant", "env-white-map", "env-objects", "thin-glass"};
   static const pc_method methods[] = {PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT};
   int beauty = -1;
   multi *m = malloc(sizeof *m);
@@ -297,6 +303,7 @@ int main(void) {
       cmocka_unit_test(test_agree_cornell),  cmocka_unit_test(test_agree_glossy_glass),
       cmocka_unit_test(test_agree_open_room), cmocka_unit_test(test_agree_ajar_door),
       cmocka_unit_test(test_agree_slit_room), cmocka_unit_test(test_agree_env_objects),
+      cmocka_unit_test(test_agree_thin_glass),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -75,6 +75,22 @@ static pc_material mk_dielectric(float int_ior, float ext_ior) {
   m.ext_ior = ext_ior;
   return m;
 }
+static pc_material mk_roughdielectric(pc_mf_type dist, float alpha) {
+  pc_material m = mk_dielectric(1.5f, 1.0f);
+  m.type = PC_MAT_ROUGHDIELECTRIC;
+  m.distribution = dist;
+  m.alpha = alpha;
+  m.transmittance = slot(0.9f, 0.8f, 1.f);
+  return m;
+}
+static pc_material mk_thindielectric(void) {
+  pc_material m = mk_dielectric(1.5f, 1.0f);
+  m.type = PC_MAT_THINDIELECTRIC;
+  return m;
+}
+static bool is_dielectric(const pc_material *m) {
+  return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
+}
 
 /* A shading point with a non-axis-aligned geometric normal; `tilt` bends the shading normal
  * away from it. */
@@ -115,10 +131,14 @@ static int all_cases(tcase *c) {
       {"roughplastic-beckmann-0.1", mk_beckmann_plastic(0.1f, false)},
       {"roughplastic-beckmann-0.4", mk_beckmann_plastic(0.4f, true)},
       {"dielectric", mk_dielectric(1.5f, 1.0f)},
+      {"roughdielectric-beckmann-0.1", mk_roughdielectric(PC_MF_BECKMANN, 0.1f)},
+      {"roughdielectric-beckmann-0.5", mk_roughdielectric(PC_MF_BECKMANN, 0.5f)},
+      {"roughdielectric-ggx-0.3", mk_roughdielectric(PC_MF_GGX, 0.3f)},
+      {"thindielectric", mk_thindielectric()},
   };
   for (size_t i = 0; i < sizeof mats / sizeof mats[0]; i++) {
     c[n++] = (tcase){mats[i].name, mats[i].m, flat};
-    if (mats[i].m.type != PC_MAT_DIELECTRIC) {
+    if (!is_dielectric(&mats[i].m)) {
       c[n] = (tcase){mats[i].name, mats[i].m, flat};
       c[n++].m.twosided = true;
     }
@@ -131,6 +151,9 @@ static int all_cases(tcase *c) {
   c[n++] = (tcase){"plastic-tilted", mk_plastic(0, false), tilted};
   c[n++] = (tcase){"conductor-tilted", mk_conductor("Cu", 0), tilted};
   c[n++] = (tcase){"dielectric-tilted", mk_dielectric(1.5f, 1.0f), tilted};
+  c[n++] = (tcase){"roughdielectric-beckmann-0.3-tilted", mk_roughdielectric(PC_MF_BECKMANN, 0.3f), tilted};
+  c[n++] = (tcase){"roughdielectric-ggx-0.1-tilted", mk_roughdielectric(PC_MF_GGX, 0.1f), tilted};
+  c[n++] = (tcase){"thindielectric-tilted", mk_thindielectric(), tilted};
   assert_true(n <= MAX_CASES);
   return n;
 }
@@ -195,7 +218,9 @@ static void test_finite(void **state) {
     variants[2].alpha = 0.f;
     variants[3].alpha = 1e-3f;
     for (int v = 0; v < 4; v++) {
-      if (v > 0 && variants[v].type != PC_MAT_ROUGHCONDUCTOR && variants[v].type != PC_MAT_ROUGHPLASTIC) continue;
+      if (v > 0 && variants[v].type != PC_MAT_ROUGHCONDUCTOR && variants[v].type != PC_MAT_ROUGHPLASTIC &&
+          variants[v].type != PC_MAT_ROUGHDIELECTRIC)
+        continue;
       pc_material_prepare(&variants[v]);
       const pc_shading *sh = &cases[c].sh;
       for (int i = 0; i < 2000; i++)
@@ -235,8 +260,16 @@ static void test_reciprocity_adjoint(void **state) {
       vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
       vec3 f = pc_bsdf_eval(&cases[c].m, NULL, sh, wo, wi, PC_RADIANCE);
       vec3 fr = pc_bsdf_eval(&cases[c].m, NULL, sh, wi, wo, PC_RADIANCE);
-      if (!close3(f, fr, 1e-4f, 1e-6f)) {
-        printf("%s: reciprocity f=(%g %g %g) rev=(%g %g %g)\n", cases[c].name, f.x, f.y, f.z, fr.x, fr.y, fr.z);
+      /* Refraction in radiance transport: f(wi, wo) = f(wo, wi) eta^2, eta the relative index
+       * seen from wo's side (the transmitted radiance's solid-angle compression). */
+      vec3 fexp = f;
+      float co = v3_dot(wo, sh->sh.n), ci = v3_dot(wi, sh->sh.n);
+      if (is_dielectric(&cases[c].m) && co * ci < 0.f) {
+        float eta = cases[c].m.int_ior / cases[c].m.ext_ior;
+        fexp = v3_scale(f, co > 0.f ? eta * eta : 1.f / (eta * eta));
+      }
+      if (!close3(fexp, fr, 1e-4f, 1e-6f)) {
+        printf("%s: reciprocity co %g ci %g f=(%g %g %g) rev=(%g %g %g)\n", cases[c].name, co, ci, f.x, f.y, f.z, fr.x, fr.y, fr.z);
         fail();
       }
       vec3 fi = pc_bsdf_eval(&cases[c].m, NULL, sh, wo, wi, PC_IMPORTANCE);
@@ -323,7 +356,8 @@ static void test_energy(void **state) {
         if (!pc_bsdf_sample(m, NULL, sh, wo, pc_rng_f(&r), pc_rng_f(&r), pc_rng_f(&r), PC_RADIANCE, &b)) continue;
         float w = v3_absdot(b.wi, sh->sh.n) / b.pdf;
         /* Radiance leaving glass is legitimately amplified by eta^2. */
-        if (m->type == PC_MAT_DIELECTRIC && v3_dot(wo, sh->sh.n) * v3_dot(b.wi, sh->sh.n) < 0.f)
+        if ((m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC) &&
+            v3_dot(wo, sh->sh.n) * v3_dot(b.wi, sh->sh.n) < 0.f)
           w *= v3_dot(wo, sh->sh.n) > 0.f ? 2.25f : 1.f / 2.25f;
         for (int ch = 0; ch < 3; ch++) {
           double x = v3_get(b.f, ch) * w;
@@ -486,7 +520,7 @@ static void test_chi2(void **state) {
       if (pc_bsdf_is_delta(&cases[c].m)) continue;
       for (int k = 0; k < ncos; k++) {
         /* Back-side wo only matters for twosided materials (one-sided ones absorb). */
-        if (coss[k] < 0 && !cases[c].m.twosided) continue;
+        if (coss[k] < 0 && !cases[c].m.twosided && !is_dielectric(&cases[c].m)) continue;
         if (pass == 0) {
           ntests++;
           continue;
@@ -557,6 +591,28 @@ static void test_known_values(void **state) {
   assert_true(close_rel(s.f.x * v3_absdot(s.wi, sh.sh.n) / s.pdf, 1 / 2.25f, 1e-5f, 0));
   assert_true(close_rel(pc_fresnel_dielectric(-0.3f, 1.5f, NULL), 1.f, 0, 0));
   assert_true(close_rel(pc_bsdf_continuation(&glass, NULL, &sh), 1.f, 0, 0));
+
+  /* Thin pane at normal incidence: R = F0 + (1 - F0)^2 F0 / (1 - F0^2) = 2 F0 / (1 + F0), the
+   * rest passes straight through, unscaled. */
+  pc_material thin = mk_thindielectric();
+  assert_true(pc_bsdf_is_delta(&thin));
+  assert_true(pc_bsdf_sample(&thin, NULL, &sh, sh.sh.n, 0.f, 0.5f, 0.5f, PC_RADIANCE, &s));
+  assert_true(s.is_delta && close_rel(s.pdf, 2 * f0 / (1 + f0), 1e-5f, 0) && close3(s.wi, sh.sh.n, 0, 1e-5f));
+  assert_true(pc_bsdf_sample(&thin, NULL, &sh, sh.sh.n, 0.99f, 0.5f, 0.5f, PC_RADIANCE, &s));
+  assert_true(close3(s.wi, v3_neg(sh.sh.n), 0, 1e-5f) && close_rel(s.pdf, 1 - 2 * f0 / (1 + f0), 1e-5f, 0));
+  assert_true(close_rel(s.f.x * v3_absdot(s.wi, sh.sh.n) / s.pdf, 1.f, 1e-5f, 0));
+
+  /* A nearly smooth rough dielectric reflects F0 of the light at normal incidence. */
+  pc_material rd = mk_roughdielectric(PC_MF_BECKMANN, 0.01f);
+  pc_rng rr = pc_rng_make(8, 0, PC_STREAM_MISC, 8);
+  double refl = 0;
+  for (int i = 0; i < 20000; i++) {
+    pc_bsdf_sampled b;
+    if (pc_bsdf_sample(&rd, NULL, &sh, sh.sh.n, pc_rng_f(&rr), pc_rng_f(&rr), pc_rng_f(&rr), PC_RADIANCE, &b) &&
+        v3_dot(b.wi, sh.sh.n) > 0.f)
+      refl += b.f.x * v3_absdot(b.wi, sh.sh.n) / b.pdf / 20000;
+  }
+  assert_true(fabs(refl - f0) < 0.01);
 
   /* Diffuse Fresnel reflectance against the published fits Mitsuba quotes (d'Eon and Irving
    * for eta > 1, Egan and Hilgeman for eta < 1), and the reciprocity relation between both
