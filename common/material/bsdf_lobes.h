@@ -34,6 +34,12 @@ static inline vec3 pc_tex(const pc_lobe_ctx *c, const pc_tex_slot *s) {
   return pc_slot_eval(s, c->texs, c->uv);
 }
 
+/* The interface's relative index int/ext (1, an invisible interface, if it is not a number). */
+static inline float pc_rel_eta(const pc_material *m) {
+  float eta = m->int_ior / m->ext_ior;
+  return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
+}
+
 /* Cosine-weighted hemisphere (Shirley-Chiu concentric map, as Mitsuba). */
 vec3 pc_sample_cosine_hemisphere(float u1, float u2);
 

@@ -9,11 +9,6 @@
 #include "fresnel.h"
 #include "microfacet.h"
 
-static float rel_eta(const pc_material *m) {
-  float eta = m->int_ior / m->ext_ior;
-  return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
-}
-
 /* Mitsuba's reallocation of the specular-lobe probability. */
 static float spec_prob(const pc_material *m, float refl) {
   float w = m->spec_sampling_weight;
@@ -33,20 +28,20 @@ static vec3 base_albedo(const pc_lobe_ctx *c, float fdr) {
 
 vec3 pc_plastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
-  float eta = rel_eta(c->m);
+  float eta = pc_rel_eta(c->m);
   float fi = pc_fresnel_dielectric(wo.z, eta, NULL), fo = pc_fresnel_dielectric(wi.z, eta, NULL);
   return v3_scale(base_albedo(c, c->m->fdr_int), (1.f - fi) * (1.f - fo) * PC_INV_PI / (eta * eta));
 }
 
 float pc_plastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
-  float ps = spec_prob(c->m, pc_fresnel_dielectric(wo.z, rel_eta(c->m), NULL));
+  float ps = spec_prob(c->m, pc_fresnel_dielectric(wo.z, pc_rel_eta(c->m), NULL));
   return (1.f - ps) * wi.z * PC_INV_PI;
 }
 
 bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   if (!(wo.z > 0.f)) return false;
-  float eta = rel_eta(c->m);
+  float eta = pc_rel_eta(c->m);
   float fi = pc_fresnel_dielectric(wo.z, eta, NULL);
   float ps = spec_prob(c->m, fi);
   if (u0 < ps) {
@@ -81,7 +76,7 @@ static float trans_in(const pc_material *m, float cos_theta) {
 vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
   const pc_material *m = c->m;
-  float eta = rel_eta(m);
+  float eta = pc_rel_eta(m);
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   vec3 h = v3_norm(v3_add(wo, wi));
   float spec = 0.f, d = pc_mf_d(&mf, h);
@@ -147,7 +142,7 @@ static float rough_transmittance(const pc_microfacet *mf, float eta, float mu) {
 }
 
 void pc_plastic_prepare(pc_material *m) {
-  float eta = rel_eta(m);
+  float eta = pc_rel_eta(m);
   m->fdr_int = pc_fresnel_diffuse_reflectance(1.f / eta);
   /* Mitsuba: luminance of the average specular vs diffuse reflectance. A textured slot
    * contributes its `value`, which the scene loader sets to the texture's average. */

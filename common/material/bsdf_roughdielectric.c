@@ -10,19 +10,14 @@
 #include "fresnel.h"
 #include "microfacet.h"
 
-static float rel_eta(const pc_material *m) {
-  float eta = m->int_ior / m->ext_ior;
-  return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
-}
-
 /* The half vector of (wo, wi), on the front side, with eta of wo's side; false if none. A
  * refraction's half vector is computed from the outside direction whichever is wo, so that
  * (wo, wi) and (wi, wo) get the same one to the last bit. */
 static bool half_vector(const pc_material *m, vec3 wo, vec3 wi, bool *reflect, float *eta, vec3 *h) {
   *reflect = wo.z * wi.z > 0.f;
-  *eta = wo.z > 0.f ? rel_eta(m) : 1.f / rel_eta(m);
+  *eta = wo.z > 0.f ? pc_rel_eta(m) : 1.f / pc_rel_eta(m);
   vec3 out = wo.z > 0.f ? wo : wi, in = wo.z > 0.f ? wi : wo;
-  vec3 v = *reflect ? v3_add(wo, wi) : v3_add(out, v3_scale(in, rel_eta(m)));
+  vec3 v = *reflect ? v3_add(wo, wi) : v3_add(out, v3_scale(in, pc_rel_eta(m)));
   float len = v3_len(v);
   if (!(len > 0.f) || !(wo.z != 0.f && wi.z != 0.f)) return false;
   *h = v3_scale(v, (v.z < 0.f ? -1.f : 1.f) / len);
@@ -36,7 +31,7 @@ static bool half_vector(const pc_material *m, vec3 wo, vec3 wi, bool *reflect, f
  * refraction pair's reflectance is the same from both sides (taken from the outside one). */
 static float fresnel_at(const pc_material *m, bool reflect, vec3 wo, float dot_o, float dot_i) {
   float c = reflect ? 0.5f * (dot_o + dot_i) : (wo.z > 0.f ? dot_o : dot_i);
-  return pc_fresnel_dielectric(c, rel_eta(m), NULL);
+  return pc_fresnel_dielectric(c, pc_rel_eta(m), NULL);
 }
 
 vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
@@ -87,7 +82,7 @@ bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1
   vec3 h = pc_mf_sample(&mf, v, u1, u2);
   float dot_o = v3_dot(wo, h);
   if (!(dot_o * wo.z > 0.f)) return false;
-  float cos_t, eta = rel_eta(m);
+  float cos_t, eta = pc_rel_eta(m);
   float f = pc_fresnel_dielectric(dot_o, eta, &cos_t);
   s->is_delta = false;
   if (u0 < f) {
