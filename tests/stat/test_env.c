@@ -5,7 +5,12 @@
  * every pixel that sees only the background. The image is split into blocks; a block whose
  * pixels' corner rays all hit the sphere (or all miss it) is checked against a*L (or L) within
  * 5 standard errors measured from the independent iterations, and the mean over all such
- * blocks within 4 standard errors and 1.5%. */
+ * blocks within 4 standard errors and 1.5%; with the balance and the power heuristic, and with
+ * N_L light paths other than W*H. The standard errors have a floor (5e-4 of the exact value per
+ * block, 2e-4 over all blocks): where the background is nearly all s=0 (the power heuristic,
+ * N_L < W*H), the rare light-tracing splats that carry the rest land in a block a few times in
+ * the whole run, so the spread of the iterations misses their share (measured: 1.6e-4 of 2 in
+ * one block with N_L = 300 and se 2.8e-5). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -36,11 +41,16 @@ static int block_kind(const pc_scene *s, int bx, int by) {
 typedef struct method_case {
   pc_method method;
   int iterations;
+  pc_mis_heuristic h;
+  uint64_t light_paths; /* N_L, 0 = W*H */
 } method_case;
 
 static void check_scene(const char *name) {
-  const method_case cases[] = {{PC_METHOD_PT, 64}, {PC_METHOD_LT, 256}, {PC_METHOD_BDPT, 64}, {PC_METHOD_CBDPT, 32},
-                               {PC_METHOD_PCBPT, 64}};
+  const method_case cases[] = {{PC_METHOD_PT, 64, PC_MIS_BALANCE, 0},     {PC_METHOD_LT, 256, PC_MIS_BALANCE, 0},
+                               {PC_METHOD_BDPT, 64, PC_MIS_BALANCE, 0},   {PC_METHOD_CBDPT, 32, PC_MIS_BALANCE, 0},
+                               {PC_METHOD_PCBPT, 64, PC_MIS_BALANCE, 0},  {PC_METHOD_PT, 64, PC_MIS_POWER, 0},
+                               {PC_METHOD_BDPT, 64, PC_MIS_POWER, 300},   {PC_METHOD_LT, 256, PC_MIS_POWER, 3000},
+                               {PC_METHOD_PCBPT, 64, PC_MIS_POWER, 2000}};
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
     pc_render_request req;
     pc_render_request_default(&req);
@@ -49,6 +59,8 @@ static void check_scene(const char *name) {
     req.set.width = req.set.height = RES;
     req.width_set = req.height_set = true;
     req.set.seed = 77;
+    req.set.mis_heuristic = cases[k].h;
+    req.set.light_paths = cases[k].light_paths;
     req.set.pcbpt_m = 20;
     req.set.pcbpt_k = 2;
     req.set.cache_fraction = 0.05f;
@@ -68,7 +80,7 @@ static void check_scene(const char *name) {
         if (kind < 0) continue;
         int b = by * st.bw + bx;
         double exact = kind ? a * le : le, mean = stat_mean(&st, b), se = stat_se(&st, b);
-        if (!(fabs(mean - exact) <= fmax(5 * se, 1e-5 * exact))) {
+        if (!(fabs(mean - exact) <= fmax(5 * se, 5e-4 * exact))) {
           printf("%s %s block (%d,%d) %s: mean %.5f exact %.5f se %.2e\n", name, pc_method_name(cases[k].method), bx,
                  by, kind ? "sphere" : "background", mean, exact, se);
           fail();
@@ -80,10 +92,11 @@ static void check_scene(const char *name) {
     assert_true(count[0] >= 8 && count[1] >= 8);
     for (int kind = 0; kind < 2; kind++) {
       double exact = kind ? a * le : le, mean = sum[kind] / count[kind], se = sqrt(var[kind]) / count[kind];
-      printf("%-13s %-5s %-10s (%2d blocks): mean %.5f exact %.5f  se %.2e  err %.2f%%\n", name,
-             pc_method_name(cases[k].method), kind ? "sphere" : "background", count[kind], mean, exact, se,
+      printf("%-13s %-5s %-7s N_L %4llu %-10s (%2d blocks): mean %.5f exact %.5f  se %.2e  err %.2f%%\n", name,
+             pc_method_name(cases[k].method), cases[k].h == PC_MIS_POWER ? "power" : "balance",
+             (unsigned long long)cases[k].light_paths, kind ? "sphere" : "background", count[kind], mean, exact, se,
              100 * fabs(mean - exact) / exact);
-      assert_true(fabs(mean - exact) <= fmax(4 * se, 1e-5 * exact));
+      assert_true(fabs(mean - exact) <= fmax(4 * se, 2e-4 * exact));
       assert_true(fabs(mean - exact) <= 0.015 * exact);
     }
     stat_free(&st);
