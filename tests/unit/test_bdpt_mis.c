@@ -363,6 +363,11 @@ static void test_mis_environment(void **state) {
   assert_true(f.env_checked > 400);
   run(&f, (pc_mis_counts){0.37f, 2.f, true}, 400);
   unload(&f);
+  /* With a point light too: the choice between the environment and it by power. */
+  load_scene(&f, "env-objects", true);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  assert_true(f.env_checked > 100 && f.env_checked < f.checked);
+  unload(&f);
 }
 
 int main(void) {
