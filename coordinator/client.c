@@ -109,7 +109,9 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
   if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 30, &in, e)) != 0) goto fail;
   if (in->msg_case != PCBPT__ENVELOPE__MSG_CHALLENGE || in->challenge->nonce.len != PC_AUTH_NONCE ||
       !pc_auth_verify(key, true, cn, in->challenge->nonce.data, in->challenge->server_mac.data, in->challenge->server_mac.len)) {
-    rc = pc_errf(e, PC_EINVAL, "the coordinator at %s did not prove it knows the token", hostport);
+    rc = in->msg_case == PCBPT__ENVELOPE__MSG_CHALLENGE && in->challenge->nonce.len == PC_AUTH_NONCE
+             ? pc_errf(e, PC_EINVAL, "authentication failed: the coordinator at %s holds a different token than %s", hostport, token_file)
+             : pc_errf(e, PC_EINVAL, "the coordinator at %s sent no valid challenge", hostport);
     goto fail;
   }
   if ((rc = pc_auth_mac(key, false, in->challenge->nonce.data, cn, mac)) != 0) goto fail;

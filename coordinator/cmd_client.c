@@ -11,6 +11,7 @@
 #include "bundle.h"
 #include "client.h"
 #include "render_flags.h"
+#include "cli_scene.h"
 #include "scene.h"
 #include "verbs.h"
 #include "wire_settings.h"
@@ -77,16 +78,19 @@ int pc_cmd_submit(int argc, char **argv) {
     scene_path = argv[i];
   }
   if (!scene_path) { fprintf(stderr, "pcbpt-coord submit: missing SCENE.xml\n"); return 2; }
-  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
   /* the scene supplies what the flags left open, so every worker gets complete settings */
   pc_scene scene = {0};
-  if (pc_scene_load(scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
-  pc_render_request_apply_scene(&req, &scene);
-  pc_scene_free(&scene);
-  if (pc_render_settings_check(&req.set, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 2; }
+  if (pc_cli_load_scene("submit", &req, scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  if (pc_render_settings_check(&req.set, &e) != 0) {
+    pc_scene_free(&scene);
+    fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
+    return 2;
+  }
   uint8_t *blob, hash[PC_BUNDLE_HASH];
   size_t n;
-  if (pc_bundle_create(scene_path, &blob, &n, hash, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  int brc = pc_cli_scene_bundle(&scene, &blob, &n, hash, &e);
+  pc_scene_free(&scene);
+  if (brc != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
   pc_client cl;
   int rc = connect_or_say("submit", &o, &cl);
   if (rc) { free(blob); return rc; }
@@ -94,7 +98,8 @@ int pc_cmd_submit(int argc, char **argv) {
   free(blob);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Settings ps;
-  pc_wire_settings_to_proto(&req.set, &ps);
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(&req.set, &ps, &psb);
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   const char *base = strrchr(scene_path, '/');
   sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);
@@ -284,16 +289,36 @@ int pc_cmd_cancel(int argc, char **argv) {
 int pc_cmd_fetch(int argc, char **argv) {
   common_opts o;
   uint64_t job;
-  int rc = one_job_args("fetch", argc, argv, &o, &job);
+  /* --partial: a job that is not done has at most a periodic, partial image */
+  bool partial = false;
+  char *rest[64];
+  int nrest = 0;
+  for (int i = 0; i < argc && nrest < 64; i++)
+    if (strcmp(argv[i], "--partial") == 0) partial = true;
+    else rest[nrest++] = argv[i];
+  int rc = one_job_args("fetch", nrest, rest, &o, &job);
   if (rc) return rc;
   if (!o.out) { fprintf(stderr, "pcbpt-coord fetch: --out F.exr is required\n"); return 2; }
   pc_client cl;
   if ((rc = connect_or_say("fetch", &o, &cl)) != 0) return rc;
   pc_err e = {0};
+  Pcbpt__Envelope *in = NULL;
+  if (pc_client_status(&cl, job, &in, &e) != 0) { fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg); pc_client_close(&cl); return 1; }
+  if (in->status_reply->n_jobs != 1) {
+    fprintf(stderr, "pcbpt-coord fetch: no job %llu\n", (unsigned long long)job);
+    rc = 1;
+  } else if (strcmp(in->status_reply->jobs[0]->state, "done") != 0 && !partial) {
+    const Pcbpt__JobStatus *st = in->status_reply->jobs[0];
+    fprintf(stderr, "pcbpt-coord fetch: job %llu is %s (%llu iterations): %s\n", (unsigned long long)job, st->state,
+            (unsigned long long)st->iterations_done,
+            *st->image ? "its image is partial; pass --partial to fetch it anyway" : "it has no image");
+    rc = 1;
+  }
+  pcbpt__envelope__free_unpacked(in, NULL);
   uint64_t got = 0;
-  rc = pc_client_fetch(&cl, job, o.out, &got, &e);
+  if (!rc && (rc = pc_client_fetch(&cl, job, o.out, &got, &e)) != 0) fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg);
   pc_client_close(&cl);
-  if (rc) { fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg); return 1; }
+  if (rc) return 1;
   if (o.json) printf("{\"job\": %llu, \"out\": \"%s\", \"bytes\": %llu}\n", (unsigned long long)job, o.out, (unsigned long long)got);
   else printf("%s\n", o.out);
   return 0;

@@ -20,6 +20,7 @@
 #include "thread_pool.h"
 #include "wire_settings.h"
 #include "render_flags.h"
+#include "cli_scene.h"
 #include "scene.h"
 #include "verbs.h"
 
@@ -123,19 +124,16 @@ static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt_
   return 0;
 }
 
-static int submit_job(pc_client *cl, const char *scene_path, const pc_render_request *req, uint64_t *job, pc_err *e) {
-  uint8_t *blob, hash[PC_BUNDLE_HASH];
-  size_t n;
-  int rc = pc_bundle_create(scene_path, &blob, &n, hash, e);
-  if (rc) return rc;
-  rc = pc_client_send_bundle(cl, blob, n, hash, e);
-  free(blob);
+static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob, size_t n, const uint8_t *hash,
+                      const pc_render_request *req, uint64_t *job, pc_err *e) {
+  int rc = pc_client_send_bundle(cl, blob, n, hash, e);
   if (rc) return rc;
   Pcbpt__Settings ps;
-  pc_wire_settings_to_proto(&req->set, &ps);
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(&req->set, &ps, &psb);
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)scene_path;
-  sub.bundle_hash.data = hash;
+  sub.bundle_hash.data = (uint8_t *)hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
   sub.halt_iterations = req->spp;
@@ -166,8 +164,9 @@ static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
 
 /* Submits the job to the embedded farm, shows progress until it ends and fetches the image to
  * `out`. *secs is the wall time from submission to the end of the job. */
-static int run_job(pc_embedded *farm, int threads, const char *scene_path, const pc_render_request *req,
-                   const char *out, progress_state *prog, double *secs, pc_err *e) {
+static int run_job(pc_embedded *farm, int threads, const char *scene_path, const uint8_t *blob, size_t blob_n,
+                   const uint8_t *hash, const pc_render_request *req, const char *out, progress_state *prog, double *secs,
+                   pc_err *e) {
   pc_client cl;
   int rc = pc_client_connect(farm->hostport, farm->token, &cl, e);
   if (rc) return rc;
@@ -175,7 +174,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
   double t0 = now_s();
   prog->t0 = t0;
   bool halted = false;
-  rc = submit_job(&cl, scene_path, req, &job, e);
+  rc = submit_job(&cl, scene_path, blob, blob_n, hash, req, &job, e);
   if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
   while (!rc) {
     Pcbpt__Envelope *env = NULL;
@@ -269,17 +268,17 @@ int pc_cmd_render(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord render: missing SCENE.xml (see --help)\n");
     return 2;
   }
-  if (req.spp == 0 && req.seconds == 0) req.spp = 64;
-
   int status = 1;
   pc_scene scene = {0};
   pc_exr_file img = {0};
+  uint8_t *blob = NULL, hash[PC_BUNDLE_HASH];
+  size_t blob_n = 0;
   pc_embedded farm;
   bool farm_up = false;
   char *out_owned = NULL, *png = NULL;
   /* the scene is checked here so a bad one is one clear line, before any farm starts */
-  if (pc_scene_load(scene_path, &scene, &err) != PC_OK) goto fail;
-  pc_render_request_apply_scene(&req, &scene);
+  if (pc_cli_load_scene("render", &req, scene_path, &scene, &err) != PC_OK) goto fail;
+  if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
   {
@@ -307,7 +306,7 @@ int pc_cmd_render(int argc, char **argv) {
   if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
   farm_up = true;
   double secs = 0;
-  int rc = run_job(&farm, (int)threads, scene_path, &req, out, &prog, &secs, &err);
+  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, out, &prog, &secs, &err);
   pc_embedded_stop(&farm);
   farm_up = false;
   if (prog.show) fputc('\n', stderr);
@@ -343,6 +342,7 @@ fail:
 done:
   pc_exr_file_free(&img);
   pc_scene_free(&scene);
+  free(blob);
   free(out_owned);
   free(png);
   return status;

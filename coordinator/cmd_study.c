@@ -11,6 +11,7 @@
 #include "film.h"
 #include "image.h"
 #include "render_flags.h"
+#include "cli_scene.h"
 #include "scene.h"
 #include "study.h"
 #include "verbs.h"
@@ -232,11 +233,8 @@ static int run_study(study_args *a, pc_err *e) {
   if (rc == PC_OK) rc = reference_slots(&ref_file, a->reference, &ref, e);
   if (rc == PC_OK && !ref.rgb[a->layer])
     rc = pc_errf(e, PC_EINVAL, "--layer: %s has no '%s' layer", a->reference, pc_study_layer_name(a->layer));
-  if (rc == PC_OK) rc = pc_scene_load(a->scene, &scene, e);
-  if (rc == PC_OK) {
-    pc_render_request_apply_scene(req, &scene);
-    rc = pc_render_settings_check(&req->set, e);
-  }
+  if (rc == PC_OK) rc = pc_cli_load_scene("study", req, a->scene, &scene, e);
+  if (rc == PC_OK) rc = pc_render_settings_check(&req->set, e);
   if (rc == PC_OK && (req->set.width != ref.w || req->set.height != ref.h))
     rc = pc_errf(e, PC_EINVAL, "--reference: %s is %dx%d but the study renders %dx%d (set --width/--height to match)",
                  a->reference, ref.w, ref.h, req->set.width, req->set.height);

@@ -30,6 +30,11 @@ typedef struct pc_range {
   double orphan_since;  /* when the owner went away; 0 while owned */
   bool merging;         /* an upload for it is being merged */
   bool final;           /* the owner sent its last upload: close at merged on commit */
+  double progress_at;   /* its progress deadline runs from here: when it was assigned, its
+                           owner's last upload came or was acknowledged (0: not owned) */
+  double measured_at;   /* when it was assigned or its owner's last upload came */
+  bool stop_asked;      /* overdue: its owner was asked to upload what it has and stop */
+  bool revoked;         /* taken back from an owner that ignored that: never re-attached */
   struct pc_range *next;
 } pc_range;
 
@@ -54,6 +59,8 @@ typedef struct pc_job {
   int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
   double elapsed, stopping_since, last_exr, last_ckpt;
   char error[256];
+  char storage_error[300];   /* the last checkpoint could not be written: retried (not stored) */
+  double storage_retry;      /* ... at this time */
   bool film_ready;
   pc_film film;
   uint8_t *wire_buf;         /* a serialized film's room, reused by the ops (merges decompress
@@ -93,6 +100,10 @@ struct pc_peer {
   double connected, last_seen;
   double rate;               /* iterations/s it reports, measured on job rate_job */
   uint64_t rate_job;         /* the job last assigned to it */
+  double mrate;              /* iterations/s its uploads on job mrate_job brought, as measured
+                                here (0: none yet): bounds the range sizes its claim earns and
+                                sets its ranges' progress deadlines */
+  uint64_t mrate_job;
   uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
   double hb_time;            /* ... at this time */
   /* upload being assembled */
@@ -128,8 +139,11 @@ struct pc_coord {
   size_t buffered, max_buffered;
   /* tunables */
   double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;
+  double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
   int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
   bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
+  bool trim_due;             /* peers went: return freed memory to the system at the next tick */
+  double last_refusal_log;   /* refused handshakes are logged at most every 10 s */
 };
 
 double pc_coord_now(void);
@@ -153,6 +167,9 @@ int pc_store_load(pc_coord *c, pc_err *e);
 /* job.c: job lifecycle: films, checkpoints, images, halting. */
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
+/* The data dir could not be written for j (a checkpoint, with op, or a range): j pauses and
+ * retries instead of failing (job.c says how). */
+void pc_job_storage_trouble(pc_coord *c, pc_job *j, pc_op *op, const char *why);
 void pc_job_cancel(pc_coord *c, pc_job *j);
 /* Stops handing out work and finishes the job with what its workers have rendered. */
 void pc_job_halt(pc_coord *c, pc_job *j);
@@ -166,6 +183,11 @@ void pc_job_free(pc_job *j);
 /* sched.c: handing out ranges and taking them back. */
 void pc_sched_request(pc_coord *c, pc_peer *p);
 void pc_sched_peer_gone(pc_coord *c, pc_peer *p);
+/* An upload of `count` iterations of r came from its owner p: progress, and a measure of p. */
+void pc_sched_progress(pc_job *j, pc_range *r, pc_peer *p, uint64_t count);
+/* Progress deadlines of the job's ranges: an overdue owner is asked to upload what it has and
+ * stop (the rest goes to others); one that ignores that too loses the range. */
+void pc_sched_check_progress(pc_coord *c, pc_job *j);
 /* Tells the workers told NoWork that there is work to ask for. */
 void pc_sched_nudge(pc_coord *c);
 pc_range *pc_sched_find_range(pc_job *j, uint64_t id);

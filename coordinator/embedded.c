@@ -14,13 +14,17 @@
 
 #include "auth.h"
 #include "serve.h"
+#include "wire_log.h"
 
 static void coord_main(void *arg) {
   pc_embedded *f = arg;
   uv_run(&f->loop, UV_RUN_DEFAULT);
 }
 
-static void worker_main(void *arg) { pc_worker_run(arg); }
+static void worker_main(void *arg) {
+  pc_err e;
+  if (pc_worker_run(arg, &e) != 0) pc_wire_log("worker: %s", e.msg); /* (one token for both: cannot happen) */
+}
 
 static void walk_close(uv_handle_t *h, void *arg) {
   (void)arg;

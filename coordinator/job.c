@@ -7,6 +7,7 @@
  * sends nothing more before that acknowledgement, so its next range's uploads would wait
  * and, once that range is rendered too, its render thread) and when the job is ending:
  * then at once. */
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -20,7 +21,9 @@
 #include "wire_film.h"
 #include "wire_log.h"
 
-typedef struct range_snap { uint64_t id, merged; bool final; } range_snap;
+typedef struct range_snap { uint64_t id, merged, split_id; bool final; } range_snap;
+
+#define STORAGE_RETRY 2.0 /* seconds between checkpoint attempts while the data dir fails */
 
 struct pc_op {
   uv_work_t work;
@@ -159,7 +162,8 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
   };
-  op->rc = pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err);
+  /* the image is written like the checkpoint: a failure is the data dir's (retried) */
+  if (pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), &op->err) != 0) op->rc = PC_EIO;
 }
 
 static void free_range_list_closed(pc_job *j) {
@@ -178,57 +182,78 @@ static void free_range_list_closed(pc_job *j) {
 static void check_finished(pc_coord *c, pc_job *j);
 static void maybe_ckpt(pc_coord *c, pc_job *j);
 
-static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
-  pc_err e = {0};
-  int rc = pc_store_begin(c, &e);
+static bool job_live(const pc_job *j) { return j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING; }
+
+/* Answers acknowledgements that no checkpoint will commit (the job ended first): a worker
+ * uploads nothing more until its last upload is answered, so silence would wedge it. */
+static void refuse_acks(pc_pending_ack **list, const char *why) {
+  while (*list) {
+    pc_pending_ack *a = *list;
+    *list = a->next;
+    if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, 0, why);
+    pc_peer_unref(a->peer);
+    free(a);
+  }
+}
+
+/* Records a checkpoint's range progress and the job in one transaction, then (only once
+ * that committed) applies it in memory, removes the previous checkpoint file and sends the
+ * acknowledgements. On a store error nothing changed: the caller retries. */
+static int commit_ckpt(pc_coord *c, pc_job *j, pc_op *op, pc_err *e) {
+  int rc = pc_store_begin(c, e);
   uint64_t added = 0;
   for (int i = 0; !rc && i < op->nsnap; i++) {
-    pc_range *r = pc_sched_find_range(j, op->snap[i].id);
+    range_snap *sn = &op->snap[i];
+    pc_range *r = pc_sched_find_range(j, sn->id);
+    sn->split_id = 0;
     if (!r) continue;
     pc_range upd = *r;
-    added += op->snap[i].merged - r->acked;
-    upd.acked = op->snap[i].merged;
-    bool split = op->snap[i].final && upd.acked < upd.count;
-    if (split) {
-      uint64_t id;
+    added += sn->merged - r->acked;
+    upd.acked = sn->merged;
+    if (sn->final && upd.acked < upd.count) {
+      /* the rest of a range its worker stopped early is a new range (while running) */
       if (j->state == PC_JOB_RUNNING)
-        rc = pc_store_insert_range(c, j->id, r->first + upd.acked, r->count - upd.acked, &id, &e);
-      if (!rc && j->state == PC_JOB_RUNNING) {
-        pc_range *nr = calloc(1, sizeof *nr);
-        if (!nr) rc = pc_errf(&e, PC_ENOMEM, "out of memory");
-        else {
-          nr->id = id;
-          nr->first = r->first + upd.acked;
-          nr->count = r->count - upd.acked;
-          nr->orphan_since = 1; /* available at once */
-          nr->next = r->next;
-          r->next = nr;
-          pc_sched_nudge(c);
-        }
-      }
+        rc = pc_store_insert_range(c, j->id, r->first + upd.acked, r->count - upd.acked, &sn->split_id, e);
       upd.count = upd.acked;
     }
-    if (!rc) rc = pc_store_update_range(c, &upd, upd.acked < upd.count, &e);
-    if (!rc) {
-      r->acked = upd.acked;
-      r->count = upd.count;
-      if (upd.acked == upd.count) r->owner = NULL;
-    }
+    if (!rc) rc = pc_store_update_range(c, &upd, upd.acked < upd.count, e);
   }
   uint64_t old_gen = j->ckpt_gen;
   pc_render_stats old_stats = j->stats;
   j->ckpt_gen = op->gen;
   j->done += added;
   j->stats = op->stats;
-  if (!rc) rc = pc_store_update_job(c, j, &e);
-  if (!rc) rc = pc_store_commit(c, &e);
+  if (!rc) rc = pc_store_update_job(c, j, e);
+  if (!rc) rc = pc_store_commit(c, e);
   if (rc) {
     pc_store_rollback(c);
     j->ckpt_gen = old_gen;
     j->done -= added;
     j->stats = old_stats;
-    pc_job_fail(c, j, e.msg);
-    return;
+    return rc;
+  }
+  for (int i = 0; i < op->nsnap; i++) {
+    range_snap *sn = &op->snap[i];
+    pc_range *r = pc_sched_find_range(j, sn->id);
+    if (!r) continue;
+    if (sn->split_id) {
+      pc_range *nr = calloc(1, sizeof *nr);
+      if (!nr) {
+        /* stored: a restarted coordinator has it; this one cannot finish the job */
+        pc_job_fail(c, j, "out of memory");
+      } else {
+        nr->id = sn->split_id;
+        nr->first = r->first + sn->merged;
+        nr->count = r->count - sn->merged;
+        nr->orphan_since = 1; /* available at once */
+        nr->next = r->next;
+        r->next = nr;
+        pc_sched_nudge(c);
+      }
+    }
+    r->acked = sn->merged;
+    if (sn->final) r->count = sn->merged < r->count ? sn->merged : r->count;
+    if (r->acked == r->count) r->owner = NULL;
   }
   if (old_gen) {
     char p[600], leaf[40];
@@ -236,9 +261,39 @@ static void commit_ckpt(pc_coord *c, pc_job *j, pc_op *op) {
     pc_job_path(c, j, leaf, p, sizeof p);
     if (unlink(p) != 0 && errno != ENOENT) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
   }
-  for (pc_pending_ack *a = op->acks; a; a = a->next)
+  double now = pc_coord_now();
+  while (op->acks) {
+    pc_pending_ack *a = op->acks;
+    op->acks = a->next;
+    /* its next upload was held back for this: the progress deadlines restart */
+    for (pc_range *r = j->ranges; r; r = r->next)
+      if (r->owner == a->peer && r->progress_at > 0 && r->progress_at < now) r->progress_at = now;
     if (!a->peer->closed) pc_peer_send_ack(a->peer, a->range_id, a->acked_end, NULL);
+    pc_peer_unref(a->peer);
+    free(a);
+  }
   free_range_list_closed(j);
+  return 0;
+}
+
+/* A checkpoint could not be written or recorded (a full or failing disk): the job keeps
+ * what is merged in memory and its last good checkpoint on disk, its workers keep their
+ * unacknowledged uploads (nothing more is taken from them meanwhile), and the checkpoint is
+ * tried again every few seconds; status shows why. The store still says running, so a
+ * restart resumes from the last good checkpoint and the workers send the rest again. */
+void pc_job_storage_trouble(pc_coord *c, pc_job *j, pc_op *op, const char *why) {
+  if (!j->storage_error[0]) pc_wire_log("job %llu: paused until the data dir can be written: %s", (unsigned long long)j->id, why);
+  snprintf(j->storage_error, sizeof j->storage_error, "waiting for the data dir: %.250s", why);
+  j->storage_retry = pc_coord_now() + STORAGE_RETRY;
+  j->dirty = true;
+  if (op) {
+    pc_pending_ack **tail = &op->acks;
+    while (*tail) tail = &(*tail)->next;
+    *tail = j->acks;
+    j->acks = op->acks;
+    op->acks = NULL;
+  }
+  (void)c;
 }
 
 static void op_after(uv_work_t *w, int status) {
@@ -261,6 +316,9 @@ static void op_after(uv_work_t *w, int status) {
         r->orphan_since = 1;
         pc_sched_nudge(c);
       }
+    } else if (r && !job_live(j)) {
+      /* merged into a film nobody will write: the job ended while it ran */
+      if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, "job is not running");
     } else if (r) {
       r->merged += op->count;
       r->final = r->final || op->final;
@@ -283,21 +341,24 @@ static void op_after(uv_work_t *w, int status) {
     free(op->buf);
     pc_coord_buffered(c, -(long long)op->len);
   } else {
-    if (op->rc) pc_job_fail(c, j, op->err.msg);
-    else {
+    pc_err e = {0};
+    bool stored = !op->rc && commit_ckpt(c, j, op, &e) == 0;
+    if (!stored && !job_live(j)) {
+      /* the job ended while it ran: its acknowledgements are refused below */
+    } else if (!stored && (!op->rc || op->rc == PC_EIO)) {
+      pc_job_storage_trouble(c, j, op, op->rc ? op->err.msg : e.msg);
+    } else if (!stored) {
+      pc_job_fail(c, j, op->err.msg);
+    } else {
       if (op->write_exr) j->last_exr = pc_coord_now();
       j->ckpts++;
-      commit_ckpt(c, j, op);
+      if (j->storage_error[0]) pc_wire_log("job %llu: the data dir is writable again", (unsigned long long)j->id);
+      j->storage_error[0] = 0;
     }
-    while (op->acks) {
-      pc_pending_ack *a = op->acks;
-      op->acks = a->next;
-      pc_peer_unref(a->peer);
-      free(a);
-    }
+    refuse_acks(&op->acks, "job is not running"); /* what a checkpoint of an ended job did not commit */
     free(op->snap);
     /* (an upload that came after all, or a range left open, makes it a checkpoint like others) */
-    bool done = j->finishing && !op->rc && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
+    bool done = j->finishing && !op->rc && !j->storage_error[0] && j->state != PC_JOB_FAILED && !j->ranges && !j->ops && !j->dirty;
     j->finishing = false;
     if (done) {
       j->state = PC_JOB_DONE;
@@ -410,6 +471,7 @@ static bool closes_all(const pc_job *j) {
 static void maybe_ckpt(pc_coord *c, pc_job *j) {
   double now = pc_coord_now();
   if ((j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) || !j->dirty || j->busy || j->ops) return;
+  if (j->storage_error[0] && now < j->storage_retry) return;
   if (now - j->last_ckpt < c->ckpt_interval && !ending(j) && !j->ack_soon) return;
   bool last = closes_all(j);
   j->finishing = last;
@@ -425,6 +487,23 @@ static void check_finished(pc_coord *c, pc_job *j) {
   queue_ckpt(c, j, true);
 }
 
+/* Removes the checkpoint files of j but its current one: a kill between writing a checkpoint
+ * and recording it, or between recording it and removing the one before, leaves them. */
+static void remove_stale_ckpts(pc_coord *c, pc_job *j, const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return;
+  char keep[40];
+  snprintf(keep, sizeof keep, "ckpt.%llu", (unsigned long long)j->ckpt_gen);
+  for (struct dirent *de; (de = readdir(d)) != NULL;) {
+    if (strncmp(de->d_name, "ckpt.", 5) != 0 || (j->ckpt_gen && strcmp(de->d_name, keep) == 0)) continue;
+    char p[900];
+    snprintf(p, sizeof p, "%s/%s", dir, de->d_name);
+    if (unlink(p) != 0) pc_wire_log("job %llu: cannot remove %s: %s", (unsigned long long)j->id, p, strerror(errno));
+  }
+  closedir(d);
+  (void)c;
+}
+
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   if (j->film_ready) return 0;
   char dir[512];
@@ -432,6 +511,7 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
   pc_job_path(c, j, NULL, dir, sizeof dir);
   if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
+  remove_stale_ckpts(c, j, dir);
   int rc = pc_film_init(&j->film, j->set.width, j->set.height, j->set.strategy_layers, e);
   if (rc) return rc;
   if (j->ckpt_gen) {
@@ -467,6 +547,8 @@ void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
   snprintf(j->error, sizeof j->error, "%s", why);
   j->state = PC_JOB_FAILED;
   j->finishing = false;
+  j->storage_error[0] = 0;
+  refuse_acks(&j->acks, "job failed");
   for (pc_range *r = j->ranges; r; r = r->next)
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   pc_err e;
@@ -479,6 +561,8 @@ void pc_job_cancel(pc_coord *c, pc_job *j) {
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   j->state = PC_JOB_CANCELLED;
   j->finishing = false;
+  j->storage_error[0] = 0;
+  refuse_acks(&j->acks, "job cancelled");
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
   pc_wire_log("job %llu: cancelled", (unsigned long long)j->id);
@@ -500,7 +584,7 @@ void pc_job_halt(pc_coord *c, pc_job *j) {
 void pc_job_tick(pc_coord *c, pc_job *j, double dt) {
   if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) return;
   double now = pc_coord_now();
-  if (j->state == PC_JOB_RUNNING) {
+  if (j->state == PC_JOB_RUNNING && !j->storage_error[0]) { /* paused time is not render time */
     j->elapsed += dt;
     if (j->halt_seconds > 0 && j->elapsed >= j->halt_seconds) pc_job_halt(c, j);
   }

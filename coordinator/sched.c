@@ -35,6 +35,8 @@ static void send_assign(pc_coord *c, pc_peer *p, pc_job *j, pc_range *r) {
   env.assign = &a;
   r->owner = p;
   r->orphan_since = 0;
+  r->progress_at = r->measured_at = pc_coord_now();
+  r->stop_asked = r->revoked = false;
   p->idle = false;
   /* the worker measures its rate afresh on a new job; until it reports, it is unknown */
   if (p->rate_job != j->id) p->rate = 0;
@@ -87,8 +89,17 @@ static const pc_job *job_of(const pc_coord *c, const pc_peer *q) {
   return NULL;
 }
 
+/* The rate a worker's ranges on j are sized by: what it claims, trusted up to 4x what its
+ * uploads on j brought (so a false claim earns no more than a few seconds of real work); a
+ * worker not measured on j yet gets a probe. */
+static double trusted_rate(const pc_peer *q, const pc_job *j) {
+  if (q->mrate_job != j->id || !(q->mrate > 0)) return 0;
+  double claimed = q->rate_job == j->id ? q->rate : 0;
+  return claimed > 0 && claimed < 4 * q->mrate ? claimed : claimed > 0 ? 4 * q->mrate : q->mrate;
+}
+
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
-  pc_range_size_in in = {.rate = p->rate_job == j->id ? p->rate : 0, .range_seconds = c->range_seconds};
+  pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds};
   if (j->halt_iterations) {
     in.bounded = true;
     in.unassigned = j->halt_iterations - j->next_iter;
@@ -99,7 +110,8 @@ static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
     for (const pc_peer *q = c->peers; q; q = q->next) {
       if (q == p || !q->authed || q->role != PCBPT__ROLE__ROLE_WORKER) continue;
       const pc_job *qj = job_of(c, q);
-      if (!qj || qj == j) in.others_rate += q->rate_job == j->id && q->rate > 0 ? q->rate : in.rate;
+      double qr = trusted_rate(q, j);
+      if (!qj || qj == j) in.others_rate += qr > 0 ? qr : in.rate;
     }
   }
   return pc_range_size(&in);
@@ -113,7 +125,8 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
     if (r->owner || r->merging || r->final || r->merged != r->acked || r->acked == r->count) continue;
     if (r->orphan_since == 0 || now - r->orphan_since < c->orphan_grace) continue;
     pc_range *g = claim_orphan(c, j, r, &e);
-    if (!g) { pc_job_fail(c, j, e.msg); return false; }
+    if (!g && e.code == PC_ENOMEM) { pc_job_fail(c, j, e.msg); return false; }
+    if (!g) { pc_job_storage_trouble(c, j, NULL, e.msg); return false; }
     send_assign(c, p, j, g);
     return true;
   }
@@ -129,7 +142,8 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
   if (!r) {
     pc_store_rollback(c);
     j->next_iter -= n;
-    pc_job_fail(c, j, rc ? e.msg : "out of memory");
+    if (rc) pc_job_storage_trouble(c, j, NULL, e.msg);
+    else pc_job_fail(c, j, "out of memory");
     return false;
   }
   r->id = id;
@@ -185,4 +199,64 @@ void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {
                     (unsigned long long)j->id, (unsigned long long)r->id, p->name, (unsigned long long)r->acked,
                     (unsigned long long)r->count);
       }
+}
+
+void pc_sched_progress(pc_job *j, pc_range *r, pc_peer *p, uint64_t count) {
+  double now = pc_coord_now(), dt = now - r->measured_at;
+  if (p->mrate_job != j->id) {
+    p->mrate = 0;
+    p->mrate_job = j->id;
+  }
+  if (count && r->measured_at > 0 && dt > 0) {
+    double inst = (double)count / dt;
+    p->mrate = p->mrate > 0 ? 0.5 * (p->mrate + inst) : inst;
+  }
+  r->progress_at = r->measured_at = now;
+  r->stop_asked = false;
+}
+
+/* p uploads nothing more while an upload of it waits for its acknowledgement (a checkpoint,
+ * or the data dir coming back): that time is ours, not its. */
+static bool waits_for_ack(const pc_job *j, const pc_peer *p) {
+  for (const pc_range *r = j->ranges; r; r = r->next)
+    if (r->owner == p && (r->merging || r->merged > r->acked)) return true;
+  return false;
+}
+
+/* Seconds r's owner may go without an upload: a few of its upload intervals, each at least
+ * one iteration at its measured rate; a worker not measured on the job (its first range is
+ * a probe of one iteration, after the scene loads) gets --progress-timeout. */
+static double allowance(const pc_coord *c, const pc_job *j, const pc_peer *p) {
+  if (p->mrate_job != j->id || !(p->mrate > 0)) return c->progress_timeout;
+  return 3 * (PC_WIRE_UPLOAD_INTERVAL + 1 / p->mrate);
+}
+
+void pc_sched_check_progress(pc_coord *c, pc_job *j) {
+  if (j->state != PC_JOB_RUNNING || j->storage_error[0]) return; /* a stopping job has its own deadline */
+  double now = pc_coord_now();
+  for (pc_range *r = j->ranges; r; r = r->next) {
+    pc_peer *p = r->owner;
+    /* an upload arriving, or held back by our own back-pressure, is not overdue */
+    if (!p || p->closed || r->final || p->paused || p->up_next > 0 || r->progress_at <= 0 || waits_for_ack(j, p)) continue;
+    double idle = now - r->progress_at;
+    if (idle <= allowance(c, j, p)) continue;
+    if (!r->stop_asked) {
+      pc_wire_log("job %llu: range %llu overdue on %s (no upload for %.1f s): asking it to upload what it has and stop",
+                  (unsigned long long)j->id, (unsigned long long)r->id, p->name, idle);
+      r->stop_asked = true;
+      r->progress_at = now;
+      p->mrate *= 0.5; /* its deadline was too short, so was its range */
+      pc_peer_send_cancel(p, j->id, r->id, true);
+      continue;
+    }
+    pc_wire_log("job %llu: range %llu taken back from %s (no upload for %.1f s after the request to stop)",
+                (unsigned long long)j->id, (unsigned long long)r->id, p->name, idle);
+    pc_peer_send_cancel(p, j->id, r->id, false);
+    r->owner = NULL;
+    r->orphan_since = 1; /* to another worker at once, split at what is acknowledged */
+    r->stop_asked = false;
+    r->revoked = true;
+    p->mrate = 0;        /* it gets probes until its uploads measure it again */
+    pc_sched_nudge(c);
+  }
 }

@@ -4,6 +4,7 @@
  * Any protocol violation closes that peer's connection with a logged reason only. */
 #include <errno.h>
 #include <fcntl.h>
+#include <malloc.h>
 #include <sodium.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +24,11 @@
 
 #define HANDSHAKE_TIMEOUT 10.0
 #define MAX_BUFFERED ((size_t)64 << 20)
+/* Before authentication a peer may only say hello and answer the challenge (a few hundred
+ * bytes): its frames are bounded by HANDSHAKE_MAX_FRAME and at most MAX_HANDSHAKES such
+ * peers are connected at once, so strangers cannot make the coordinator hold memory. */
+#define HANDSHAKE_MAX_FRAME 4096
+#define MAX_HANDSHAKES 128
 
 double pc_coord_now(void) {
   struct timespec ts;
@@ -157,6 +163,7 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
     return;
   }
   p->authed = true;
+  p->conn.dec.max = PC_WIRE_MAX_FRAME; /* the handshake's bound is lifted for the peer's work */
   r.ok = true;
   r.reason = "";
   pc_conn_send(&p->conn, &env);
@@ -177,9 +184,10 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_job *j = pc_coord_job(c, h->job_id);
   pc_range *r = j && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) ? pc_sched_find_range(j, h->range_id) : NULL;
   if (r && r->owner == p) return;
-  if (r && !r->owner && !r->final && r->acked < r->count) {
+  if (r && !r->owner && !r->final && !r->revoked && r->acked < r->count) {
     r->owner = p;
     r->orphan_since = 0;
+    r->progress_at = p->last_seen; /* (measured_at stays 0: no measure across a re-attach) */
     pc_wire_log("job %llu: range %llu re-attached to %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name);
     if (j->state == PC_JOB_STOPPING) pc_peer_send_cancel(p, j->id, r->id, true);
     return;
@@ -274,7 +282,15 @@ static void on_bundle_request(pc_peer *p, const Pcbpt__BundleRequest *b) {
   if (b->hash.len != PC_BUNDLE_HASH) { drop(p, "bundle request with a %zu-byte hash", b->hash.len); return; }
   pc_bundle_hex(b->hash.data, hex);
   snprintf(path, sizeof path, "%s/bundles/%s", p->coord->data_dir, hex);
-  if (stream_file(p, path, true, b->hash.data) != 0) drop(p, "bundle %.16s... unavailable or a transfer is already running", hex);
+  if (p->out.fd >= 0) { drop(p, "bundle %.16s... requested while a transfer is running", hex); return; }
+  if (stream_file(p, path, true, b->hash.data) == 0) return;
+  /* gone from the data dir: no worker can render the jobs on it (dropping the worker would
+   * only have it ask again) */
+  char why[200];
+  snprintf(why, sizeof why, "scene bundle %.16s... cannot be read from the data dir: %s", hex, strerror(errno));
+  for (pc_job *j = p->coord->jobs; j; j = j->next)
+    if ((j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING) && memcmp(j->bundle, b->hash.data, PC_BUNDLE_HASH) == 0)
+      pc_job_fail(p->coord, j, why);
 }
 
 static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
@@ -344,8 +360,8 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   if (p->up_count == 0) {
     /* a halted worker with nothing rendered since its last upload: the range ends at what is
      * merged, now rather than when the stopping job gives up waiting for it */
-    pc_range *r = j && j->state == PC_JOB_STOPPING ? pc_sched_find_range(j, p->up_range) : NULL;
-    if (p->up_final && r && r->owner == p && !r->merging && !r->final) {
+    pc_range *r = j && (j->state == PC_JOB_STOPPING || j->state == PC_JOB_RUNNING) ? pc_sched_find_range(j, p->up_range) : NULL;
+    if (p->up_final && r && r->owner == p && !r->merging && !r->final && (j->state == PC_JOB_STOPPING || r->stop_asked)) {
       r->final = true;
       j->dirty = true;
     }
@@ -359,9 +375,13 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   if (!j || !j->film_ready || (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING)) refuse = "job is not running";
   else if (!(r = pc_sched_find_range(j, p->up_range))) refuse = "range is closed or unknown";
   else if (r->owner && r->owner != p) refuse = "range was handed to another worker";
+  else if (!r->owner && r->revoked) refuse = "range was taken back (no upload in time)";
   else if (r->merging) refuse = "an upload for this range is still being merged";
+  /* in the range, without an overflow of first + count */
+  if (!refuse && (p->up_count == 0 || p->up_first < r->first || p->up_first - r->first > r->count ||
+                  p->up_count > r->count - (p->up_first - r->first)))
+    refuse = "iterations outside the range";
   uint64_t end = p->up_first + p->up_count;
-  if (!refuse && (p->up_count == 0 || p->up_first < r->first || end > r->first + r->count)) refuse = "iterations outside the range";
   if (refuse) {
     pc_wire_log("job %llu: refused upload from %s for range %llu: %s", (unsigned long long)p->up_job, p->conn.peer,
                 (unsigned long long)p->up_range, refuse);
@@ -395,6 +415,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     upload_reset(p);
     return;
   }
+  pc_sched_progress(j, r, p, p->up_count);
   /* the bytes stay accounted in c->buffered until the merge frees them */
   uint8_t *buf = p->up_buf;
   size_t len = p->up_len;
@@ -534,7 +555,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_iterations = j->halt_iterations;
     s->halt_seconds = j->halt_seconds;
     s->elapsed = j->elapsed;
-    for (pc_range *r = j->ranges; r; r = r->next) {
+    for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
       bool seen = false;
       for (pc_range *q = j->ranges; q != r && !seen; q = q->next) seen = q->owner == r->owner;
@@ -547,7 +568,7 @@ static void send_status(pc_peer *p, uint64_t only) {
       double eta_t = j->halt_seconds > 0 ? j->halt_seconds - j->elapsed : -1;
       s->eta_seconds = eta_i >= 0 && (eta_t < 0 || eta_i < eta_t) ? eta_i : eta_t;
     }
-    s->error = j->error;
+    s->error = j->storage_error[0] ? j->storage_error : j->error;
     pc_job_path(c, j, "image.exr", images[k], sizeof images[k]);
     s->image = access(images[k], R_OK) == 0 ? images[k] : "";
     jp[k] = s;
@@ -565,7 +586,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     w->iterations_per_second = q->rate;
     w->address = q->conn.peer;
     for (pc_job *j = c->jobs; j; j = j->next)
-      for (pc_range *r = j->ranges; r; r = r->next)
+      for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next)
         if (r->owner == q) { w->job_id = j->id; w->range_id = r->id; }
     wp[k++] = w;
   }
@@ -584,7 +605,12 @@ static void on_fetch(pc_peer *p, uint64_t id) {
   char path[600];
   if (!j) { send_error(p, "fetch: no such job"); return; }
   pc_job_path(p->coord, j, "image.exr", path, sizeof path);
-  if (stream_file(p, path, false, NULL) != 0) send_error(p, "fetch: the job has no image yet");
+  if (stream_file(p, path, false, NULL) != 0) {
+    char why[120];
+    snprintf(why, sizeof why, "fetch: job %llu is %s and has no image%s", (unsigned long long)j->id, pc_job_state_name(j->state),
+             j->state == PC_JOB_RUNNING || j->state == PC_JOB_QUEUED || j->state == PC_JOB_STOPPING ? " yet" : "");
+    send_error(p, why);
+  }
 }
 
 /* ---- dispatch ---- */
@@ -625,6 +651,13 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
     case PCBPT__ENVELOPE__MSG_CANCEL_REQUEST: {
       pc_job *j = pc_coord_job(p->coord, env->cancel_request->job_id);
       if (!j) { send_error(p, "cancel: no such job"); return; }
+      bool ended = j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED;
+      if (ended && !env->cancel_request->finish) { /* (finishing an ended job is a no-op: a race) */
+        char why[80];
+        snprintf(why, sizeof why, "cancel: job %llu is %s already", (unsigned long long)j->id, pc_job_state_name(j->state));
+        send_error(p, why);
+        return;
+      }
       if (env->cancel_request->finish) pc_job_halt(p->coord, j);
       else pc_job_cancel(p->coord, j);
       send_status(p, j->id);
@@ -651,16 +684,20 @@ static void on_closed(pc_conn *conn) {
   if (p->bun_fd >= 0) close(p->bun_fd);
   if (p->bun_tmp[0]) unlink(p->bun_tmp);
   if (p->out.fd >= 0) close(p->out.fd);
+  /* a burst of peers (or an upload) freed: give the memory back at the next tick */
+  c->trim_due = true;
   pc_peer_unref(p);
 }
 
 static void on_connection(uv_stream_t *server, int status) {
   pc_coord *c = server->data;
   if (status < 0) { pc_wire_log("accept: %s", uv_strerror(status)); return; }
+  int handshakes = 0;
+  for (pc_peer *q = c->peers; q; q = q->next) handshakes += !q->authed && !q->conn.closing;
   pc_peer *p = calloc(1, sizeof *p);
   if (!p) { pc_wire_log("accept: out of memory"); return; }
   pc_conn_cbs cbs = {.on_msg = on_msg, .on_drain = on_drain, .on_closed = on_closed};
-  int r = pc_conn_init(c->loop, &p->conn, &cbs, p, PC_WIRE_MAX_FRAME);
+  int r = pc_conn_init(c->loop, &p->conn, &cbs, p, HANDSHAKE_MAX_FRAME);
   if (r) { pc_wire_log("accept: %s", uv_strerror(r)); free(p); return; }
   p->coord = c;
   p->refs = 1;
@@ -669,14 +706,44 @@ static void on_connection(uv_stream_t *server, int status) {
   p->connected = p->last_seen = pc_coord_now();
   p->next = c->peers;
   c->peers = p;
-  if ((r = uv_accept(server, (uv_stream_t *)&p->conn.tcp)) != 0 || (r = pc_conn_start(&p->conn)) != 0)
+  if ((r = uv_accept(server, (uv_stream_t *)&p->conn.tcp)) != 0 || (r = pc_conn_start(&p->conn)) != 0) {
     pc_conn_close(&p->conn, uv_strerror(r));
+  } else if (handshakes >= MAX_HANDSHAKES) {
+    double now = pc_coord_now();
+    if (now - c->last_refusal_log > 10) {
+      pc_wire_log("%s: refused: %d connections are authenticating already (logged once per 10 s)", p->conn.peer, handshakes);
+      c->last_refusal_log = now;
+    }
+    pc_conn_close(&p->conn, NULL);
+  }
+}
+
+/* The loop did not run for `by` seconds (the process was stopped, or the machine slept):
+ * nothing was read in that time, so the peers' silence is ours. Every time a timeout is
+ * judged from moves forward by as much, and the peers' pending input is read before it is
+ * judged again. */
+static void loop_stalled(pc_coord *c, double by) {
+  pc_wire_log("the loop did not run for %.1f s: timeouts restart from now", by);
+  for (pc_peer *p = c->peers; p; p = p->next) {
+    p->connected += by;
+    p->last_seen += by;
+    p->hb_time += by;
+  }
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    if (j->stopping_since > 0) j->stopping_since += by;
+    for (pc_range *r = j->ranges; r; r = r->next) {
+      if (r->orphan_since > 1) r->orphan_since += by; /* 1: free at once */
+      if (r->progress_at > 0) r->progress_at += by;
+      if (r->measured_at > 0) r->measured_at += by;
+    }
+  }
 }
 
 static void on_tick(uv_timer_t *t) {
   pc_coord *c = t->data;
   double now = pc_coord_now(), dt = now - c->last_tick;
   c->last_tick = now;
+  if (dt > 1.0 + 2e-3 * c->tick_ms) loop_stalled(c, dt - 1e-3 * c->tick_ms);
   for (pc_peer *p = c->peers; p; p = p->next) {
     if (p->conn.closing || p->paused) continue; /* a paused peer is silent because we do not read */
     if (!p->authed && now - p->connected > HANDSHAKE_TIMEOUT) pc_conn_close(&p->conn, "no authentication within 10 s");
@@ -686,7 +753,14 @@ static void on_tick(uv_timer_t *t) {
       pc_conn_close(&p->conn, why);
     }
   }
-  for (pc_job *j = c->jobs; j; j = j->next) pc_job_tick(c, j, dt);
+  for (pc_job *j = c->jobs; j; j = j->next) {
+    pc_sched_check_progress(c, j);
+    pc_job_tick(c, j, dt);
+  }
+  if (c->trim_due) {
+    c->trim_due = false;
+    malloc_trim(0);
+  }
 }
 
 static void close_handle(uv_handle_t *h) {
@@ -725,6 +799,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
   if (!c->ckpt_interval) c->ckpt_interval = 1;
   if (!c->exr_interval) c->exr_interval = 10;
   if (!c->tick_ms) c->tick_ms = 250;
+  if (!c->progress_timeout) c->progress_timeout = 60;
   if (!c->max_buffered) c->max_buffered = MAX_BUFFERED;
   if ((size_t)snprintf(c->data_dir, sizeof c->data_dir, "%s", data_dir) >= sizeof c->data_dir)
     return pc_errf(e, PC_ELIMIT, "--data-dir: path too long");
@@ -789,6 +864,10 @@ static const char serve_help[] =
     "  --heartbeat-timeout S  drop a worker silent for S seconds (10)\n"
     "  --range-seconds S      target seconds of work per range (3)\n"
     "  --exr-interval S       seconds between image writes of a running job (10)\n"
+    "  --progress-timeout S   seconds a worker not yet measured on a job may hold a range without\n"
+    "                         uploading (60); a measured one gets 3 upload intervals of its rate.\n"
+    "                         An overdue worker is asked to upload what it has and stop; one that\n"
+    "                         ignores that loses the range to others\n"
     "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
 
 int pc_cmd_serve(int argc, char **argv) {
@@ -800,7 +879,8 @@ int pc_cmd_serve(int argc, char **argv) {
     double *num = strcmp(a, "--orphan-grace") == 0 ? &c.orphan_grace
                   : strcmp(a, "--heartbeat-timeout") == 0 ? &c.heartbeat_timeout
                   : strcmp(a, "--range-seconds") == 0 ? &c.range_seconds
-                  : strcmp(a, "--exr-interval") == 0 ? &c.exr_interval : NULL;
+                  : strcmp(a, "--exr-interval") == 0 ? &c.exr_interval
+                  : strcmp(a, "--progress-timeout") == 0 ? &c.progress_timeout : NULL;
     if (strcmp(a, "--help") == 0) { fputs(serve_help, stdout); return 0; }
     if (i + 1 >= argc) { fprintf(stderr, "pcbpt-coord serve: %s needs a value (see --help)\n", a); return 2; }
     if (num) {

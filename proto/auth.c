@@ -14,7 +14,9 @@ int pc_auth_init(pc_err *e) {
 }
 
 int pc_auth_load_token(const char *path, uint8_t key[PC_AUTH_KEY], pc_err *e) {
-  int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  /* a symlink is followed (Kubernetes mounts secrets as links): the checks below are on the
+   * file opened, so a link cannot launder a group-readable token */
+  int fd = open(path, O_RDONLY | O_CLOEXEC);
   if (fd < 0) return pc_errf(e, PC_EIO, "%s: cannot open token file: %s", path, strerror(errno));
   struct stat st;
   if (fstat(fd, &st) != 0) {

@@ -2,7 +2,6 @@
 #include "bundle.h"
 
 #include <errno.h>
-#include <expat.h>
 #include <fcntl.h>
 #include <ftw.h>
 #include <libgen.h>
@@ -17,14 +16,6 @@
 #include "pcbpt.pb-c.h"
 #include "file_read.h"
 #include "wire_film.h"
-
-typedef struct refs {
-  char **paths;
-  int n;
-  int error;       /* first problem found while parsing, reported after */
-  char bad[512];
-  XML_Parser parser;
-} refs;
 
 static int read_file(const char *path, uint8_t **out, size_t *n, pc_err *e) {
   int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -73,41 +64,6 @@ int pc_bundle_path_ok(const char *rel) {
   }
 }
 
-static void XMLCALL on_start(void *ud, const XML_Char *el, const XML_Char **attr) {
-  refs *r = ud;
-  if (r->error || strcmp(el, "string") != 0) return;
-  const char *name = NULL, *value = NULL;
-  for (int i = 0; attr[i]; i += 2) {
-    if (strcmp(attr[i], "name") == 0) name = attr[i + 1];
-    else if (strcmp(attr[i], "value") == 0) value = attr[i + 1];
-  }
-  if (!name || !value || strcmp(name, "filename") != 0) return;
-  if (!pc_bundle_path_ok(value)) {
-    r->error = PC_EINVAL;
-    snprintf(r->bad, sizeof r->bad, "line %lu: referenced file '%.200s' is not a relative path inside the scene directory",
-             (unsigned long)XML_GetCurrentLineNumber(r->parser), value);
-    return;
-  }
-  for (int i = 0; i < r->n; i++)
-    if (strcmp(r->paths[i], value) == 0) return;
-  if (r->n >= PC_BUNDLE_MAX_FILES) {
-    r->error = PC_ELIMIT;
-    snprintf(r->bad, sizeof r->bad, "more than %d referenced files", PC_BUNDLE_MAX_FILES);
-    return;
-  }
-  char **np = realloc(r->paths, sizeof *np * (size_t)(r->n + 1));
-  char *dup = strdup(value);
-  if (!np || !dup) {
-    if (np) r->paths = np;
-    free(dup);
-    r->error = PC_ENOMEM;
-    snprintf(r->bad, sizeof r->bad, "out of memory");
-    return;
-  }
-  r->paths = np;
-  r->paths[r->n++] = dup;
-}
-
 int pc_bundle_hash(const uint8_t *blob, size_t n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
   if (crypto_generichash(hash, PC_BUNDLE_HASH, blob, n, NULL, 0) != 0) return pc_errf(e, PC_EIO, "bundle: hashing failed");
   return 0;
@@ -125,61 +81,35 @@ int pc_bundle_unhex(const char *hex, uint8_t hash[PC_BUNDLE_HASH]) {
   return 0;
 }
 
-int pc_bundle_create(const char *scene_path, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
-  uint8_t *xml = NULL;
-  size_t xml_n = 0;
-  int rc = read_file(scene_path, &xml, &xml_n, e);
-  if (rc) return rc;
-  refs r = {0};
-  r.parser = XML_ParserCreate(NULL);
-  if (!r.parser) { free(xml); return pc_errf(e, PC_ENOMEM, "%s: cannot create an XML parser", scene_path); }
-  XML_SetUserData(r.parser, &r);
-  XML_SetStartElementHandler(r.parser, on_start);
-  if (xml_n > (size_t)INT32_MAX || XML_Parse(r.parser, (const char *)xml, (int)xml_n, 1) == XML_STATUS_ERROR) {
-    rc = pc_errf(e, PC_EPARSE, "%s:%lu: %s", scene_path, (unsigned long)XML_GetCurrentLineNumber(r.parser),
-                 XML_ErrorString(XML_GetErrorCode(r.parser)));
-  } else if (r.error) {
-    rc = pc_errf(e, r.error, "%s: %s", scene_path, r.bad);
-  }
-  XML_ParserFree(r.parser);
-
-  char *pathcopy = strdup(scene_path), *pathcopy2 = strdup(scene_path);
-  Pcbpt__BundleFile *files = calloc((size_t)r.n + 1, sizeof *files);
-  Pcbpt__BundleFile **fp = calloc((size_t)r.n + 1, sizeof *fp);
-  if (!rc && (!pathcopy || !pathcopy2 || !files || !fp)) rc = pc_errf(e, PC_ENOMEM, "bundle: out of memory");
-  int nfiles = 0;
-  size_t total = xml_n;
-  if (!rc) {
-    const char *dir = dirname(pathcopy), *base = basename(pathcopy2);
-    pcbpt__bundle_file__init(&files[0]);
-    files[0].path = (char *)base;
-    files[0].data.data = xml;
-    files[0].data.len = xml_n;
-    fp[0] = &files[0];
-    nfiles = 1;
-    for (int i = 0; i < r.n && !rc; i++) {
-      if (strcmp(r.paths[i], base) == 0) continue;
-      char full[PATH_MAX];
-      if ((size_t)snprintf(full, sizeof full, "%s/%s", dir, r.paths[i]) >= sizeof full) {
-        rc = pc_errf(e, PC_ELIMIT, "%s: path of '%s' too long", scene_path, r.paths[i]);
-        break;
-      }
-      uint8_t *d;
-      size_t dn;
-      if ((rc = read_file(full, &d, &dn, e)) != 0) break;
-      total += dn;
-      pcbpt__bundle_file__init(&files[nfiles]);
-      files[nfiles].path = r.paths[i];
-      files[nfiles].data.data = d;
-      files[nfiles].data.len = dn;
-      fp[nfiles] = &files[nfiles];
-      nfiles++;
-      if (total > PC_BUNDLE_MAX) rc = pc_errf(e, PC_ELIMIT, "%s: scene and its files exceed %zu bytes", scene_path, PC_BUNDLE_MAX);
+int pc_bundle_create(const char *const *files, const char *const *names, int nfiles, uint8_t **blob, size_t *n,
+                     uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
+  if (nfiles < 1) return pc_errf(e, PC_EINVAL, "bundle: no scene file");
+  if (nfiles > PC_BUNDLE_MAX_FILES) return pc_errf(e, PC_ELIMIT, "bundle: more than %d files", PC_BUNDLE_MAX_FILES);
+  Pcbpt__BundleFile *bf = calloc((size_t)nfiles, sizeof *bf);
+  Pcbpt__BundleFile **fp = calloc((size_t)nfiles, sizeof *fp);
+  int rc = bf && fp ? 0 : pc_errf(e, PC_ENOMEM, "bundle: out of memory");
+  int done = 0;
+  size_t total = 0;
+  for (; !rc && done < nfiles; done++) {
+    const char *rel = names[done];
+    if (!pc_bundle_path_ok(rel)) {
+      rc = pc_errf(e, PC_EINVAL, "bundle: '%.200s' is not a relative path inside the scene's folder", rel);
+      break;
     }
+    uint8_t *d = NULL;
+    size_t dn = 0;
+    if ((rc = read_file(files[done], &d, &dn, e)) != 0) break;
+    pcbpt__bundle_file__init(&bf[done]);
+    bf[done].path = (char *)rel;
+    bf[done].data.data = d;
+    bf[done].data.len = dn;
+    fp[done] = &bf[done];
+    total += dn;
+    if (total > PC_BUNDLE_MAX) rc = pc_errf(e, PC_ELIMIT, "%s: scene and its files exceed %zu bytes", files[0], PC_BUNDLE_MAX);
   }
   if (!rc) {
     Pcbpt__Bundle b = PCBPT__BUNDLE__INIT;
-    b.scene = files[0].path;
+    b.scene = bf[0].path;
     b.n_files = (size_t)nfiles;
     b.files = fp;
     size_t len = pcbpt__bundle__get_packed_size(&b);
@@ -192,14 +122,9 @@ int pc_bundle_create(const char *scene_path, uint8_t **blob, size_t *n, uint8_t 
       if (!rc && (rc = pc_bundle_hash(*blob, *n, hash, e)) != 0) free(*blob);
     }
   }
-  for (int i = 1; i < nfiles; i++) free(files[i].data.data);
-  free(files);
+  for (int i = 0; i < done && bf; i++) free(bf[i].data.data);
+  free(bf);
   free(fp);
-  free(pathcopy);
-  free(pathcopy2);
-  free(xml);
-  for (int i = 0; i < r.n; i++) free(r.paths[i]);
-  free(r.paths);
   return rc;
 }
 
@@ -220,6 +145,12 @@ static int make_parents(const char *root, const char *rel, pc_err *e) {
     *c = '/';
   }
   return 0;
+}
+
+int pc_bundle_dir(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], char *out, size_t out_size) {
+  char hex[2 * PC_BUNDLE_HASH + 1];
+  pc_bundle_hex(hash, hex);
+  return (size_t)snprintf(out, out_size, "%s/%s", cache_dir, hex) < out_size ? 0 : PC_ELIMIT;
 }
 
 int pc_bundle_lookup(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], char *scene_out, size_t scene_out_size) {

@@ -1,5 +1,5 @@
-/* bundle.h: content-addressed scene bundles. A bundle is the scene XML and every file it
- * references (found by parsing the XML for `filename` parameters), serialized as a protobuf
+/* bundle.h: content-addressed scene bundles. A bundle is the scene XML and every file the
+ * scene loader read for it (included XML, meshes, images), serialized as a protobuf
  * Bundle and zstd-compressed; its address is the BLAKE2b-256 hash of those bytes. Unpacking
  * verifies the hash and writes only under the cache directory (no absolute paths, no "..",
  * no symlink following), so a hostile bundle cannot escape it. */
@@ -16,8 +16,13 @@
 #define PC_BUNDLE_MAX_FILES 4096
 #define PC_BUNDLE_MAX_PATH 1024
 
-/* Collects scene_path and its referenced files into a malloc'd blob with its hash. */
-int pc_bundle_create(const char *scene_path, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
+/* Packs files (real paths, read) under names (relative paths; files[0] is the scene), as
+ * pc_scene's files and file_names list them, into a malloc'd blob with its hash. Unpacked, the
+ * scene's root folder becomes the bundle's folder (pc_bundle_dir). */
+int pc_bundle_create(const char *const *files, const char *const *names, int nfiles, uint8_t **blob, size_t *n,
+                     uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
+/* The folder a bundle unpacks into (the scene's root folder there). */
+int pc_bundle_dir(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], char *out, size_t out_size);
 int pc_bundle_hash(const uint8_t *blob, size_t n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
 void pc_bundle_hex(const uint8_t hash[PC_BUNDLE_HASH], char out[2 * PC_BUNDLE_HASH + 1]);
 /* Parses 64 hex digits; returns PC_EINVAL otherwise. */

@@ -54,22 +54,26 @@ static void get_block(const uint8_t *d, bool planes, size_t m, double *v) {
   memcpy(v, bits, 8 * m);
 }
 
-/* The first non-finite value of a block, or m: a double is NaN or infinite when its 11
- * exponent bits are all set, and in byte planes those are in planes 7 and 6 alone. */
-static size_t first_nonfinite(const uint8_t *d, bool planes, size_t m) {
+/* The first value of a block whose biased binary exponent exceeds max_exp, or m. NaN and
+ * infinities have the largest exponent (0x7ff), so every bound refuses them; in byte planes
+ * the exponent is in planes 7 and 6 alone. */
+static size_t first_over(const uint8_t *d, bool planes, size_t m, unsigned max_exp) {
   if (!planes) {
     double v[PLANE_BLOCK];
     get_block(d, false, m, v);
-    for (size_t i = 0; i < m; i++)
-      if (!isfinite(v[i])) return i;
+    for (size_t i = 0; i < m; i++) {
+      uint64_t bits;
+      memcpy(&bits, &v[i], 8);
+      if ((unsigned)(bits >> 52 & 0x7ff) > max_exp) return i;
+    }
     return m;
   }
   const uint8_t *hi = d + 7 * m, *lo = d + 6 * m;
   int bad = 0;
-  for (size_t i = 0; i < m; i++) bad |= (hi[i] & 0x7f) == 0x7f && (lo[i] & 0xf0) == 0xf0;
+  for (size_t i = 0; i < m; i++) bad |= ((unsigned)(hi[i] & 0x7f) << 4 | lo[i] >> 4) > max_exp;
   if (!bad) return m;
   for (size_t i = 0; i < m; i++)
-    if ((hi[i] & 0x7f) == 0x7f && (lo[i] & 0xf0) == 0xf0) return i;
+    if (((unsigned)(hi[i] & 0x7f) << 4 | lo[i] >> 4) > max_exp) return i;
   return m;
 }
 
@@ -124,19 +128,30 @@ static int check_header(const uint8_t *buf, size_t n, const pc_film *like, bool 
   return 0;
 }
 
-/* The header checks, then that every sum is finite, before anything is read into a film. */
-static int check(const uint8_t *buf, size_t n, const pc_film *like, bool *planes, pc_err *e) {
+/* The header checks, then that every sum is finite and, for a delta (bounded), under
+ * 2^PC_WIRE_SAMPLE_LOG2 per sample of its layer (a biased exponent of at most 1023 + that +
+ * the bit length of the count - 1), before anything is read into a film. */
+static int check(const uint8_t *buf, size_t n, const pc_film *like, bool bounded, bool *planes, pc_err *e) {
   int rc = check_header(buf, n, like, planes, e);
   if (rc) return rc;
   size_t px = (size_t)like->w * (size_t)like->h * 3;
   const uint8_t *d = buf + HEAD + (size_t)like->nlayers * LAYER_HEAD;
-  for (int l = 0; l < like->nlayers; l++)
+  for (int l = 0; l < like->nlayers; l++) {
+    uint64_t count = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
+    unsigned bits = 0;
+    while (bits < 64 && count >> bits) bits++;
+    unsigned max_exp = bounded ? 1023 + PC_WIRE_SAMPLE_LOG2 + bits - 1 : 0x7fe;
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
-      size_t i = first_nonfinite(d, *planes, m);
-      if (i < m) return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
+      size_t i = first_over(d, *planes, m, max_exp);
+      if (i < m && first_over(d, *planes, m, 0x7fe) == i)
+        return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
+      if (i < m)
+        return pc_errf(e, PC_ENUMERIC, "film: a sum in layer %d at pixel %zu is beyond any radiance for %llu samples", l,
+                       (k + i) / 3, (unsigned long long)count);
       d += 8 * m;
     }
+  }
   return 0;
 }
 
@@ -145,7 +160,7 @@ static int check(const uint8_t *buf, size_t n, const pc_film *like, bool *planes
 static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_counts_judge judge, void *user,
                  pc_err *e) {
   bool planes = false;
-  int rc = check(buf, n, into, &planes, e);
+  int rc = check(buf, n, into, add, &planes, e);
   if (rc) return rc;
   if (judge) {
     uint64_t counts[PC_FILM_MAX_LAYERS];

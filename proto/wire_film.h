@@ -22,10 +22,14 @@ int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
 /* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
  * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error. */
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
+/* A delta's sum per sample of its layer stays under 2^PC_WIRE_SAMPLE_LOG2 (1.8e19; no real
+ * radiance comes near): larger finite sums would add to infinity or overflow the image's
+ * floats, so pc_wire_film_add refuses them. */
+#define PC_WIRE_SAMPLE_LOG2 64
 /* Judges buf's per-layer counts (counts[into->nlayers]) before anything is added: 0 accepts,
  * an error code (with e set) refuses. */
 typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *e);
-/* The same checks (a non-finite sum is refused before the counts are judged), then judge
+/* The same checks (a non-finite or unbounded sum is refused before the counts are judged), then judge
  * (NULL: any counts), then adds buf's sums, counts and dropped samples into `into`
  * (unchanged on error): a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);

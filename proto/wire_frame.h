@@ -13,6 +13,9 @@
 #define PC_WIRE_PROTOCOL_VERSION 2u   /* 2: films as byte planes (PCFILM02) */
 #define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's payload */
 #define PC_WIRE_CHUNK (256u << 10)     /* bulk payload bytes per frame; well under the limit */
+/* A rendering worker uploads what it has at least this often (seconds; a range shorter than
+ * this, at its end): the coordinator's progress deadlines count on it. */
+#define PC_WIRE_UPLOAD_INTERVAL 2.0
 
 typedef struct pc_wire_decoder {
   uint8_t hdr[4];

@@ -1,7 +1,9 @@
 /* wire_settings.c: pc_render_settings <-> proto Settings. */
 #include "wire_settings.h"
 
-void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out) {
+#include <stdio.h>
+
+void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out, pc_wire_settings_buf *buf) {
   pcbpt__settings__init(out);
   out->method = (char *)pc_method_name(s->method);
   out->width = (uint32_t)s->width;
@@ -18,6 +20,15 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->uniform_mix = s->uniform_mix;
   out->mis_mode = (uint32_t)s->mis_mode;
   out->pmf_mode = (uint32_t)s->pmf_mode;
+  for (int i = 0; i < s->defines.n; i++) {
+    const char *n, *v;
+    pc_scene_defines_get(&s->defines, i, &n, &v);
+    buf->names[i] = (char *)n;
+    buf->values[i] = (char *)v;
+  }
+  out->n_define_names = out->n_define_values = (size_t)s->defines.n;
+  out->define_names = buf->names;
+  out->define_values = buf->values;
 }
 
 int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *out, pc_err *e) {
@@ -43,6 +54,15 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.uniform_mix = p->uniform_mix;
   s.mis_mode = (pc_mis_mode)p->mis_mode;
   s.pmf_mode = (pc_pmf_mode)p->pmf_mode;
+  if (p->n_define_names != p->n_define_values || p->n_define_names > PC_SCENE_MAX_DEFINES)
+    return pc_errf(e, PC_EINVAL, "settings: malformed -D parameters");
+  for (size_t i = 0; i < p->n_define_names; i++) {
+    char nv[PC_SCENE_DEFINES_BYTES];
+    if ((size_t)snprintf(nv, sizeof nv, "%s=%s", p->define_names[i], p->define_values[i]) >= sizeof nv)
+      return pc_errf(e, PC_ELIMIT, "settings: -D parameters too long");
+    int rc = pc_scene_defines_add(&s.defines, nv, e);
+    if (rc) return rc;
+  }
   int rc = pc_render_settings_check(&s, e);
   if (rc) return rc;
   *out = s;

@@ -49,7 +49,8 @@ int main(int argc, char **argv) {
   int rc = pc_worker_create(&o, &w, &e);
   sodium_memzero(key, sizeof key);
   if (rc) { fprintf(stderr, "pcbpt-worker: %s\n", e.msg); return 1; }
-  pc_worker_run(w);
+  rc = pc_worker_run(w, &e);
   pc_worker_destroy(w);
+  if (rc) { fprintf(stderr, "pcbpt-worker: %s\n", e.msg); return 1; }
   return 0;
 }

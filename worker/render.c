@@ -33,10 +33,14 @@ static void ctx_free(job_ctx *c) {
   c->loaded = false;
 }
 
-static int ctx_load(job_ctx *c, const pc_wrender *w, const pc_render_settings *set, const char *path, pc_err *e) {
+static int ctx_load(job_ctx *c, const pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
+                    pc_err *e) {
   ctx_free(c);
   memset(&c->scene, 0, sizeof c->scene);
-  int rc = pc_scene_load(path, &c->scene, e);
+  /* The client checked the scene and showed its warnings; the worker loads the same files with
+   * the same -D values and needs no warnings. */
+  pc_scene_load_opts o = {.root = root, .defines = &set->defines};
+  int rc = pc_scene_load_with(path, &o, &c->scene, e);
   if (!rc) {
     /* the job's settings are complete: apply them over the scene's own values */
     pc_render_request req;
@@ -66,14 +70,15 @@ static void thread_main(void *arg) {
     if (w->quit) { uv_mutex_unlock(&w->mu); break; }
     uint64_t job = w->job_id, first = w->first, count = w->count;
     pc_render_settings set = w->set;
-    char path[sizeof w->scene_path];
+    char path[sizeof w->scene_path], root[sizeof w->scene_root];
     memcpy(path, w->scene_path, sizeof path);
+    memcpy(root, w->scene_root, sizeof root);
     uv_mutex_unlock(&w->mu);
 
     pc_err e = {0};
     int rc = 0;
     if (!ctx.loaded || loaded_job != job) {
-      rc = ctx_load(&ctx, w, &set, path, &e);
+      rc = ctx_load(&ctx, w, &set, path, root, &e);
       loaded_job = rc ? 0 : job;
     }
     uint64_t done = 0;
@@ -141,7 +146,7 @@ void pc_wrender_stop(pc_wrender *w) {
 }
 
 int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
-                      const pc_render_settings *s, const char *scene_path, pc_err *e) {
+                      const pc_render_settings *s, const char *scene_path, const char *scene_root, pc_err *e) {
   uv_mutex_lock(&w->mu);
   int rc = 0;
   if (w->pending_ready && (w->pending.w != s->width || w->pending.h != s->height)) {
@@ -162,6 +167,7 @@ int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t firs
     w->count = count;
     w->set = *s;
     snprintf(w->scene_path, sizeof w->scene_path, "%s", scene_path);
+    snprintf(w->scene_root, sizeof w->scene_root, "%s", scene_root);
     w->rendered = w->pend_count = 0;
     memset(&w->pend_stats, 0, sizeof w->pend_stats);
     w->pend_first = first;

@@ -24,8 +24,6 @@
 #include "wire_settings.h"
 #include "worker.h"
 
-#define UPLOAD_INTERVAL 2.0
-
 struct pc_worker {
   uv_loop_t *loop, loop_storage;
   uv_timer_t retry, beat, pump;
@@ -33,6 +31,7 @@ struct pc_worker {
   uv_async_t stop;
   uv_signal_t sigint, sigterm;
   bool handle_signals, shutting_down;
+  bool wrong_token;          /* the coordinator holds another token: retrying cannot help */
   pc_conn *conn;
   bool connected, authed, waiting_work;
   double backoff, last_upload, next_request;
@@ -138,6 +137,20 @@ static void send_closing(worker *w) {
   send_env(w, &env);
 }
 
+/* Tells the coordinator a range cannot be rendered here (it counts towards failing the job,
+ * with this reason) and asks again only after a pause, so a failing worker does not spin. */
+static void give_back(worker *w, uint64_t job, uint64_t range, const char *why) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
+  f.job_id = job;
+  f.range_id = range;
+  f.reason = (char *)why;
+  env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
+  env.range_failed = &f;
+  send_env(w, &env);
+  w->next_request = now_s() + 0.5;
+}
+
 /* The render thread is idle and nothing of the range is left to take: ask for the next one
  * (a final delta may still wait for its acknowledgement). */
 static void finish_range(worker *w) {
@@ -156,16 +169,7 @@ static void pump(worker *w) {
   uv_mutex_unlock(&w->r.mu);
   if (done && failed) {
     pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
-    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-    Pcbpt__RangeFailed f = PCBPT__RANGE_FAILED__INIT;
-    f.job_id = w->job;
-    f.range_id = w->range;
-    f.reason = w->r.error;
-    env.msg_case = PCBPT__ENVELOPE__MSG_RANGE_FAILED;
-    env.range_failed = &f;
-    send_env(w, &env);
-    /* ask again after a pause, so a failing worker does not spin */
-    w->next_request = now_s() + 0.5;
+    give_back(w, w->job, w->range, w->r.error);
     w->busy = false;
     w->drop = w->stopping = false;
     return;
@@ -183,11 +187,11 @@ static void pump(worker *w) {
   }
   if (!w->authed) return;
   if (!done) {
-    if (now_s() - w->last_upload < UPLOAD_INTERVAL) return;
+    if (now_s() - w->last_upload < PC_WIRE_UPLOAD_INTERVAL) return;
     /* the range's final upload is due within an interval anyway: every upload costs a whole
      * film on both sides whatever it holds, and this keeps a range of up to two intervals
      * to one upload (at most about two intervals of work unacknowledged) */
-    if (rate > 0 && (double)(w->count - rendered) / rate < UPLOAD_INTERVAL) return;
+    if (rate > 0 && (double)(w->count - rendered) / rate < PC_WIRE_UPLOAD_INTERVAL) return;
   }
   pc_err e;
   uv_mutex_lock(&w->r.mu);
@@ -235,10 +239,13 @@ static void on_pump(uv_timer_t *t) {
 static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
   pc_render_settings s;
   pc_err e;
-  if (pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
-      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, &e) != 0) {
+  char root[1200];
+  /* the bundle's folder is the scene's root there, as the client's root folder was */
+  int bad = pc_bundle_dir(w->cache, a->bundle_hash.data, root, sizeof root) != 0 ? pc_errf(&e, PC_ELIMIT, "cache path too long") : 0;
+  if (bad || pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
+      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, root, &e) != 0) {
     pc_wire_log("job %llu: cannot start range %llu: %s", (unsigned long long)a->job_id, (unsigned long long)a->range_id, e.msg);
-    if (w->conn) pc_conn_close(w->conn, "cannot start the assigned range");
+    give_back(w, a->job_id, a->range_id, e.msg);
     return;
   }
   w->busy = true;
@@ -302,8 +309,12 @@ static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
   Pcbpt__Assign *a = w->pending_assign;
   w->pending_assign = NULL;
   if (rc) {
-    pc_wire_log("refused scene bundle: %s", e.msg);
-    pc_conn_close(w->conn, "bad scene bundle");
+    /* the range fails, not the connection: the job fails after a few such ranges with this
+     * reason, where reconnecting would fetch the same bundle forever */
+    char why[sizeof e.msg + 32];
+    snprintf(why, sizeof why, "scene bundle refused: %s", e.msg);
+    pc_wire_log("job %llu: %s", (unsigned long long)a->job_id, why);
+    give_back(w, a->job_id, a->range_id, why);
   } else {
     start_range(w, a, scene);
   }
@@ -311,17 +322,32 @@ static void on_bundle_chunk(worker *w, const Pcbpt__BundleChunk *b) {
 }
 
 static void on_cancel(worker *w, const Pcbpt__Cancel *c) {
-  if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) return;
+  if (w->bun_wait && w->pending_assign && w->pending_assign->job_id == c->job_id) {
+    /* the range waits for its bundle: nothing to render or upload, only to forget */
+    w->bun_wait = false;
+    free(w->bun);
+    w->bun = NULL;
+    pcbpt__assign__free_unpacked(w->pending_assign, NULL);
+    w->pending_assign = NULL;
+    w->next_request = now_s() + 0.5;
+    return;
+  }
+  /* an upload of a dropped range (this one or the last) is not waited for: nothing would
+   * be uploaded after it */
+  if (!c->upload_partial && w->inflight && w->in_job == c->job_id && (!c->range_id || c->range_id == w->in_range)) {
+    free(w->inflight);
+    w->inflight = NULL;
+  }
+  if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) {
+    pump(w);
+    return;
+  }
   atomic_store(&w->r.cancel, true);
   if (c->upload_partial) {
     w->stopping = true;
     pc_wire_log("job %llu: halted; uploading what is rendered", (unsigned long long)w->job);
   } else {
     w->drop = true;
-    if (w->inflight && w->in_range == w->range) {
-      free(w->inflight);
-      w->inflight = NULL;
-    }
     pc_wire_log("job %llu: range %llu cancelled", (unsigned long long)w->job, (unsigned long long)w->range);
   }
   pump(w);
@@ -344,15 +370,19 @@ static void on_ack(worker *w, const Pcbpt__UploadAck *a) {
 }
 
 static void schedule_reconnect(worker *w);
+static void token_mismatch(worker *w, pc_conn *c);
 
 static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
   worker *w = c->data;
   switch (env->msg_case) {
   case PCBPT__ENVELOPE__MSG_CHALLENGE: {
     Pcbpt__Challenge *ch = env->challenge;
-    if (w->authed || ch->nonce.len != PC_AUTH_NONCE ||
-        !pc_auth_verify(w->key, true, w->cnonce, ch->nonce.data, ch->server_mac.data, ch->server_mac.len)) {
-      pc_conn_close(c, "the coordinator did not prove it knows the token");
+    if (w->authed || ch->nonce.len != PC_AUTH_NONCE) {
+      pc_conn_close(c, "malformed challenge");
+      return;
+    }
+    if (!pc_auth_verify(w->key, true, w->cnonce, ch->nonce.data, ch->server_mac.data, ch->server_mac.len)) {
+      token_mismatch(w, c);
       return;
     }
     uint8_t mac[PC_AUTH_MAC];
@@ -367,7 +397,7 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     return;
   }
   case PCBPT__ENVELOPE__MSG_AUTH_RESULT:
-    if (!env->auth_result->ok) { pc_conn_close(c, env->auth_result->reason); return; }
+    if (!env->auth_result->ok) { token_mismatch(w, c); return; }
     w->authed = true;
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
@@ -520,6 +550,15 @@ static void walk_close(uv_handle_t *h, void *arg) {
 
 static void on_stop(uv_async_t *a) { shut_down(a->data); }
 
+/* Neither side can tell which token is the wrong one, only that they differ; a worker with
+ * the wrong token would fail the same way forever, so it stops and says so. */
+static void token_mismatch(worker *w, pc_conn *c) {
+  pc_wire_log("the coordinator at %s:%d holds a different token than this worker's --token-file: stopping", w->host, w->port);
+  w->wrong_token = true;
+  pc_conn_close(c, NULL);
+  shut_down(w);
+}
+
 static void on_signal(uv_signal_t *s, int signum) {
   worker *w = s->data;
   pc_wire_log("signal %d: stopping", signum);
@@ -580,7 +619,12 @@ uv_fail:
   return PC_EIO;
 }
 
-void pc_worker_run(pc_worker *w) { uv_run(w->loop, UV_RUN_DEFAULT); }
+int pc_worker_run(pc_worker *w, pc_err *e) {
+  uv_run(w->loop, UV_RUN_DEFAULT);
+  if (w->wrong_token)
+    return pc_errf(e, PC_EINVAL, "the coordinator at %s:%d holds a different token than --token-file", w->host, w->port);
+  return 0;
+}
 
 void pc_worker_stop(pc_worker *w) { uv_async_send(&w->stop); }
 

@@ -23,6 +23,7 @@ typedef struct pc_wrender {
   uint64_t job_id, range_id, first, count;
   pc_render_settings set;
   char scene_path[1200];
+  char scene_root[1200];   /* the bundle's folder: what the scene's files may come from */
   atomic_bool cancel;
   /* progress (thread writes, loop reads and takes, under mu) */
   uint64_t rendered;       /* iterations of the range rendered so far */
@@ -38,7 +39,7 @@ int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
 void pc_wrender_stop(pc_wrender *w);
 /* Starts a range (the thread must be idle). */
 int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
-                      const pc_render_settings *s, const char *scene_path, pc_err *e);
+                      const pc_render_settings *s, const char *scene_path, const char *scene_root, pc_err *e);
 
 /* A worker connected to one coordinator (reconnecting with backoff while it is away). */
 typedef struct pc_worker pc_worker;
@@ -53,8 +54,9 @@ typedef struct pc_worker_opts {
 } pc_worker_opts;
 
 int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);
-/* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals). */
-void pc_worker_run(pc_worker *w);
+/* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals); an error
+ * when it stopped because the coordinator holds a different token. */
+int pc_worker_run(pc_worker *w, pc_err *e);
 /* Thread-safe: makes pc_worker_run return. */
 void pc_worker_stop(pc_worker *w);
 void pc_worker_destroy(pc_worker *w);

@@ -33,6 +33,7 @@ typedef struct pc_render_settings {
   float uniform_mix;       /* weight of the uniform PMF blended into p_conn */
   pc_mis_mode mis_mode;
   pc_pmf_mode pmf_mode;
+  pc_scene_defines defines; /* -D name=value: part of what the scene is, so workers get them */
   /* Debug (tests): every strategy gets weight 1, so each per-strategy layer is on its own an
    * estimate of its whole path length; the beauty is then not an estimate of anything. */
   bool unweighted;

@@ -21,7 +21,10 @@ const char pc_render_flags_help[] =
     "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
     "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.5)\n"
     "  --mis MODE            PCBPT correlated MIS: upper-bound (default) or standard\n"
-    "  --pmf MODE            PCBPT connection PMF: cached (default) or exact\n";
+    "  --pmf MODE            PCBPT connection PMF: cached (default) or exact\n"
+    "  -D NAME=VALUE         scene parameter: replaces $NAME in the scene (wins over <default>)\n"
+    "  --strict              settings pcbpt ignores (sampler, rfilter, ...) are errors, not warnings\n"
+    "  --scene-root DIR      folder the scene's includes and files may come from (default: its own)\n";
 
 void pc_render_request_default(pc_render_request *r) {
   memset(r, 0, sizeof *r);
@@ -33,6 +36,24 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
                                       "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", NULL};
   const char *flag = argv[*i];
+  if (strcmp(flag, "--strict") == 0) {
+    r->strict = true;
+    return 1;
+  }
+  if (strcmp(flag, "-D") == 0 || strncmp(flag, "-D", 2) == 0) { /* -D a=b or -Da=b, as Mitsuba */
+    const char *nv = flag[2] ? flag + 2 : NULL;
+    if (!nv) {
+      if (*i + 1 >= argc) return pc_errf(e, PC_EINVAL, "-D: missing name=value");
+      nv = argv[++*i];
+    }
+    int rc = pc_scene_defines_add(&r->set.defines, nv, e);
+    return rc ? rc : 1;
+  }
+  if (strcmp(flag, "--scene-root") == 0) {
+    if (*i + 1 >= argc || !*argv[*i + 1]) return pc_errf(e, PC_EINVAL, "%s: missing folder", flag);
+    r->scene_root = argv[++*i];
+    return 1;
+  }
   int which = -1;
   for (int k = 0; flags[k]; k++)
     if (strcmp(flag, flags[k]) == 0) which = k;
@@ -116,7 +137,15 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   return 1;
 }
 
+void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->root = r->scene_root;
+  o->defines = &r->set.defines;
+  o->strict = r->strict;
+}
+
 void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s) {
+  if (r->spp == 0 && r->seconds == 0 && s->sample_count > 0) r->spp = (uint64_t)s->sample_count;
   if (!r->method_set) r->set.method = s->method;
   if (!r->depth_set) r->set.max_depth = s->max_depth;
   if (!r->width_set) r->set.width = s->camera.width;

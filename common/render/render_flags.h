@@ -16,6 +16,8 @@ typedef struct pc_render_request {
   bool method_set, depth_set, width_set, height_set; /* overrides of the scene's own values */
   uint64_t spp;      /* iterations to render (0: not given) */
   double seconds;    /* wall-time budget (0: not given) */
+  bool strict;       /* the loader's warnings are errors */
+  const char *scene_root; /* folder confining the files the scene names (NULL: the scene's own) */
 } pc_render_request;
 
 void pc_render_request_default(pc_render_request *r);
@@ -24,7 +26,12 @@ void pc_render_request_default(pc_render_request *r);
  * returns 0 if it is not one; a negative code with "--flag: what is wrong" on a bad value. */
 int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e);
 
-/* Fills in what the flags left to the scene (method, maxDepth, film size) and gives the
+/* The loader options the flags give (-D, --strict, --scene-root); the caller adds its warning
+ * sink. */
+void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts *o);
+
+/* Fills in what the flags left to the scene (method, maxDepth, film size, the sampler's
+ * sampleCount as the iteration count when neither --spp nor --time is given) and gives the
  * scene's camera the final film size. Call between pc_scene_load and pc_scene_build. */
 void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s);
 

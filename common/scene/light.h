@@ -34,6 +34,7 @@ typedef struct pc_light {
   float *env_row_cdf; /* h+1: rows by luminance times sin(theta) (Mitsuba's envmap tables) */
   float *env_col_cdf; /* h*(w+1): columns by luminance within each row */
   float env_norm;     /* pdf of pixel (x,y) per unit solid angle times sin(theta): lum * row weight * norm */
+  float sampling_weight; /* Mitsuba's samplingWeight: scales power in the choice (0 is read as 1) */
 } pc_light;
 
 struct pc_scene;

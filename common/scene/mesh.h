@@ -3,6 +3,7 @@
 #ifndef PC_MESH_H
 #define PC_MESH_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -29,6 +30,8 @@ void pc_mesh_flip(pc_mesh *m);
 /* Loaders. `where` is the "file:line" of the referencing scene element, used in messages. */
 int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e);
 int pc_mesh_load_ply(const char *path, pc_mesh *out, pc_err *e);
+/* Shape shape_index of a Mitsuba serialized file; *face_normals is the file's own flag. */
+int pc_mesh_load_serialized(const char *path, int shape_index, pc_mesh *out, bool *face_normals, pc_err *e);
 /* Built-in Mitsuba shapes in object space, before their toWorld transform. */
 int pc_mesh_rectangle(pc_mesh *out);  /* [-1,1]^2 in z=0, normal +z */
 int pc_mesh_cube(pc_mesh *out);       /* [-1,1]^3, outward normals */

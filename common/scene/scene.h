@@ -46,6 +46,12 @@ typedef struct pc_scene {
   pc_camera camera;
   pc_method method;           /* from <integrator type=...>: path, bdpt or pcbpt */
   int max_depth;              /* Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly */
+  int sample_count;           /* the <sampler>'s sampleCount (0: none): default iteration count */
+  /* every file the scene read (itself first), for bundles: its real path, and its name below
+   * root as the scene reaches it (a link inside the folder keeps its own name, so the unpacked
+   * bundle holds every name the scene uses) */
+  char **files, **file_names; int nfiles;
+  char *root;                 /* real path of the folder that confines those files */
   /* built by pc_scene_build */
   void *rtc_device, *rtc_scene; /* RTCDevice, RTCScene (kept opaque to users of this header) */
   void *rtc_error;            /* where Embree's error callback records the first error */
@@ -57,7 +63,36 @@ typedef struct pc_scene {
                                  perpendicular to their direction, outside the bounding sphere */
 } pc_scene;
 
-/* Parses a Mitsuba 0.6 XML scene (the subset in DESIGN.md §5). Errors are "file:line: what". */
+/* Command-line $name parameters (Mitsuba's -D name=value), kept in one flat buffer so render
+ * settings that carry them stay plain data: "name\0value\0name\0value\0...". */
+#define PC_SCENE_MAX_DEFINES 64
+#define PC_SCENE_DEFINES_BYTES 4096
+typedef struct pc_scene_defines {
+  int n;
+  int used;                    /* bytes of buf in use */
+  char buf[PC_SCENE_DEFINES_BYTES];
+} pc_scene_defines;
+
+/* Adds "name=value" (name: letters, digits, _; a later -D of the same name replaces it). */
+int pc_scene_defines_add(pc_scene_defines *d, const char *name_eq_value, pc_err *e);
+/* The i-th definition. */
+void pc_scene_defines_get(const pc_scene_defines *d, int i, const char **name, const char **value);
+
+/* Receives one warning line ("file:line: what"), already without repeats. */
+typedef void (*pc_scene_warn_fn)(void *ud, const char *line);
+
+typedef struct pc_scene_load_opts {
+  const char *root;                 /* folder confining every file the scene names (NULL: the scene's own) */
+  const pc_scene_defines *defines;  /* -D values; they win over <default> */
+  pc_scene_warn_fn warn;            /* NULL: warnings are not reported */
+  void *warn_ud;
+  bool strict;                      /* what would be a warning is an error */
+  size_t max_file_bytes;            /* the scene's files together, checked before any is read (0: no bound) */
+} pc_scene_load_opts;
+
+/* Parses a Mitsuba 0.6 XML scene (the subset in DESIGN.md §5). Errors are "file:line: what".
+ * opts may be NULL (no -D, warnings dropped, the scene's folder as root). */
+int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scene *out, pc_err *e);
 int pc_scene_load(const char *path, pc_scene *out, pc_err *e);
 /* Builds Embree geometry, light sampling tables and derived material data. */
 int pc_scene_build(pc_scene *s, pc_err *e);

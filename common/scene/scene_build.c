@@ -69,7 +69,7 @@ static int build_lights(pc_scene *s, pc_err *e) {
     }
     if (!(l->power >= 0.f) || !isfinite(l->power))
       return pc_errf(e, PC_EINVAL, "%s: emitter %d has a negative or non-finite power", s->path, i);
-    s->light_cdf[i + 1] = s->light_cdf[i] + l->power;
+    s->light_cdf[i + 1] = s->light_cdf[i] + l->power * (l->sampling_weight > 0.f ? l->sampling_weight : 1.f);
   }
   if (!(s->light_cdf[s->nlights] > 0.f))
     return pc_errf(e, PC_EINVAL, "%s: every emitter has zero power", s->path);
@@ -169,6 +169,13 @@ void pc_scene_free(pc_scene *s) {
   free(s->lights);
   free(s->light_cdf);
   free(s->path);
+  for (int i = 0; i < s->nfiles; i++) {
+    free(s->files[i]);
+    free(s->file_names[i]);
+  }
+  free(s->files);
+  free(s->file_names);
+  free(s->root);
   memset(s, 0, sizeof *s);
 }
 

@@ -173,7 +173,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->twosided = true;
     return 0;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported BSDF plugin '%s'", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt", c->file, n->line, type);
   }
   return 0;
 }
@@ -183,8 +183,7 @@ int pc_sx_bsdf(pc_sx *c, const pc_xml_node *n, int *index) {
   pc_material m;
   int rc;
   if ((rc = check_object(c, n, &type))) return rc;
-  if (pc_xml_attr(n, "name"))
-    return pc_errf(c->e, PC_EPARSE, "%s:%d: <bsdf> takes no name attribute", c->file, n->line);
+  /* a name is allowed (Mitsuba's schema has it on every object) and means nothing here */
   if ((rc = bsdf_value(c, n, type, &m)) || (rc = pc_sx_add_material(c, n, &m, index))) return rc;
   const char *id = pc_xml_attr(n, "id");
   return id ? pc_sx_id_add(c, id, PC_ID_BSDF, *index, n->line) : 0;
@@ -218,11 +217,14 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
                        {"uoffset", PC_P_FLOAT, &t.uoffset, 0, 0}, {"voffset", PC_P_FLOAT, &t.voffset, 0, 0}};
   if (strcmp(type, "bitmap") == 0) {
     const char *filename = NULL, *filter = "ewa", *wrap = "repeat", *wrapu = "repeat", *wrapv = "repeat";
+    float gamma = 0; /* Mitsuba: 0 the file's own (sRGB for 8-bit), -1 sRGB, else v^gamma */
     pc_param p[] = {common[0], common[1], common[2], common[3],
                     {"filename", PC_P_STRING, &filename, 0, 0}, {"filterType", PC_P_STRING, &filter, 0, 0},
                     {"wrapMode", PC_P_STRING, &wrap, 0, 0}, {"wrapModeU", PC_P_STRING, &wrapu, 0, 0},
-                    {"wrapModeV", PC_P_STRING, &wrapv, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 9))) return rc;
+                    {"wrapModeV", PC_P_STRING, &wrapv, 0, 0}, {"gamma", PC_P_FLOAT, &gamma, 0, 0}};
+    if ((rc = params_only(c, n, what, p, 10))) return rc;
+    if (!(gamma == 0 || gamma == -1 || (gamma > 0 && gamma <= 10)))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: gamma must be -1 (sRGB) or in (0, 10]", c->file, p[9].line, what);
     if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
     /* pcbpt filters bilinearly whatever Mitsuba's filter; the difference is only blur. */
     if (strcmp(filter, "ewa") != 0 && strcmp(filter, "trilinear") != 0 && strcmp(filter, "nearest") != 0)
@@ -233,9 +235,11 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
     if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
     t.type = PC_TEX_BITMAP;
     /* 8-bit images are sRGB-encoded as Mitsuba assumes; the reader ignores the flag for EXR. */
-    rc = pc_image_read(path, 1, &t.img, c->e);
+    rc = pc_image_read(path, gamma <= 0, &t.img, c->e);
     free(path);
     if (rc) return pc_sx_wrap(c, n, what, rc);
+    if (gamma > 0) /* the file's values are v^(1/gamma)-encoded, whatever its format */
+      for (size_t i = 0; i < 3 * (size_t)t.img.w * (size_t)t.img.h; i++) t.img.rgb[i] = powf(fmaxf(t.img.rgb[i], 0.f), gamma);
   } else if (strcmp(type, "checkerboard") == 0) {
     t.type = PC_TEX_CHECKER;
     t.color0 = v3s(0.4f);
@@ -244,7 +248,7 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
                     {"color0", PC_P_COLOR, &t.color0, 0, 0}, {"color1", PC_P_COLOR, &t.color1, 0, 0}};
     if ((rc = params_only(c, n, what, p, 6))) return rc;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported texture plugin '%s'", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: texture '%s': not modelled by pcbpt", c->file, n->line, type);
   }
   if ((!isfinite(t.uscale) || !isfinite(t.vscale) || t.uscale == 0.f || t.vscale == 0.f))
     rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: uscale and vscale must be nonzero", c->file, n->line, what);

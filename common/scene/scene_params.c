@@ -3,6 +3,7 @@
  * confined to the scene's folder. */
 #include <errno.h>
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,9 +24,12 @@ static bool is_param_elem(const char *name) {
 }
 
 static pc_param *find_param(pc_param *params, int np, const char *name) {
-  for (int i = 0; i < np; i++)
+  pc_param *any = NULL;
+  for (int i = 0; i < np; i++) {
     if (strcmp(params[i].name, name) == 0) return &params[i];
-  return NULL;
+    if (strcmp(params[i].name, "*") == 0) any = &params[i];
+  }
+  return any;
 }
 
 bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np) {
@@ -38,7 +42,14 @@ bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np) {
 }
 
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
+  static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", NULL};
   const char *type = pc_xml_attr(ch, "type");
+  if (strcmp(ch->name, "animation") == 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: animation (motion blur): not modelled by pcbpt (in %s)", c->file, ch->line, what);
+  for (const char *const *u = unmodelled; type && *u; u++)
+    if (strcmp(ch->name, *u) == 0)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s '%s': not modelled by pcbpt (in %s)", c->file, ch->line, ch->name,
+                     type, what);
   if (type)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s type=\"%s\">", c->file, ch->line, what, ch->name, type);
   return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s>", c->file, ch->line, what, ch->name);
@@ -143,6 +154,9 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
       *(vec3 *)p->out = v3((float)v[0], (float)v[1], (float)v[2]);
     }
     break;
+  case PC_P_IGNORED:
+    ok = true;
+    break;
   case PC_P_TRANSFORM:
     if ((ok = strcmp(el, "transform") == 0)) {
       static const char *const n[] = {"name", NULL};
@@ -155,18 +169,72 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
   return rc;
 }
 
+/* Mitsuba 0.6 warns about a parameter its plugin does not read and goes on, so such a
+ * parameter cannot change the image; one it reads but pcbpt does not model stays an error. For
+ * "what" (e.g. "bsdf 'conductor'"), the reason a parameter pcbpt does not take is ignored, or
+ * NULL if it is not known to be harmless. */
+static const char *ignored_as_mitsuba(const char *what, const char *name) {
+  static const struct { const char *what, *params; } mitsuba[] = {
+      {"bsdf 'diffuse'", " reflectance "},
+      {"bsdf 'conductor'", " material eta k extEta specularReflectance "},
+      {"bsdf 'roughconductor'", " distribution alpha alphaU alphaV material eta k extEta specularReflectance sampleVisible "},
+      {"bsdf 'plastic'", " intIOR extIOR specularReflectance diffuseReflectance nonlinear "},
+      {"bsdf 'roughplastic'", " distribution alpha intIOR extIOR specularReflectance diffuseReflectance nonlinear sampleVisible "},
+      {"bsdf 'dielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
+      {"bsdf 'roughdielectric'", " distribution alpha alphaU alphaV intIOR extIOR specularReflectance specularTransmittance sampleVisible "},
+      {"bsdf 'thindielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
+      {"bsdf 'twosided'", " "},
+      {"texture 'bitmap'", " filename wrapMode wrapModeU wrapModeV gamma filterType maxAnisotropy cache uoffset voffset uscale vscale channel "},
+      {"texture 'checkerboard'", " color0 color1 uoffset voffset uscale vscale "},
+      {"emitter 'area'", " radiance samplingWeight "},
+      {"emitter 'point'", " toWorld position intensity samplingWeight "},
+      {"emitter 'constant'", " radiance samplingWeight "},
+      {"emitter 'envmap'", " filename scale toWorld gamma cache samplingWeight "},
+      {"shape 'obj'", " filename faceNormals maxSmoothAngle flipNormals flipTexCoords toWorld collapse "},
+      {"shape 'ply'", " filename faceNormals maxSmoothAngle flipNormals toWorld srgb "},
+      {"shape 'serialized'", " filename shapeIndex faceNormals maxSmoothAngle flipNormals toWorld "},
+      {"shape 'rectangle'", " toWorld flipNormals "},
+      {"shape 'cube'", " toWorld flipNormals "},
+      {"shape 'disk'", " toWorld flipNormals "},
+      {"shape 'sphere'", " center radius toWorld flipNormals "},
+      {"sensor 'perspective'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip "},
+  };
+  /* read by Mitsuba, but only to steer its sampling */
+  if (strcmp(name, "sampleVisible") == 0 || strcmp(name, "maxAnisotropy") == 0 || strcmp(name, "cache") == 0)
+    return "it only steers Mitsuba's sampling or caching";
+  char key[80];
+  if (snprintf(key, sizeof key, " %s ", name) >= (int)sizeof key) return NULL;
+  for (size_t i = 0; i < sizeof mitsuba / sizeof mitsuba[0]; i++)
+    if (strcmp(mitsuba[i].what, what) == 0)
+      return strstr(mitsuba[i].params, key) ? NULL : "Mitsuba's plugin does not read it either";
+  return NULL;
+}
+
 int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np) {
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (!pc_sx_is_param(ch, params, np)) continue;
     const char *name = pc_xml_attr(ch, "name");
     if (!name) return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: <%s> lacks a name", c->file, ch->line, what, ch->name);
     pc_param *p = find_param(params, np, name);
+    const char *unused = p ? NULL : ignored_as_mitsuba(what, name);
+    if (unused) {
+      int rc = pc_sx_warn(c, ch, "%s: parameter '%s' ignored (%s)", what, name, unused);
+      if (rc) return rc;
+      continue;
+    }
     if (!p)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unknown or unsupported parameter '%s'", c->file, ch->line, what, name);
+    int rc;
+    if (p->kind == PC_P_IGNORED) {
+      if ((rc = pc_sx_warn(c, ch, "%s: parameter '%s' ignored (%s)", what, name, (const char *)p->out))) return rc;
+      p->set = true;
+      p->line = ch->line;
+      continue;
+    }
     if (p->set)
       return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: parameter '%s' given twice (first on line %d)", c->file, ch->line, what,
                      name, p->line);
-    int rc = read_one(c, ch, what, p);
+    rc = read_one(c, ch, what, p);
     if (rc) return rc;
     p->set = true;
     p->line = ch->line;
@@ -276,20 +344,11 @@ static int substitute(pc_sx *c, const pc_xml_node *n, char **value) {
   return 0;
 }
 
-static int add_default(pc_sx *c, const pc_xml_node *n) {
-  static const char *const allowed[] = {"name", "value", NULL};
-  int rc = pc_xml_check_attrs(c->file, n, allowed, c->e);
-  if (rc) return rc;
-  const char *name = pc_xml_attr(n, "name"), *value = pc_xml_attr(n, "value");
-  if (!name || !value || !*name)
-    return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> needs a name and a value", c->file, n->line);
-  if (n->first) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be empty", c->file, n->line);
-  for (const char *p = name; *p; p++)
-    if (!(*p == '_' || (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9')))
-      return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> name '%s' must be letters, digits and _", c->file, n->line, name);
+static int add_param(pc_sx *c, const pc_xml_node *n, const char *name, const char *value) {
   for (int i = 0; i < c->nparams; i++)
-    if (strcmp(c->pnames[i], name) == 0) return 0; /* the first definition wins, as in Mitsuba */
-  if (c->nparams >= MAX_PARAMS) return pc_errf(c->e, PC_ELIMIT, "%s:%d: too many <default> parameters", c->file, n->line);
+    if (strcmp(c->pnames[i], name) == 0) return 0; /* the first definition (or -D) wins, as in Mitsuba */
+  if (c->nparams >= MAX_PARAMS)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: too many <default> parameters", c->file, n ? n->line : 0);
   if (c->nparams == c->cap_params) {
     int cap = c->cap_params ? 2 * c->cap_params : 16;
     char **a = realloc(c->pnames, (size_t)cap * sizeof *a);
@@ -308,24 +367,134 @@ static int add_default(pc_sx *c, const pc_xml_node *n) {
   return 0;
 }
 
-static int subst_rec(pc_sx *c, pc_xml_node *n, int depth) {
+static bool defined(const pc_sx *c, const char *name) {
+  for (int i = 0; i < c->nparams; i++)
+    if (strcmp(c->pnames[i], name) == 0) return true;
+  return false;
+}
+
+/* A <default> whose value names its own, still undefined, parameter would expand to itself. */
+static int default_self_reference(pc_sx *c, const pc_xml_node *n) {
+  const char *name = pc_xml_attr(n, "name"), *value = pc_xml_attr(n, "value");
+  if (!name || !value || !*name || defined(c, name)) return 0;
+  size_t nl = strlen(name);
+  for (const char *p = strchr(value, '$'); p; p = strchr(p + 1, '$'))
+    if (strncmp(p + 1, name, nl) == 0)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: <default name=\"%s\">: '$%s' expands to itself (give it with -D %s=...)",
+                     c->file, n->line, name, name, name);
+  return 0;
+}
+
+static int add_default(pc_sx *c, const pc_xml_node *n) {
+  static const char *const allowed[] = {"name", "value", NULL};
+  int rc = pc_xml_check_attrs(c->file, n, allowed, c->e);
+  if (rc) return rc;
+  const char *name = pc_xml_attr(n, "name"), *value = pc_xml_attr(n, "value");
+  if (!name || !value || !*name)
+    return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> needs a name and a value", c->file, n->line);
+  if (n->first) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be empty", c->file, n->line);
+  for (const char *p = name; *p; p++)
+    if (!(*p == '_' || (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9')))
+      return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> name '%s' must be letters, digits and _", c->file, n->line, name);
+  return add_param(c, n, name, value);
+}
+
+static int subst_attrs(pc_sx *c, pc_xml_node *n) {
   for (int i = 0; i < n->nattrs; i++) {
     int rc = substitute(c, n, &n->attrs[2 * i + 1]);
-    if (rc) return rc;
-  }
-  if (strcmp(n->name, "default") == 0) {
-    if (depth != 1) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be a child of <scene>", c->file, n->line);
-    int rc = add_default(c, n);
-    if (rc) return rc;
-  }
-  for (pc_xml_node *ch = n->first; ch; ch = ch->next) {
-    int rc = subst_rec(c, ch, depth + 1);
     if (rc) return rc;
   }
   return 0;
 }
 
-int pc_sx_substitute(pc_sx *c, pc_xml_node *root) { return subst_rec(c, root, 0); }
+static int subst_list(pc_sx *c, pc_xml_node **link, const pc_xml_node *stop, int depth, pc_xml_node ***end);
+
+static int subst_rec(pc_sx *c, pc_xml_node *n, int depth) {
+  c->file = n->file ? n->file : c->main_file;
+  int rc = 0;
+  if (strcmp(n->name, "default") == 0 && (rc = default_self_reference(c, n))) return rc;
+  if ((rc = subst_attrs(c, n))) return rc;
+  if (strcmp(n->name, "default") == 0) {
+    if (depth != 1) return pc_errf(c->e, PC_EPARSE, "%s:%d: <default> must be a child of <scene>", c->file, n->line);
+    if ((rc = add_default(c, n))) return rc;
+  }
+  pc_xml_node **end;
+  return subst_list(c, &n->first, NULL, depth + 1, &end);
+}
+
+/* Substitutes the siblings from *link up to stop, splicing included files in as it meets them
+ * (so their <default>s and $names take effect in document order, as in Mitsuba). */
+static int subst_list(pc_sx *c, pc_xml_node **link, const pc_xml_node *stop, int depth, pc_xml_node ***end) {
+  int rc = 0;
+  while (*link != stop) {
+    pc_xml_node *ch = *link;
+    if (strcmp(ch->name, "include") != 0) {
+      if ((rc = subst_rec(c, ch, depth))) return rc;
+      link = &ch->next;
+      continue;
+    }
+    c->file = ch->file ? ch->file : c->main_file;
+    if (depth != 1) return pc_errf(c->e, PC_EPARSE, "%s:%d: <include> must be a child of <scene>", c->file, ch->line);
+    pc_xml_node *inc;
+    if ((rc = subst_attrs(c, ch)) || (rc = pc_sx_include_open(c, ch, &inc))) return rc;
+    pc_xml_node *rest = ch->next, *kids = inc->first;
+    inc->first = NULL;
+    pc_xml_free(inc);
+    ch->next = NULL;
+    pc_xml_free(ch);
+    *link = kids ? kids : rest;
+    if (kids) {
+      pc_xml_node *last = kids;
+      while (last->next) last = last->next;
+      last->next = rest;
+    }
+    pc_xml_node **after;
+    rc = subst_list(c, link, rest, depth, &after);
+    pc_sx_include_close(c);
+    if (rc) return rc;
+    link = after;
+  }
+  *end = link;
+  return 0;
+}
+
+int pc_sx_substitute(pc_sx *c, pc_xml_node *root) {
+  const pc_scene_defines *d = c->opts->defines;
+  for (int i = 0; d && i < d->n; i++) {
+    const char *name, *value;
+    pc_scene_defines_get(d, i, &name, &value);
+    int rc = add_param(c, NULL, name, value);
+    if (rc) return rc;
+  }
+  return subst_rec(c, root, 0);
+}
+
+int pc_sx_name_below(pc_sx *c, const pc_xml_node *n, const char *base, const char *rel, char out[PATH_MAX]) {
+  size_t k = 0;
+  const char *slash = strrchr(base, '/');
+  if (slash) {
+    memcpy(out, base, (size_t)(slash - base));
+    k = (size_t)(slash - base);
+  }
+  for (const char *s = rel; *s;) {
+    const char *end = strchr(s, '/');
+    size_t len = end ? (size_t)(end - s) : strlen(s);
+    if (len == 2 && s[0] == '.' && s[1] == '.') {
+      if (k == 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: '%s' lies outside the scene folder", c->file, n->line, rel);
+      while (k > 0 && out[k - 1] != '/') k--;
+      if (k > 0) k--;
+    } else if (len > 0 && !(len == 1 && s[0] == '.')) {
+      if (k + len + 2 > PATH_MAX) return pc_errf(c->e, PC_ELIMIT, "%s:%d: path '%s' too long", c->file, n->line, rel);
+      if (k) out[k++] = '/';
+      memcpy(out + k, s, len);
+      k += len;
+    }
+    s += len + (end ? 1 : 0);
+  }
+  out[k] = 0;
+  if (k == 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: '%s' names no file", c->file, n->line, rel);
+  return 0;
+}
 
 int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *rel, char **out) {
   *out = NULL;
@@ -333,17 +502,22 @@ int pc_sx_resolve(pc_sx *c, const pc_xml_node *n, const char *what, const char *
   if (rel[0] == '/')
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: absolute path '%s' (paths must be relative to the scene folder)", c->file,
                    n->line, what, rel);
-  size_t dl = strlen(c->dir), rl = strlen(rel);
-  if (dl + rl + 2 > PATH_MAX) return pc_errf(c->e, PC_ELIMIT, "%s:%d: %s: path too long", c->file, n->line, what);
+  /* Relative to the main scene file's folder, as Mitsuba's file resolver has it (also inside
+   * included files); confined to the root folder. */
+  const char *scene = c->incl_stack[0], *slash = strrchr(scene, '/');
+  size_t dl = strlen(c->dir);
   char joined[PATH_MAX], real[PATH_MAX];
-  memcpy(joined, c->dir, dl);
-  joined[dl] = '/';
-  memcpy(joined + dl + 1, rel, rl + 1);
+  if ((size_t)snprintf(joined, sizeof joined, "%.*s/%s", (int)(slash - scene), scene, rel) >= sizeof joined)
+    return pc_errf(c->e, PC_ELIMIT, "%s:%d: %s: path too long", c->file, n->line, what);
   if (!realpath(joined, real))
     return pc_errf(c->e, PC_EIO, "%s:%d: %s: cannot find '%s': %s", c->file, n->line, what, rel, strerror(errno));
   bool inside = strcmp(c->dir, "/") == 0 || (strncmp(real, c->dir, dl) == 0 && real[dl] == '/');
   if (!inside)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: '%s' lies outside the scene folder", c->file, n->line, what, rel);
+  char name[PATH_MAX];
+  int rc = pc_sx_name_below(c, n, c->incl_names[0], rel, name);
+  if (!rc) rc = pc_sx_note_file(c, real, name);
+  if (rc) return rc;
   *out = strdup(real);
   if (!*out) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
   return 0;

@@ -14,11 +14,13 @@
 
 #define DISK_SEGMENTS 256
 
+/* id_ok: the element can be referred to; elsewhere an id is accepted with a warning. */
 static int object_type(pc_sx *c, const pc_xml_node *n, bool id_ok, const char **type) {
-  static const char *const with_id[] = {"type", "id", NULL};
-  static const char *const no_id[] = {"type", NULL};
-  int rc = pc_xml_check_attrs(c->file, n, id_ok ? with_id : no_id, c->e);
+  static const char *const with_id[] = {"type", "id", "name", NULL}; /* Mitsuba's schema allows a name on any object */
+  int rc = pc_xml_check_attrs(c->file, n, with_id, c->e);
   if (rc) return rc;
+  if (!id_ok && pc_xml_attr(n, "id") && (rc = pc_sx_warn(c, n, "<%s>: id ignored (nothing refers to it)", n->name)))
+    return rc;
   *type = pc_xml_attr(n, "type");
   if (!*type) return pc_errf(c->e, PC_EPARSE, "%s:%d: <%s> lacks a type", c->file, n->line, n->name);
   return 0;
@@ -32,47 +34,99 @@ static int only_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_para
   return rc;
 }
 
-static int integrator(pc_sx *c, const pc_xml_node *n) {
+/* The first <medium> anywhere in the tree, or NULL. */
+static const pc_xml_node *find_medium(const pc_xml_node *n) {
+  for (; n; n = n->next) {
+    if (strcmp(n->name, "medium") == 0) return n;
+    const pc_xml_node *m = find_medium(n->first); /* recursion bounded by PC_XML_MAX_DEPTH */
+    if (m) return m;
+  }
+  return NULL;
+}
+
+static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, false, &type);
   if (rc) return rc;
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "integrator '%.60s'", type);
   if (strcmp(type, "path") == 0) c->s->method = PC_METHOD_PT;
   else if (strcmp(type, "bdpt") == 0) c->s->method = PC_METHOD_BDPT;
   else if (strcmp(type, "pcbpt") == 0) c->s->method = PC_METHOD_PCBPT;
-  else return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported integrator plugin '%s' (path, bdpt or pcbpt)", c->file, n->line, type);
-  char what[PC_SX_WHAT_MAX];
-  snprintf(what, sizeof what, "integrator '%s'", type);
+  else {
+    /* Another integrator computes the same image (up to noise) unless the scene holds what only
+     * it models: participating media, which pcbpt does not. */
+    const pc_xml_node *m = find_medium(root->first);
+    if (m)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: the scene has participating media (<medium> on line %d): not modelled by pcbpt",
+                     c->file, n->line, what, m->line);
+    if ((rc = pc_sx_warn(c, n, "%s: not a pcbpt method; rendering with the default (%s, or --method)", what,
+                         pc_method_name(c->s->method))))
+      return rc;
+  }
   int depth = -1;
-  /* Any other parameter (rrDepth, lightImage, ...) is refused: pcbpt's Russian roulette is
-   * local by design and the rest changes what is rendered. */
-  pc_param p[] = {{"maxDepth", PC_P_INT, &depth, 0, 0}};
-  if ((rc = only_params(c, n, what, p, 1))) return rc;
+  bool hide = false, light_image = true;
+  /* maxDepth is honoured; rrDepth is ignored since pcbpt's Russian roulette is local by design;
+   * the two switches that leave light out of the image are refused when set; every other
+   * parameter only steers that integrator's own sampling. */
+  pc_param p[] = {{"maxDepth", PC_P_INT, &depth, 0, 0},
+                  {"rrDepth", PC_P_IGNORED, "pcbpt's Russian roulette depends on local vertex data only", 0, 0},
+                  {"hideEmitters", PC_P_BOOL, &hide, 0, 0}, {"lightImage", PC_P_BOOL, &light_image, 0, 0},
+                  {"*", PC_P_IGNORED, "it steers that integrator's own sampling, not the image", 0, 0}};
+  if ((rc = pc_sx_params(c, n, what, p, 5))) return rc;
+  if (hide || !light_image)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: '%s' (leaving light out of the image): not modelled by pcbpt", c->file,
+                   hide ? p[2].line : p[3].line, what, hide ? "hideEmitters" : "lightImage");
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next)
+    if (!pc_sx_is_param(ch, p, 5) && (rc = pc_sx_warn(c, ch, "%s: nested <%s> ignored", what, ch->name))) return rc;
   if (depth == 0 || depth < -1)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
   c->s->max_depth = depth;
   return 0;
 }
 
+/* pcbpt splats every sample into its pixel, which is Mitsuba's box filter; another filter
+ * only blurs the same image a little. */
+static int rfilter(pc_sx *c, const pc_xml_node *n) {
+  const char *ft;
+  int rc = object_type(c, n, false, &ft);
+  if (rc) return rc;
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "rfilter '%.60s'", ft);
+  if (strcmp(ft, "box") != 0 && (rc = pc_sx_warn(c, n, "%s: pcbpt splats with a box filter", what))) return rc;
+  pc_param p[] = {{"*", PC_P_IGNORED, "pcbpt splats with a box filter", 0, 0}};
+  return only_params(c, n, what, p, 1);
+}
+
 static int film(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, false, &type);
   if (rc) return rc;
-  if (strcmp(type, "hdrfilm") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported film plugin '%s' (hdrfilm)", c->file, n->line, type);
-  int w = 768, h = 576;
-  pc_param p[] = {{"width", PC_P_INT, &w, 0, 0}, {"height", PC_P_INT, &h, 0, 0}};
-  if ((rc = pc_sx_params(c, n, "film 'hdrfilm'", p, 2))) return rc;
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "film '%.60s'", type);
+  bool ldr = strcmp(type, "ldrfilm") == 0;
+  if (strcmp(type, "hdrfilm") != 0 && strcmp(type, "tiledhdrfilm") != 0 && !ldr)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported film plugin '%s' (hdrfilm, tiledhdrfilm, ldrfilm)", c->file,
+                   n->line, type);
+  if (ldr && (rc = pc_sx_warn(c, n, "%s: pcbpt writes a linear EXR (plus a PNG preview); only the size is used", what)))
+    return rc;
+  int w = 768, h = 576, crop = 0;
+  pc_param p[] = {{"width", PC_P_INT, &w, 0, 0}, {"height", PC_P_INT, &h, 0, 0},
+                  {"cropOffsetX", PC_P_INT, &crop, 0, 0}, {"cropOffsetY", PC_P_INT, &crop, 0, 0},
+                  {"cropWidth", PC_P_INT, &crop, 0, 0}, {"cropHeight", PC_P_INT, &crop, 0, 0},
+                  {"*", PC_P_IGNORED, "it sets the output file, not the image", 0, 0}};
+  if ((rc = pc_sx_params(c, n, what, p, 7))) return rc;
+  for (int i = 2; i < 6; i++)
+    if (p[i].set)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: '%s' (a crop window) is not supported", c->file, p[i].line, what,
+                     p[i].name);
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
-    if (pc_sx_is_param(ch, p, 2)) continue;
-    if (strcmp(ch->name, "rfilter") != 0) return pc_sx_unexpected(c, ch, "film 'hdrfilm'");
-    const char *ft;
-    if ((rc = object_type(c, ch, false, &ft))) return rc;
-    if (strcmp(ft, "box") != 0)
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported rfilter plugin '%s' (only box)", c->file, ch->line, ft);
-    if (ch->first) return pc_sx_unexpected(c, ch->first, "rfilter 'box'");
+    if (pc_sx_is_param(ch, p, 7)) continue;
+    if (strcmp(ch->name, "rfilter") != 0) return pc_sx_unexpected(c, ch, what);
+    if ((rc = rfilter(c, ch))) return rc;
   }
   if (w < 1 || w > PC_SCENE_MAX_FILM_DIM || h < 1 || h > PC_SCENE_MAX_FILM_DIM)
-    return pc_errf(c->e, PC_EINVAL, "%s:%d: film 'hdrfilm': width and height must lie in 1..%d", c->file, n->line,
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: width and height must lie in 1..%d", c->file, n->line, what,
                    PC_SCENE_MAX_FILM_DIM);
   c->s->camera.width = w;
   c->s->camera.height = h;
@@ -90,34 +144,54 @@ static bool is_rigid(const mat4 *m) {
   return true;
 }
 
+/* pcbpt draws its own independent samples; the sampler's sampleCount is the default number of
+ * iterations (one sample per pixel each), as it is Mitsuba's samples per pixel. */
+static int sampler(pc_sx *c, const pc_xml_node *n) {
+  const char *type;
+  int rc = object_type(c, n, false, &type);
+  if (rc) return rc;
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "sampler '%.60s'", type);
+  int count = 4; /* Mitsuba's default */
+  pc_param p[] = {{"sampleCount", PC_P_INT, &count, 0, 0},
+                  {"*", PC_P_IGNORED, "pcbpt draws independent samples", 0, 0}};
+  if ((rc = only_params(c, n, what, p, 2))) return rc;
+  if (count < 1) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: sampleCount must be at least 1", c->file, p[0].line, what);
+  c->s->sample_count = count;
+  return pc_sx_warn(c, n, "%s: pcbpt draws its own samples; sampleCount %d is the default iteration count", what, count);
+}
+
 static int sensor(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
   if (strcmp(type, "perspective") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported sensor plugin '%s' (perspective)", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: sensor '%s': not modelled by pcbpt (perspective)", c->file, n->line, type);
   const char *what = "sensor 'perspective'";
   pc_camera *cam = &c->s->camera;
-  float fov = 0, near_clip = 1e-2f, far_clip = 1e4f;
+  float fov = 0;
   const char *axis = "x";
   mat4 xf = mat4_identity();
-  /* nearClip/farClip are accepted and ignored: pcbpt does not clip, which only differs for
-   * geometry closer than nearClip or beyond farClip. */
+  /* pcbpt does not clip, which only differs for geometry closer than nearClip or beyond
+   * farClip; focusDistance does nothing in a pinhole camera; a still image has no shutter. */
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
-                  {"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"nearClip", PC_P_FLOAT, &near_clip, 0, 0},
-                  {"farClip", PC_P_FLOAT, &far_clip, 0, 0}};
-  if ((rc = pc_sx_params(c, n, what, p, 5))) return rc;
+                  {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
+                  {"nearClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
+                  {"farClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
+                  {"focusDistance", PC_P_IGNORED, "a pinhole camera has no focus", 0, 0},
+                  {"shutterOpen", PC_P_IGNORED, "pcbpt renders a still image", 0, 0},
+                  {"shutterClose", PC_P_IGNORED, "pcbpt renders a still image", 0, 0}};
+  const int np = 8;
+  if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
   bool have_film = false;
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
-    if (pc_sx_is_param(ch, p, 5)) continue;
+    if (pc_sx_is_param(ch, p, np)) continue;
     if (strcmp(ch->name, "film") == 0) {
       if (have_film) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one film", c->file, ch->line, what);
       have_film = true;
       if ((rc = film(c, ch))) return rc;
     } else if (strcmp(ch->name, "sampler") == 0) {
-      return pc_errf(c->e, PC_EUNSUPPORTED,
-                     "%s:%d: %s: <sampler> is not supported (samples per pixel and time are command-line settings)",
-                     c->file, ch->line, what);
+      if ((rc = sampler(c, ch))) return rc;
     } else {
       return pc_sx_unexpected(c, ch, what);
     }
@@ -127,8 +201,6 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'fov' is required (focalLength is not supported)", c->file, n->line, what);
   if (!(fov > 0.f && fov < 180.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: fov must lie in (0, 180) degrees", c->file, p[0].line, what);
-  if (!(near_clip > 0.f && near_clip < far_clip))
-    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs 0 < nearClip < farClip", c->file, n->line, what);
   static const struct { const char *name; char c; } axes[] = {
       {"x", 'x'}, {"y", 'y'}, {"diagonal", 'd'}, {"smaller", 's'}, {"larger", 'l'}};
   cam->fov_axis = 0;
@@ -139,7 +211,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    what, axis);
   if (!is_rigid(&xf))
     return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: toWorld must be rigid (rotations, translations, mirror flips); it scales or shears",
+                   "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt",
                    c->file, p[2].line, what);
   cam->fov_deg = fov;
   cam->to_world = xf;
@@ -170,14 +242,21 @@ static int positive_color(pc_sx *c, const pc_param *p, vec3 v, const char *what)
   return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: '%s' must be positive in some channel", c->file, p->line, what, p->name);
 }
 
-static int area_emitter(pc_sx *c, const pc_xml_node *n, vec3 *radiance) {
+/* Mitsuba's samplingWeight scales how often the emitter is chosen; pcbpt multiplies it into its
+ * power-proportional choice, whose pdf every method uses alike. */
+static int sampling_weight(pc_sx *c, const pc_param *p, float w, const char *what) {
+  if (!p->set || (w > 0.f && w <= 1e6f)) return 0;
+  return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: samplingWeight must lie in (0, 1e6]", c->file, p->line, what);
+}
+
+static int area_emitter(pc_sx *c, const pc_xml_node *n, vec3 *radiance, float *weight) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
   if (strcmp(type, "area") != 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s' cannot be attached to a shape (only area)", c->file, n->line, type);
-  pc_param p[] = {{"radiance", PC_P_COLOR, radiance, 0, 0}};
-  if ((rc = only_params(c, n, "emitter 'area'", p, 1))) return rc;
+  pc_param p[] = {{"radiance", PC_P_COLOR, radiance, 0, 0}, {"samplingWeight", PC_P_FLOAT, weight, 0, 0}};
+  if ((rc = only_params(c, n, "emitter 'area'", p, 2)) || (rc = sampling_weight(c, &p[1], *weight, "emitter 'area'"))) return rc;
   if (!p[0].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area': 'radiance' is required", c->file, n->line);
   return positive_color(c, &p[0], *radiance, "emitter 'area'");
 }
@@ -197,7 +276,7 @@ static bool is_similarity(const mat4 *m, double *s) {
 }
 
 static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, const char *filename,
-                     pc_mesh *m) {
+                     int shape_index, bool *file_face_normals, pc_mesh *m) {
   int rc;
   if (strcmp(type, "rectangle") == 0) rc = pc_mesh_rectangle(m);
   else if (strcmp(type, "cube") == 0) rc = pc_mesh_cube(m);
@@ -206,7 +285,8 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
     if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
     char *path;
     if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
-    rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
+    if (type[0] == 's') rc = pc_mesh_load_serialized(path, shape_index, m, file_face_normals, c->e);
+    else rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
     free(path);
     return rc ? pc_sx_wrap(c, n, what, rc) : 0;
   }
@@ -217,14 +297,15 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
-  bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0;
+  bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "serialized") == 0;
   bool is_sphere = strcmp(type, "sphere") == 0;
   if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: unsupported shape plugin '%s'", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape '%s': not modelled by pcbpt", c->file, n->line, type);
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "shape '%s'", type);
   const char *filename = NULL;
-  bool face_normals = false, flip_normals = false, flip_tex = true;
+  bool face_normals = false, flip_normals = false, flip_tex = true, file_face_normals = false;
+  int shape_index = 0;
   mat4 xf = mat4_identity();
   vec3 center = v3s(0);
   float radius = 1.f;
@@ -234,6 +315,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
     p[np++] = (pc_param){"filename", PC_P_STRING, &filename, 0, 0};
     p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
     if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
+    if (type[0] == 's') p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
@@ -242,9 +324,13 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   int material = -1;
   bool emits = false;
   vec3 radiance = v3s(0);
+  float weight = 1.f;
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (pc_sx_is_param(ch, p, np)) continue;
     if (strcmp(ch->name, "bsdf") == 0 || strcmp(ch->name, "ref") == 0) {
+      if (material >= 0 && pc_xml_attr(ch, "name"))
+        return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: BSDFs named after the file's materials (usemtl): not modelled by pcbpt",
+                       c->file, ch->line, what);
       if (material >= 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one BSDF", c->file, ch->line, what);
       if (ch->name[0] == 'b') {
         if ((rc = pc_sx_bsdf(c, ch, &material))) return rc;
@@ -259,7 +345,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
       material = r->index;
     } else if (strcmp(ch->name, "emitter") == 0) {
       if (emits) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one emitter", c->file, ch->line, what);
-      if ((rc = area_emitter(c, ch, &radiance))) return rc;
+      if ((rc = area_emitter(c, ch, &radiance, &weight))) return rc;
       emits = true;
     } else {
       return pc_sx_unexpected(c, ch, what);
@@ -285,11 +371,11 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius must be positive and finite", c->file, n->line, what);
   } else {
     sh.kind = PC_SHAPE_MESH;
-    if ((rc = load_mesh(c, n, type, what, filename, &sh.mesh))) return rc;
+    if ((rc = load_mesh(c, n, type, what, filename, shape_index, &file_face_normals, &sh.mesh))) return rc;
     if (type[0] == 'o' && flip_tex && sh.mesh.uv)
       for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
     pc_mesh_transform(&sh.mesh, &xf);
-    if (face_normals) {
+    if (face_normals || file_face_normals) {
       free(sh.mesh.n);
       sh.mesh.n = NULL;
     } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {
@@ -313,6 +399,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
     memset(&l, 0, sizeof l);
     l.type = PC_LIGHT_AREA;
     l.radiance = radiance;
+    l.sampling_weight = weight;
     l.shape = c->s->nshapes - 1;
     if ((rc = add_light(c, n, &l, &c->s->shapes[c->s->nshapes - 1].light))) return rc;
   }
@@ -332,8 +419,10 @@ static int env_emitter(pc_sx *c, const pc_xml_node *n, const char *type, pc_ligh
   if (c->have_env)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: only one environment emitter per scene (as in Mitsuba)", c->file, n->line, what);
   if (type[0] == 'c') {
-    pc_param p[] = {{"radiance", PC_P_COLOR, &l->radiance, 0, 0}};
-    if ((rc = only_params(c, n, what, p, 1)) || (rc = positive_color(c, &p[0], l->radiance, what))) return rc;
+    pc_param p[] = {{"radiance", PC_P_COLOR, &l->radiance, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+    if ((rc = only_params(c, n, what, p, 2)) || (rc = positive_color(c, &p[0], l->radiance, what)) ||
+        (rc = sampling_weight(c, &p[1], l->sampling_weight, what)))
+      return rc;
     l->env_frame = (frame){v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
     c->have_env = true;
     return 0;
@@ -345,8 +434,8 @@ static int env_emitter(pc_sx *c, const pc_xml_node *n, const char *type, pc_ligh
   /* `cache` only decides whether Mitsuba writes a MIP-map file next to the image. */
   pc_param p[] = {{"filename", PC_P_STRING, &filename, 0, 0}, {"scale", PC_P_FLOAT, &l->env_scale, 0, 0},
                   {"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"gamma", PC_P_FLOAT, &gamma, 0, 0},
-                  {"cache", PC_P_BOOL, &cache, 0, 0}};
-  if ((rc = only_params(c, n, what, p, 5))) return rc;
+                  {"cache", PC_P_BOOL, &cache, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+  if ((rc = only_params(c, n, what, p, 6)) || (rc = sampling_weight(c, &p[5], l->sampling_weight, what))) return rc;
   if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
   if (!(l->env_scale > 0.f) || !isfinite(l->env_scale))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'scale' must be positive and finite", c->file, p[1].line, what);
@@ -375,6 +464,7 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
     return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area' must be nested in a <shape>", c->file, n->line);
   pc_light l;
   memset(&l, 0, sizeof l);
+  l.sampling_weight = 1.f;
   if (strcmp(type, "constant") == 0 || strcmp(type, "envmap") == 0) {
     if ((rc = env_emitter(c, n, type, &l))) {
       pc_env_free(&l);
@@ -386,8 +476,9 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
     l.shape = -1;
     mat4 xf = mat4_identity();
     pc_param p[] = {{"position", PC_P_POINT, &l.position, 0, 0}, {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
-                    {"intensity", PC_P_COLOR, &l.intensity, 0, 0}};
-    if ((rc = only_params(c, n, "emitter 'point'", p, 3))) return rc;
+                    {"intensity", PC_P_COLOR, &l.intensity, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l.sampling_weight, 0, 0}};
+    if ((rc = only_params(c, n, "emitter 'point'", p, 4)) || (rc = sampling_weight(c, &p[3], l.sampling_weight, "emitter 'point'")))
+      return rc;
     if (p[0].set && p[1].set)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'point': give position or toWorld, not both", c->file, n->line);
     if (p[1].set) l.position = mat4_point(&xf, v3s(0));
@@ -395,8 +486,7 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
       return pc_errf(c->e, PC_ENUMERIC, "%s:%d: emitter 'point': position is not finite", c->file, n->line);
     if ((rc = positive_color(c, &p[2], l.intensity, "emitter 'point'"))) return rc;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: unsupported emitter plugin '%s' (area in a shape, point, constant or envmap)", c->file, n->line, type);
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s': not modelled by pcbpt", c->file, n->line, type);
   }
   int idx;
   if ((rc = add_light(c, n, &l, &idx))) {
@@ -419,14 +509,23 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
   if (sscanf(v, "%d.%d.%d%n", &major, &minor, &patch, &end) != 3 || v[end] || major != 0 || minor < 4 || minor > 6)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: scene version '%s' unsupported (0.4.0 to 0.6.x)", c->file, root->line, v);
   bool have_integrator = false, have_sensor = false;
+  static const char *const param_elems[] = {"integer", "float", "boolean", "string", "rgb", "srgb", "spectrum",
+                                            "blackbody", "point", "vector", "transform", NULL};
   for (const pc_xml_node *ch = root->first; ch; ch = ch->next) {
     const char *el = ch->name;
     int idx;
+    c->file = ch->file ? ch->file : c->main_file; /* an included file's element */
     if (strcmp(el, "default") == 0) continue; /* applied by pc_sx_substitute */
-    if (strcmp(el, "integrator") == 0) {
+    bool is_param = false;
+    for (const char *const *pe = param_elems; *pe; pe++) is_param |= strcmp(el, *pe) == 0;
+    if (is_param) {
+      /* Mitsuba keeps scene-level parameters for plugins that ask; none of pcbpt's does. */
+      const char *name = pc_xml_attr(ch, "name");
+      rc = pc_sx_warn(c, ch, "scene: parameter '%.60s' ignored (no plugin reads scene-level parameters)", name ? name : "");
+    } else if (strcmp(el, "integrator") == 0) {
       if (have_integrator) return pc_errf(c->e, PC_EINVAL, "%s:%d: more than one <integrator>", c->file, ch->line);
       have_integrator = true;
-      rc = integrator(c, ch);
+      rc = integrator(c, root, ch);
     } else if (strcmp(el, "sensor") == 0) {
       if (have_sensor) return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: more than one <sensor>", c->file, ch->line);
       have_sensor = true;
@@ -443,41 +542,63 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
       rc = pc_sx_texture(c, ch, &idx);
     } else if (strcmp(el, "emitter") == 0) {
       rc = emitter(c, ch);
-    } else if (strcmp(el, "include") == 0) {
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: <include> is not supported (a scene is one file plus meshes and images)",
-                     c->file, ch->line);
     } else {
       return pc_sx_unexpected(c, ch, "scene");
     }
     if (rc) return rc;
   }
+  c->file = c->main_file;
   if (!have_sensor) return pc_errf(c->e, PC_EINVAL, "%s:%d: the scene has no <sensor>", c->file, root->line);
   return 0;
 }
 
-int pc_scene_load(const char *path, pc_scene *out, pc_err *e) {
+int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scene *out, pc_err *e) {
+  static const pc_scene_load_opts none = {0};
   memset(out, 0, sizeof *out);
   out->method = PC_METHOD_PT;
   out->max_depth = -1;
-  pc_sx c = {.file = path, .s = out, .e = e, .default_material = -1};
+  pc_sx c = {.file = path, .main_file = path, .s = out, .e = e, .default_material = -1, .opts = opts ? opts : &none};
   pc_xml_node *root = NULL;
-  char real[PATH_MAX];
+  char real[PATH_MAX], rootreal[PATH_MAX];
   int rc = 0;
   out->path = strdup(path);
   if (!out->path) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   else if (!realpath(path, real)) rc = pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
-  if (!rc) {
-    char *slash = strrchr(real, '/');
-    if (slash == real) slash[1] = 0;
+  if (!rc && c.opts->root) {
+    if (!realpath(c.opts->root, rootreal)) rc = pc_errf(e, PC_EIO, "%s: cannot open: %s", c.opts->root, strerror(errno));
+    size_t rl = strlen(rootreal);
+    if (!rc && !(strcmp(rootreal, "/") == 0 || (strncmp(real, rootreal, rl) == 0 && real[rl] == '/')))
+      rc = pc_errf(e, PC_EINVAL, "%s: the scene lies outside its root folder %s", path, c.opts->root);
+  } else if (!rc) {
+    memcpy(rootreal, real, sizeof real);
+    char *slash = strrchr(rootreal, '/');
+    if (slash == rootreal) slash[1] = 0;
     else *slash = 0;
-    c.dir = strdup(real);
-    if (!c.dir) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   }
+  if (!rc && (!(c.dir = strdup(rootreal)) || !(out->root = strdup(rootreal)) || !(c.incl_stack[0] = strdup(real))))
+    rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  if (!rc) {
+    /* below the root (checked above); the root itself is a folder */
+    size_t rl = strlen(rootreal);
+    const char *name = strcmp(rootreal, "/") == 0 ? real + 1 : real + rl + 1;
+    if (!(c.incl_names[0] = strdup(name))) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+    else c.incl_depth = 1;
+  }
+  if (!rc) rc = pc_sx_note_file(&c, real, c.incl_names[0]);
   if (!rc) rc = pc_xml_parse(path, path, &root, e);
   if (!rc) rc = pc_sx_substitute(&c, root);
   if (!rc) rc = scene_root(&c, root);
   pc_xml_free(root);
   free(c.dir);
+  if (c.incl_depth == 0) free((char *)c.incl_stack[0]); /* its name could not be allocated */
+  while (c.incl_depth > 0) {
+    free(c.incl_names[c.incl_depth - 1]);
+    free((char *)c.incl_stack[--c.incl_depth]);
+  }
+  for (int i = 0; i < c.nnames; i++) free(c.names[i]);
+  free(c.names);
+  for (int i = 0; i < c.nwarned; i++) free(c.warned[i]);
+  free(c.warned);
   for (int i = 0; i < c.nids; i++) free(c.ids[i].id);
   free(c.ids);
   free(c.id_table);
@@ -490,3 +611,5 @@ int pc_scene_load(const char *path, pc_scene *out, pc_err *e) {
   if (rc) pc_scene_free(out);
   return rc;
 }
+
+int pc_scene_load(const char *path, pc_scene *out, pc_err *e) { return pc_scene_load_with(path, NULL, out, e); }

@@ -4,6 +4,7 @@
 #ifndef PC_SCENE_XML_CTX_H
 #define PC_SCENE_XML_CTX_H
 
+#include <limits.h>
 #include <stdbool.h>
 
 #include "scene.h"
@@ -19,8 +20,18 @@ typedef struct pc_sx_id {
 } pc_sx_id;
 
 typedef struct pc_sx {
-  const char *file;  /* the scene path as given, for messages */
-  char *dir;         /* realpath of the scene's folder */
+  const char *file;  /* the file of the element being read (the scene path as given, or an
+                        included file's), for messages */
+  const char *main_file;
+  char *dir;         /* realpath of the folder confining every file reference (the root) */
+  const pc_scene_load_opts *opts; /* never NULL */
+  char **warned;     /* warnings already given (without their location), so each is given once */
+  int nwarned, cap_warned;
+  char **names;      /* display names of included files (owned; nodes point at them) */
+  int nnames, cap_names;
+  const char *incl_stack[16]; /* real paths of the files being included, for loop detection */
+  char *incl_names[16];       /* their names below the root (see pc_scene.file_names) */
+  int incl_depth;
   pc_scene *s;
   pc_err *e;
   pc_sx_id *ids;
@@ -32,6 +43,7 @@ typedef struct pc_sx {
   int default_material;     /* Mitsuba's diffuse 0.5 for shapes without a BSDF, -1 until needed */
   bool have_env;            /* an environment emitter was declared (Mitsuba allows one) */
   int cap_shapes, cap_materials, cap_textures, cap_lights;
+  unsigned long long file_bytes; /* sizes of the files noted so far, against opts->max_file_bytes */
 } pc_sx;
 
 /* Parameter kinds a plugin declares. */
@@ -45,6 +57,8 @@ typedef enum {
   PC_P_POINT,     /* <point> -> vec3 */
   PC_P_TRANSFORM, /* <transform> -> mat4 */
   PC_P_IOR,       /* <float> or <string> with a Mitsuba IOR name -> float */
+  PC_P_IGNORED,   /* any value, accepted with a warning; out is the reason (const char *).
+                     The name "*" matches every parameter the list does not name. */
 } pc_param_kind;
 
 typedef struct pc_param {
@@ -66,6 +80,22 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
 bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np);
 /* Error for a child element the caller does not accept. */
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what);
+
+/* A warning "file:line: what: message" through opts->warn, once per distinct "what: message";
+ * with --strict it is the error instead (returns its code; 0 otherwise). */
+int pc_sx_warn(pc_sx *c, const pc_xml_node *n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The name below the root of `rel` taken relative to the folder of the file named `base` (a
+ * name below the root): "." and empty parts dropped, ".." taken lexically, as in the unpacked
+ * bundle; NULL-terminated into out. Fails if it leaves the root. */
+int pc_sx_name_below(pc_sx *c, const pc_xml_node *n, const char *base, const char *rel, char out[PATH_MAX]);
+/* Records a file the scene read (for bundles): its real path and its name below the root. */
+int pc_sx_note_file(pc_sx *c, const char *real, const char *name);
+
+/* <include filename=...> at scene level (its attributes already substituted): parses the file
+ * into *root (the caller splices root's children in the include's place and frees root) and
+ * pushes it on the include stack; pc_sx_include_close pops it when its children are done. */
+int pc_sx_include_open(pc_sx *c, const pc_xml_node *incl, pc_xml_node **root);
+void pc_sx_include_close(pc_sx *c);
 
 /* Registers an id (duplicates are errors). */
 int pc_sx_id_add(pc_sx *c, const char *id, pc_id_kind kind, int index, int line);

@@ -15,6 +15,8 @@
 typedef struct pc_xml_node {
   char *name;
   int line;
+  const char *file;  /* set by the scene loader on elements spliced in by <include>; NULL: the
+                        main file (not owned) */
   int nattrs;
   char **attrs; /* 2*nattrs strings: name, value, ... */
   struct pc_xml_node *first, *next; /* children, siblings (document order) */

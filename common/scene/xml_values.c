@@ -2,6 +2,8 @@
  * names); see xml_values.h. */
 #include "xml_values.h"
 
+#include "spectrum.h"
+
 #include <ctype.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,6 +40,45 @@ int pc_xv_number(const char *file, const pc_xml_node *n, const char *attr, doubl
   return pc_xv_numbers(file, n, attr, pc_xml_attr(n, attr), out, 1, 1, &k, e);
 }
 
+/* "400:0.5, 500:0.6, ..." */
+static int sampled_spectrum(const char *file, const pc_xml_node *n, const char *val, double rgb[3], pc_err *e) {
+  double *l = malloc(2 * PC_SPECTRUM_MAX_SAMPLES * sizeof *l);
+  if (!l) return pc_errf(e, PC_ENOMEM, "%s:%d: out of memory", file, n->line);
+  double *v = l + PC_SPECTRUM_MAX_SAMPLES;
+  int m = 0, rc = 0;
+  const char *p = val;
+  for (;;) {
+    while (*p == ' ' || *p == ',' || *p == '\t' || *p == '\n' || *p == '\r') p++;
+    if (!*p) break;
+    if (m == PC_SPECTRUM_MAX_SAMPLES) {
+      rc = pc_errf(e, PC_ELIMIT, "%s:%d: <spectrum> has more than %d wavelength:value pairs", file, n->line, PC_SPECTRUM_MAX_SAMPLES);
+      break;
+    }
+    char *end;
+    l[m] = strtod(p, &end);
+    if (end == p || *end != ':') {
+      rc = pc_errf(e, PC_EPARSE, "%s:%d: <spectrum>: '%.30s' is not wavelength:value", file, n->line, p);
+      break;
+    }
+    p = end + 1;
+    v[m] = strtod(p, &end);
+    if (end == p || !(*end == 0 || *end == ' ' || *end == ',' || *end == '\t' || *end == '\n' || *end == '\r')) {
+      rc = pc_errf(e, PC_EPARSE, "%s:%d: <spectrum>: '%.30s' is not wavelength:value", file, n->line, p);
+      break;
+    }
+    if (!isfinite(l[m]) || !isfinite(v[m]) || v[m] < 0 || !(l[m] > 0)) {
+      rc = pc_errf(e, PC_EINVAL, "%s:%d: <spectrum>: wavelengths must be positive and values finite and not negative", file, n->line);
+      break;
+    }
+    p = end;
+    m++;
+  }
+  if (!rc && pc_spectrum_sampled_rgb(l, v, m, rgb) != 0)
+    rc = pc_errf(e, PC_EINVAL, "%s:%d: <spectrum>: needs at least 2 wavelengths, in increasing order", file, n->line);
+  free(l);
+  return rc;
+}
+
 static double srgb_to_linear(double c) {
   return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
@@ -47,17 +88,24 @@ int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
   int k = 0, rc;
   const char *val = pc_xml_attr(n, "value");
   if (strcmp(n->name, "spectrum") == 0) {
-    static const char *const allowed[] = {"name", "value", NULL};
+    static const char *const allowed[] = {"name", "value", "intent", NULL};
     if ((rc = pc_xml_check_attrs(file, n, allowed, e))) return rc;
-    if (val && strchr(val, ':'))
-      return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <spectrum> with wavelength:value pairs is unsupported (pcbpt renders RGB; use <rgb>)", file, n->line);
-    double many[16];
-    if ((rc = pc_xv_numbers(file, n, "value", val, many, 1, 16, &k, e))) return rc;
-    if (k != 1)
-      return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <spectrum> must be a single number (sampled spectra are unsupported; use <rgb>)", file, n->line);
-    v[0] = many[0];
-    v[1] = v[2] = v[0];
-  } else if (strcmp(n->name, "rgb") == 0 || strcmp(n->name, "srgb") == 0) {
+    if (val && strchr(val, ':')) {
+      if (pc_xml_attr(n, "intent"))
+        return pc_errf(e, PC_EPARSE, "%s:%d: <spectrum>: an intent goes with a single value only", file, n->line);
+      if ((rc = sampled_spectrum(file, n, val, v, e))) return rc;
+    } else {
+      double many[4];
+      if ((rc = pc_xv_numbers(file, n, "value", val, many, 1, 4, &k, e))) return rc;
+      /* Mitsuba's RGB mode: one value is grey (for an emitter, D65 scaled, which is grey in
+       * RGB mode), three are the RGB values themselves */
+      if (k != 1 && k != 3)
+        return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <spectrum> needs 1 or 3 values, or wavelength:value pairs (Mitsuba's RGB mode)",
+                       file, n->line);
+      if (k == 3 && pc_xml_attr(n, "intent"))
+        return pc_errf(e, PC_EPARSE, "%s:%d: <spectrum>: an intent goes with a single value only", file, n->line);
+      for (int i = 0; i < 3; i++) v[i] = many[k == 3 ? i : 0];
+    }  } else if (strcmp(n->name, "rgb") == 0 || strcmp(n->name, "srgb") == 0) {
     static const char *const allowed[] = {"name", "value", "intent", NULL};
     if ((rc = pc_xml_check_attrs(file, n, allowed, e))) return rc;
     const char *intent = pc_xml_attr(n, "intent");
@@ -85,7 +133,23 @@ int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
         v[i] = srgb_to_linear(v[i]);
       }
   } else if (strcmp(n->name, "blackbody") == 0) {
-    return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <blackbody> spectra are unsupported (pcbpt renders RGB; use <rgb>)", file, n->line);
+    static const char *const allowed[] = {"name", "temperature", "scale", NULL};
+    if ((rc = pc_xml_check_attrs(file, n, allowed, e))) return rc;
+    const char *t = pc_xml_attr(n, "temperature");
+    if (!t) return pc_errf(e, PC_EPARSE, "%s:%d: <blackbody> lacks a temperature", file, n->line);
+    char tbuf[64];
+    size_t tl = strlen(t);
+    if (tl >= sizeof tbuf) return pc_errf(e, PC_EPARSE, "%s:%d: <blackbody>: temperature too long", file, n->line);
+    memcpy(tbuf, t, tl + 1);
+    while (tl > 0 && tbuf[tl - 1] == ' ') tbuf[--tl] = 0;
+    if (tl > 0 && (tbuf[tl - 1] == 'K' || tbuf[tl - 1] == 'k')) tbuf[--tl] = 0; /* "5000K", as Mitsuba allows */
+    double kelvin, scale = 1;
+    if ((rc = pc_xv_numbers(file, n, "temperature", tbuf, &kelvin, 1, 1, &k, e))) return rc;
+    if (pc_xml_attr(n, "scale") && (rc = pc_xv_number(file, n, "scale", &scale, e))) return rc;
+    if (!(kelvin >= 100 && kelvin <= 1e6))
+      return pc_errf(e, PC_EINVAL, "%s:%d: <blackbody>: temperature must lie in 100..1e6 K", file, n->line);
+    pc_spectrum_blackbody_rgb(kelvin, v);
+    for (int i = 0; i < 3; i++) v[i] *= scale;
   } else {
     return pc_errf(e, PC_EPARSE, "%s:%d: expected <rgb>, <srgb> or <spectrum>, found <%s>", file, n->line, n->name);
   }

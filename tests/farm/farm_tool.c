@@ -3,12 +3,20 @@
  *       equal a single-process render of iterations [0, --spp) up to summation order:
  *       identical counts, relative 1e-9 on per-layer totals and on every pixel value
  *   farm_tool mean CKPT EXPECT TOL              |mean(beauty) - EXPECT| <= TOL * EXPECT
- *   farm_tool upload HOST:PORT TOKEN nan|size   speaks as a worker: takes a range and uploads
- *       a delta with a NaN sum or of the wrong size; exits 0 if the coordinator refuses it
+ *   farm_tool upload HOST:PORT TOKEN nan|size|huge|wrap   speaks as a worker: takes a range
+ *       and uploads a delta with a NaN sum, of the wrong size, with a finite sum no radiance
+ *       reaches (1.7e308), or of 2^64-1 iterations (first + count wraps); exits 0 if the
+ *       coordinator refuses it
  *   farm_tool bundle HOST:PORT TOKEN            sends a scene bundle whose content does not
  *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it
  *   farm_tool fail HOST:PORT TOKEN              speaks as a worker: takes a range and reports
- *       that it cannot render it */
+ *       that it cannot render it
+ *   farm_tool cancelack HOST:PORT TOKEN         an upload merged, the job cancelled before its
+ *       checkpoint: exits 0 if the upload is still answered
+ *   farm_tool hoard HOST:PORT TOKEN JOB SECONDS claims 1e8 iterations/s, takes a range and
+ *       only sends heartbeats; exits 0 if the range is taken back and a late upload refused
+ *   farm_tool badbundle HOST:PORT TOKEN KIND    submits a job on a bundle workers must refuse
+ *       (dotdot, absolute, noscene, dup, clash, notproto); prints the job id */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,6 +52,12 @@ static int load_ckpt(const char *path, pc_film *f, int w, int h, int depth, pc_e
   return rc;
 }
 
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 static double rel(double a, double b) {
   double m = fmax(fabs(a), fabs(b));
   return m > 0 ? fabs(a - b) / m : 0;
@@ -60,7 +74,9 @@ static int cmd_exact(int argc, char **argv) {
   pc_renderer *r = NULL;
   pc_film mine = {0}, farm = {0};
   pc_render_stats st = {0};
-  int rc = pc_scene_load(argv[1], &scene, &e);
+  pc_scene_load_opts lo;
+  pc_render_request_load_opts(&req, &lo);
+  int rc = pc_scene_load_with(argv[1], &lo, &scene, &e);
   if (!rc) {
     pc_render_request_apply_scene(&req, &scene);
     rc = pc_scene_build(&scene, &e);
@@ -155,66 +171,247 @@ static int cmd_fail(int argc, char **argv) {
   return rc ? 1 : 0;
 }
 
-static int cmd_upload(int argc, char **argv) {
-  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size"))) { fprintf(stderr, "upload HOST:PORT TOKEN nan|size\n"); return 2; }
-  pc_client cl;
-  pc_err e = {0};
-  Pcbpt__Envelope *in = NULL;
-  int rc = 1;
-  if (take_range(argv[1], argv[2], &cl, &in, &e)) { fprintf(stderr, "upload: %s\n", e.msg); return 1; }
-  Pcbpt__Assign *a = in->assign;
+/* Uploads a delta of iterations [first, first+count) of an assigned range, shaped like a
+ * real one (eye layers count the iterations, light layers w*h light paths per iteration)
+ * with zero sums but for the pt layer's first value; dw widens the film (a wrong size). */
+static int send_delta(pc_client *cl, const Pcbpt__Assign *a, uint64_t first, uint64_t count, bool final, int dw,
+                      double value, pc_err *e) {
   pc_render_settings s;
-  if (pc_wire_settings_from_proto(a->settings, &s, &e)) goto fail;
-  bool nan = strcmp(argv[3], "nan") == 0;
   pc_film f;
-  if (pc_film_init(&f, s.width + (nan ? 0 : 1), s.height, s.strategy_layers, &e)) goto fail;
-  for (int l = 0; l < f.nlayers; l++) f.layers[l].count = f.layers[l].norm == PC_NORM_EYE ? 1 : (uint64_t)s.width * s.height;
-  if (nan) f.layers[PC_LAYER_PT].sum[7] = NAN;
+  if (pc_wire_settings_from_proto(a->settings, &s, e) || pc_film_init(&f, s.width + dw, s.height, s.strategy_layers, e)) return 1;
+  for (int l = 0; l < f.nlayers; l++) f.layers[l].count = f.layers[l].norm == PC_NORM_EYE ? count : count * (uint64_t)s.width * s.height;
+  f.layers[PC_LAYER_PT].sum[7] = value;
   uint8_t *raw = NULL, *z = NULL;
   size_t rn, zn;
-  int prc = pc_wire_film_pack(&f, &raw, &rn, &e);
-  if (!prc) prc = pc_wire_compress(raw, rn, &z, &zn, &e);
+  int rc = pc_wire_film_pack(&f, &raw, &rn, e);
+  if (!rc) rc = pc_wire_compress(raw, rn, &z, &zn, e);
   pc_film_free(&f);
   free(raw);
-  if (prc) goto fail;
   uint32_t nchunks = (uint32_t)((zn + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK);
-  for (uint32_t i = 0; i < nchunks; i++) {
+  for (uint32_t i = 0; !rc && i < nchunks; i++) {
     Pcbpt__Envelope u = PCBPT__ENVELOPE__INIT;
     Pcbpt__UploadChunk c = PCBPT__UPLOAD_CHUNK__INIT;
     c.job_id = a->job_id;
     c.range_id = a->range_id;
-    c.first = a->first;
-    c.count = 1;
+    c.first = first;
+    c.count = count;
     c.index = i;
     c.nchunks = nchunks;
     c.raw_size = rn;
-    c.final = true;
+    c.final = final;
     c.data.data = z + (size_t)i * PC_WIRE_CHUNK;
     c.data.len = zn - (size_t)i * PC_WIRE_CHUNK < PC_WIRE_CHUNK ? zn - (size_t)i * PC_WIRE_CHUNK : PC_WIRE_CHUNK;
     u.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
     u.upload_chunk = &c;
-    if (pc_client_send(&cl, &u, &e)) { free(z); goto fail; }
+    rc = pc_client_send(cl, &u, e);
   }
   free(z);
-  printf("uploaded a %s delta for job %llu range %llu\n", argv[3], (unsigned long long)a->job_id, (unsigned long long)a->range_id);
-  pcbpt__envelope__free_unpacked(in, NULL);
-  in = NULL;
-  for (;;) {
-    if (pc_client_recv(&cl, 30, &in, &e)) goto fail;
-    if (in->msg_case == PCBPT__ENVELOPE__MSG_UPLOAD_ACK) break;
-    pcbpt__envelope__free_unpacked(in, NULL); /* heartbeat-free test peer: ignore anything else */
-    in = NULL;
+  return rc ? 1 : 0;
+}
+
+/* Waits up to `seconds` for the acknowledgement of an upload to `range` (anything else is
+ * skipped); 0 with *refused and its reason printed, 1 when none came. */
+static int wait_ack(pc_client *cl, uint64_t range, double seconds, bool *refused, pc_err *e) {
+  double end = now_s() + seconds;
+  while (now_s() < end) {
+    Pcbpt__Envelope *in = NULL;
+    if (pc_client_recv(cl, end - now_s(), &in, e)) return 1;
+    bool hit = in->msg_case == PCBPT__ENVELOPE__MSG_UPLOAD_ACK && in->upload_ack->range_id == range;
+    if (hit) {
+      *refused = in->upload_ack->refused;
+      printf("ack for range %llu: refused=%d reason: %s\n", (unsigned long long)range, *refused, in->upload_ack->reason);
+    }
+    pcbpt__envelope__free_unpacked(in, NULL);
+    if (hit) return 0;
   }
-  printf("ack: refused=%d reason: %s\n", in->upload_ack->refused, in->upload_ack->reason);
-  rc = in->upload_ack->refused ? 0 : 1;
+  pc_errf(e, PC_EIO, "no acknowledgement within %.0f s", seconds);
+  return 1;
+}
+
+static int send_heartbeat(pc_client *cl, uint64_t job, uint64_t range, double rate, uint64_t done, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__Heartbeat h = PCBPT__HEARTBEAT__INIT;
+  h.job_id = job;
+  h.range_id = range;
+  h.iterations_per_second = rate;
+  h.iterations_done = done;
+  env.msg_case = PCBPT__ENVELOPE__MSG_HEARTBEAT;
+  env.heartbeat = &h;
+  return pc_client_send(cl, &env, e);
+}
+
+/* Asks for a range claiming `rate` and waits for the assignment (skipping anything else). */
+static int request_range(pc_client *cl, double rate, Pcbpt__Envelope **in, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+  Pcbpt__WorkRequest wr = PCBPT__WORK_REQUEST__INIT;
+  wr.iterations_per_second = rate;
+  env.msg_case = PCBPT__ENVELOPE__MSG_WORK_REQUEST;
+  env.work_request = &wr;
+  if (pc_client_send(cl, &env, e)) return 1;
+  for (;;) {
+    if (pc_client_recv(cl, 10, in, e)) return 1;
+    if ((*in)->msg_case == PCBPT__ENVELOPE__MSG_ASSIGN) return 0;
+    pcbpt__envelope__free_unpacked(*in, NULL);
+    *in = NULL;
+  }
+}
+
+static int cmd_upload(int argc, char **argv) {
+  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size") && strcmp(argv[3], "huge") && strcmp(argv[3], "wrap"))) {
+    fprintf(stderr, "upload HOST:PORT TOKEN nan|size|huge|wrap\n");
+    return 2;
+  }
+  pc_client cl;
+  pc_err e = {0};
+  Pcbpt__Envelope *in = NULL;
+  if (take_range(argv[1], argv[2], &cl, &in, &e)) { fprintf(stderr, "upload: %s\n", e.msg); return 1; }
+  Pcbpt__Assign *a = in->assign;
+  bool size = strcmp(argv[3], "size") == 0, refused = false;
+  double value = strcmp(argv[3], "nan") == 0 ? NAN : strcmp(argv[3], "huge") == 0 ? 1.7e308 : 0;
+  /* wrap: 2^64-1 iterations from first + 1, so first + count wraps round to first */
+  bool wrap = strcmp(argv[3], "wrap") == 0;
+  int rc = send_delta(&cl, a, wrap ? a->first + 1 : a->first, wrap ? UINT64_MAX : 1, true, size ? 1 : 0, value, &e);
+  if (!rc) printf("uploaded a %s delta for job %llu range %llu\n", argv[3], (unsigned long long)a->job_id, (unsigned long long)a->range_id);
+  if (!rc) rc = wait_ack(&cl, a->range_id, 30, &refused, &e);
+  if (rc) fprintf(stderr, "upload: %s\n", e.msg);
   pcbpt__envelope__free_unpacked(in, NULL);
   pc_client_close(&cl);
-  return rc;
-fail:
-  if (in) pcbpt__envelope__free_unpacked(in, NULL);
-  fprintf(stderr, "upload: %s\n", e.msg);
+  return rc || !refused;
+}
+
+/* A merge acknowledged at the next checkpoint, then the job cancelled before that
+ * checkpoint: the upload must still be answered, or a worker would wait for it forever. */
+static int cmd_cancelack(int argc, char **argv) {
+  if (argc != 3) { fprintf(stderr, "cancelack HOST:PORT TOKEN\n"); return 2; }
+  pc_client cl, cc;
+  pc_err e = {0};
+  Pcbpt__Envelope *in = NULL, *in2 = NULL;
+  bool refused = false;
+  if (take_range(argv[1], argv[2], &cl, &in, &e)) { fprintf(stderr, "cancelack: %s\n", e.msg); return 1; }
+  Pcbpt__Assign *a = in->assign;
+  /* the probe range, committed at once (its last upload); then a range of 100 iterations */
+  int rc = send_heartbeat(&cl, a->job_id, a->range_id, 100, 0, &e);
+  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, &e);
+  if (!rc) rc = wait_ack(&cl, a->range_id, 10, &refused, &e);
+  if (!rc) rc = request_range(&cl, 100, &in2, &e);
+  if (!rc && in2->assign->count < 2) rc = pc_errf(&e, PC_EINVAL, "a range of %llu iterations", (unsigned long long)in2->assign->count);
+  /* one iteration of it: merged, its acknowledgement waits for the next checkpoint */
+  if (!rc) rc = send_delta(&cl, in2->assign, in2->assign->first, 1, false, 0, 0, &e);
+  struct timespec ts = {0, 200000000};
+  nanosleep(&ts, NULL);
+  if (!rc && !(rc = pc_client_connect(argv[1], argv[2], &cc, &e))) {
+    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *rep = NULL;
+    Pcbpt__CancelRequest cr = PCBPT__CANCEL_REQUEST__INIT;
+    cr.job_id = a->job_id;
+    env.msg_case = PCBPT__ENVELOPE__MSG_CANCEL_REQUEST;
+    env.cancel_request = &cr;
+    rc = pc_client_send(&cc, &env, &e);
+    if (!rc) rc = pc_client_recv(&cc, 10, &rep, &e);
+    if (rep) pcbpt__envelope__free_unpacked(rep, NULL);
+    pc_client_close(&cc);
+    printf("cancelled job %llu\n", (unsigned long long)a->job_id);
+  }
+  if (!rc) rc = wait_ack(&cl, in2->assign->range_id, 5, &refused, &e);
+  if (rc) fprintf(stderr, "cancelack: %s\n", e.msg);
+  pcbpt__envelope__free_unpacked(in, NULL);
+  if (in2) pcbpt__envelope__free_unpacked(in2, NULL);
   pc_client_close(&cl);
-  return 1;
+  return rc ? 1 : 0;
+}
+
+/* Claims a rate of 1e8 iterations/s for job JOB (a heartbeat naming it), takes a range and
+ * then only sends heartbeats, until the coordinator takes the range back (a Cancel of it)
+ * or SECONDS pass; then uploads the whole range, which must be refused. */
+static int cmd_hoard(int argc, char **argv) {
+  if (argc != 5) { fprintf(stderr, "hoard HOST:PORT TOKEN JOB SECONDS\n"); return 2; }
+  pc_client cl;
+  pc_err e = {0};
+  Pcbpt__Envelope *in = NULL;
+  bool refused = false, revoked = false;
+  uint64_t job = strtoull(argv[3], NULL, 10);
+  if (pc_client_connect_as(argv[1], argv[2], PCBPT__ROLE__ROLE_WORKER, &cl, &e)) { fprintf(stderr, "hoard: %s\n", e.msg); return 1; }
+  int rc = send_heartbeat(&cl, job, 999999999, 1e8, 0, &e);
+  if (!rc) rc = request_range(&cl, 1e8, &in, &e);
+  if (rc) { fprintf(stderr, "hoard: %s\n", e.msg); pc_client_close(&cl); return 1; }
+  Pcbpt__Assign *a = in->assign;
+  printf("hoarding range %llu [%llu,+%llu)\n", (unsigned long long)a->range_id, (unsigned long long)a->first, (unsigned long long)a->count);
+  double end = now_s() + atof(argv[4]);
+  while (!rc && !revoked && now_s() < end) {
+    rc = send_heartbeat(&cl, a->job_id, a->range_id, 1e8, 0, &e);
+    Pcbpt__Envelope *m = NULL;
+    pc_err te;
+    if (!rc && pc_client_recv(&cl, 0.5, &m, &te) == 0) {
+      revoked = m->msg_case == PCBPT__ENVELOPE__MSG_CANCEL && m->cancel->range_id == a->range_id && !m->cancel->upload_partial;
+      pcbpt__envelope__free_unpacked(m, NULL);
+    }
+  }
+  printf("%s after %.1f s; uploading the range anyway\n", revoked ? "taken back" : "not taken back", atof(argv[4]) - (end - now_s()));
+  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, &e);
+  if (!rc) rc = wait_ack(&cl, a->range_id, 10, &refused, &e);
+  if (rc) fprintf(stderr, "hoard: %s\n", e.msg);
+  pcbpt__envelope__free_unpacked(in, NULL);
+  pc_client_close(&cl);
+  return rc || !revoked || !refused;
+}
+
+/* Uploads a scene bundle its worker must refuse to unpack (its hash is right) and submits a
+ * job on it; prints the job id. */
+static int cmd_badbundle(int argc, char **argv) {
+  if (argc != 4) { fprintf(stderr, "badbundle HOST:PORT TOKEN dotdot|absolute|noscene|dup|clash|notproto\n"); return 2; }
+  const char *kind = argv[3];
+  Pcbpt__BundleFile f[2] = {PCBPT__BUNDLE_FILE__INIT, PCBPT__BUNDLE_FILE__INIT}, *fp[2] = {&f[0], &f[1]};
+  Pcbpt__Bundle b = PCBPT__BUNDLE__INIT;
+  static const char xml[] = "<scene version=\"0.6.0\"/>";
+  b.scene = "scene.xml";
+  b.files = fp;
+  b.n_files = 2;
+  f[0].path = "scene.xml";
+  f[0].data.data = (uint8_t *)xml;
+  f[0].data.len = sizeof xml - 1;
+  f[1].path = strcmp(kind, "dotdot") == 0 ? "../escape.obj" : strcmp(kind, "absolute") == 0 ? "/tmp/escape.obj"
+            : strcmp(kind, "dup") == 0 ? "scene.xml" : strcmp(kind, "clash") == 0 ? "scene.xml/m.obj" : "m.obj";
+  f[1].data.data = (uint8_t *)"v 0 0 0\n";
+  f[1].data.len = 8;
+  if (strcmp(kind, "noscene") == 0) b.scene = "other.xml";
+  size_t rn = pcbpt__bundle__get_packed_size(&b);
+  uint8_t *raw = malloc(rn + 32), *z = NULL, hash[PC_BUNDLE_HASH];
+  size_t zn;
+  pc_err e = {0};
+  if (!raw) return 1;
+  if (strcmp(kind, "notproto") == 0) rn = (size_t)snprintf((char *)raw, rn + 32, "\xff\xff\xff not a protobuf");
+  else pcbpt__bundle__pack(&b, raw);
+  int rc = pc_wire_compress(raw, rn, &z, &zn, &e);
+  free(raw);
+  if (!rc) rc = pc_bundle_hash(z, zn, hash, &e);
+  pc_client cl;
+  if (!rc) rc = pc_client_connect(argv[1], argv[2], &cl, &e);
+  if (!rc) {
+    rc = pc_client_send_bundle(&cl, z, zn, hash, &e);
+    Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+    Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+    Pcbpt__Settings ps;
+    pc_wire_settings_buf psb;
+    pc_render_settings s;
+    pc_render_settings_default(&s);
+    s.width = s.height = 16;
+    pc_wire_settings_to_proto(&s, &ps, &psb);
+    sub.name = (char *)kind;
+    sub.bundle_hash.data = hash;
+    sub.bundle_hash.len = PC_BUNDLE_HASH;
+    sub.settings = &ps;
+    sub.halt_iterations = 100;
+    env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+    env.submit = &sub;
+    if (!rc) rc = pc_client_send(&cl, &env, &e);
+    if (!rc) rc = pc_client_recv(&cl, 10, &in, &e);
+    if (!rc && in->msg_case == PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) printf("%llu\n", (unsigned long long)in->submit_reply->job_id);
+    else if (!rc) rc = pc_errf(&e, PC_EPARSE, "unexpected reply to submit");
+    if (in) pcbpt__envelope__free_unpacked(in, NULL);
+    pc_client_close(&cl);
+  }
+  free(z);
+  if (rc) fprintf(stderr, "badbundle: %s\n", e.msg);
+  return rc ? 1 : 0;
 }
 
 static int cmd_bundle(int argc, char **argv) {
@@ -237,9 +434,10 @@ static int cmd_bundle(int argc, char **argv) {
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   Pcbpt__Settings ps;
+  pc_wire_settings_buf psb;
   pc_render_settings s;
   pc_render_settings_default(&s);
-  pc_wire_settings_to_proto(&s, &ps);
+  pc_wire_settings_to_proto(&s, &ps, &psb);
   sub.name = "bad-bundle";
   sub.bundle_hash.data = hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
@@ -262,6 +460,11 @@ int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "upload") == 0) return cmd_upload(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "bundle") == 0) return cmd_bundle(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "fail") == 0) return cmd_fail(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN\n");
+  if (argc >= 2 && strcmp(argv[1], "cancelack") == 0) return cmd_cancelack(argc - 1, argv + 1);
+  if (argc >= 2 && strcmp(argv[1], "hoard") == 0) return cmd_hoard(argc - 1, argv + 1);
+  if (argc >= 2 && strcmp(argv[1], "badbundle") == 0) return cmd_badbundle(argc - 1, argv + 1);
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size|huge|wrap"
+                  " | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN | cancelack HOST:PORT TOKEN | hoard HOST:PORT TOKEN JOB SECONDS"
+                  " | badbundle HOST:PORT TOKEN KIND\n");
   return 2;
 }

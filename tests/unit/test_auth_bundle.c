@@ -4,6 +4,8 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <limits.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,10 +14,18 @@
 
 #include <cmocka.h>
 
+#include <zstd.h>
+
 #include "auth.h"
 #include "bundle.h"
+#include "pcbpt.pb-c.h"
+#include "scene.h"
+#include "wire_film.h"
 
 static char dir[256];
+/* a mesh the loader accepts */
+#define SENSOR "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>"
+#define TRI "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
 
 static void write_text(const char *path, const char *text, mode_t mode) {
   FILE *f = fopen(path, "w");
@@ -43,6 +53,16 @@ static void token_rules(void **st) {
   assert_int_equal(pc_auth_load_token(p, k2, &e), PC_EINVAL);
   snprintf(p, sizeof p, "%s/missing", dir);
   assert_int_equal(pc_auth_load_token(p, k2, &e), PC_EIO);
+  /* a symlinked token (how Kubernetes mounts secrets) is read; its target's mode is judged */
+  char target[300], link[300];
+  snprintf(target, sizeof target, "%s/token-target", dir);
+  snprintf(link, sizeof link, "%s/token-link", dir);
+  write_text(target, "correct horse battery", 0600);
+  assert_int_equal(symlink(target, link), 0);
+  assert_int_equal(pc_auth_load_token(link, k2, &e), 0);
+  assert_memory_equal(k1, k2, PC_AUTH_KEY);
+  chmod(target, 0644);
+  assert_int_equal(pc_auth_load_token(link, k2, &e), PC_EINVAL);
 }
 
 static void challenge_response(void **st) {
@@ -83,10 +103,15 @@ static void bundle_roundtrip(void **st) {
   snprintf(scene, sizeof scene, "%s/scene/s.xml", dir);
   write_text(scene, "<scene version=\"0.6.0\"><shape type=\"obj\"><string name=\"filename\" value=\"meshes/m.obj\"/></shape>"
                     "<shape type=\"obj\"><string name=\"filename\" value=\"meshes/m.obj\"/></shape></scene>", 0600);
+  /* the files as the scene loader lists them: real paths and names below the root, the scene first */
+  char rscene[PATH_MAX], rmesh[PATH_MAX];
+  assert_non_null(realpath(scene, rscene));
+  assert_non_null(realpath(mesh, rmesh));
+  const char *files[] = {rscene, rmesh}, *names[] = {"s.xml", "meshes/m.obj"};
   uint8_t *blob, hash[PC_BUNDLE_HASH], h2[PC_BUNDLE_HASH];
   size_t n;
   pc_err e;
-  assert_int_equal(pc_bundle_create(scene, &blob, &n, hash, &e), 0);
+  assert_int_equal(pc_bundle_create(files, names, 2, &blob, &n, hash, &e), 0);
   snprintf(cache, sizeof cache, "%s/cache", dir);
   assert_int_equal(pc_bundle_lookup(cache, hash, out, sizeof out), 0);
   memcpy(h2, hash, sizeof h2);
@@ -102,11 +127,116 @@ static void bundle_roundtrip(void **st) {
   /* unpacking again is a no-op */
   assert_int_equal(pc_bundle_unpack(blob, n, hash, cache, out2, sizeof out2, &e), 0);
   free(blob);
-  write_text(scene, "<scene><shape type=\"obj\"><string name=\"filename\" value=\"../../etc/passwd\"/></shape></scene>", 0600);
-  assert_int_equal(pc_bundle_create(scene, &blob, &n, hash, &e), PC_EINVAL);
-  assert_non_null(strstr(e.msg, "line 1"));
-  write_text(scene, "<scene><shape", 0600);
-  assert_int_equal(pc_bundle_create(scene, &blob, &n, hash, &e), PC_EPARSE);
+  /* a name outside the root is refused */
+  const char *outside[] = {"s.xml", "../passwd"};
+  assert_int_equal(pc_bundle_create(files, outside, 2, &blob, &n, hash, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "../passwd"));
+  assert_int_equal(pc_bundle_create(files, names, 0, &blob, &n, hash, &e), PC_EINVAL);
+}
+
+/* The bundle of a scene, as submit makes it: the files the loader read. */
+static int scene_bundle(const char *path, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
+  pc_scene s;
+  int rc = pc_scene_load(path, &s, e);
+  if (!rc) rc = pc_bundle_create((const char *const *)s.files, (const char *const *)s.file_names, s.nfiles, blob, n, hash, e);
+  pc_scene_free(&s);
+  if (rc) print_message("%s\n", e->msg);
+  return rc;
+}
+
+/* The files of a bundle, decoded (the test's own decoder of what workers receive). */
+static Pcbpt__Bundle *open_bundle(const uint8_t *blob, size_t n) {
+  uint8_t *raw = NULL;
+  pc_err e;
+  unsigned long long cs = ZSTD_getFrameContentSize(blob, n);
+  assert_true(cs < PC_BUNDLE_MAX);
+  assert_int_equal(pc_wire_decompress(blob, n, (size_t)cs, PC_BUNDLE_MAX, &raw, &e), 0);
+  Pcbpt__Bundle *b = pcbpt__bundle__unpack(NULL, (size_t)cs, raw);
+  free(raw);
+  assert_non_null(b);
+  return b;
+}
+
+/* X/scene.xml links to Y/scene.xml; X/mesh.obj links to a secret outside both. The scene's
+ * folder is Y (where the loader looks too), so Y/mesh.obj is bundled, never the secret; and
+ * a link from Y out of Y is refused, one within Y followed. (Issue 10, failure 3.) */
+static void bundle_symlinks(void **st) {
+  (void)st;
+  char x[300], y[300], p[400], q[400], scene[400];
+  snprintf(x, sizeof x, "%s/X", dir);
+  snprintf(y, sizeof y, "%s/Y", dir);
+  assert_int_equal(mkdir(x, 0700), 0);
+  assert_int_equal(mkdir(y, 0700), 0);
+  snprintf(p, sizeof p, "%s/secret", dir);
+  write_text(p, "SECRET-LINE\n", 0600);
+  snprintf(q, sizeof q, "%s/mesh.obj", x);
+  assert_int_equal(symlink(p, q), 0);
+  snprintf(p, sizeof p, "%s/mesh.obj", y);
+  write_text(p, TRI, 0600);
+  snprintf(p, sizeof p, "%s/scene.xml", y);
+  write_text(p, "<scene version=\"0.6.0\">" SENSOR "<shape type=\"obj\"><string name=\"filename\" value=\"mesh.obj\"/></shape>"
+                "<shape type=\"obj\"><string name=\"filename\" value=\"sub/m.obj\"/></shape></scene>", 0600);
+  snprintf(q, sizeof q, "%s/sub", y);
+  assert_int_equal(mkdir(q, 0700), 0);
+  snprintf(q, sizeof q, "%s/sub/m.obj", y);
+  assert_int_equal(symlink("../mesh.obj", q), 0); /* a link within the folder */
+  snprintf(scene, sizeof scene, "%s/scene.xml", x);
+  assert_int_equal(symlink(p, scene), 0);
+  uint8_t *blob, hash[PC_BUNDLE_HASH];
+  size_t n;
+  pc_err e;
+  assert_int_equal(scene_bundle(scene, &blob, &n, hash, &e), 0);
+  Pcbpt__Bundle *b = open_bundle(blob, n);
+  assert_int_equal(b->n_files, 3);
+  assert_string_equal(b->files[1]->path, "mesh.obj");
+  assert_string_equal(b->files[2]->path, "sub/m.obj");
+  for (size_t i = 0; i < b->n_files; i++) assert_null(memmem(b->files[i]->data.data, b->files[i]->data.len, "SECRET", 6));
+  assert_memory_equal(b->files[1]->data.data, TRI, strlen(TRI));
+  assert_memory_equal(b->files[2]->data.data, TRI, strlen(TRI)); /* under the name the scene uses */
+  pcbpt__bundle__free_unpacked(b, NULL);
+  free(blob);
+  /* Y/mesh.obj itself a link out of Y */
+  snprintf(p, sizeof p, "%s/mesh.obj", y);
+  assert_int_equal(unlink(p), 0);
+  snprintf(q, sizeof q, "%s/secret", dir);
+  assert_int_equal(symlink(q, p), 0);
+  assert_int_equal(scene_bundle(scene, &blob, &n, hash, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "lies outside the scene folder"));
+  assert_null(strstr(e.msg, "SECRET"));
+}
+
+/* "./m.obj" and "sub//m.obj" are files the loader finds: bundled under their plain names;
+ * an absolute path and ".." are refused with a message that says so. */
+static void bundle_path_forms(void **st) {
+  (void)st;
+  char d[300], p[400];
+  snprintf(d, sizeof d, "%s/forms", dir);
+  assert_int_equal(mkdir(d, 0700), 0);
+  snprintf(p, sizeof p, "%s/sub", d);
+  assert_int_equal(mkdir(p, 0700), 0);
+  snprintf(p, sizeof p, "%s/m.obj", d);
+  write_text(p, TRI, 0600);
+  snprintf(p, sizeof p, "%s/sub/m.obj", d);
+  write_text(p, TRI "v 1 0 0\n", 0600);
+  snprintf(p, sizeof p, "%s/scene.xml", d);
+#define OBJ(f) "<shape type=\"obj\"><string name=\"filename\" value=\"" f "\"/></shape>"
+  write_text(p, "<scene version=\"0.6.0\">" SENSOR OBJ("./m.obj") OBJ("sub//m.obj") OBJ("m.obj") "</scene>", 0600);
+  uint8_t *blob, hash[PC_BUNDLE_HASH];
+  size_t n;
+  pc_err e;
+  assert_int_equal(scene_bundle(p, &blob, &n, hash, &e), 0);
+  Pcbpt__Bundle *b = open_bundle(blob, n);
+  assert_int_equal(b->n_files, 3);
+  assert_string_equal(b->files[1]->path, "m.obj");
+  assert_string_equal(b->files[2]->path, "sub/m.obj");
+  pcbpt__bundle__free_unpacked(b, NULL);
+  free(blob);
+  write_text(p, "<scene version=\"0.6.0\">" SENSOR OBJ("/etc/passwd") "</scene>", 0600);
+  assert_int_equal(scene_bundle(p, &blob, &n, hash, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "absolute path"));
+  write_text(p, "<scene version=\"0.6.0\">" SENSOR OBJ("sub/../../forms/m.obj") "</scene>", 0600);
+  assert_int_equal(scene_bundle(p, &blob, &n, hash, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "lies outside the scene folder"));
 }
 
 int main(void) {
@@ -116,7 +246,8 @@ int main(void) {
   if (!mkdtemp(dir)) return 1;
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(token_rules), cmocka_unit_test(challenge_response), cmocka_unit_test(paths),
-    cmocka_unit_test(bundle_roundtrip),
+    cmocka_unit_test(bundle_roundtrip), cmocka_unit_test(bundle_symlinks),
+    cmocka_unit_test(bundle_path_forms),
   };
   int r = cmocka_run_group_tests(tests, NULL, NULL);
   char cmd[300];

@@ -1,4 +1,4 @@
-/* test_mesh.c: OBJ and PLY readers (fan triangulation, index forms, binary PLY, truncated and
+/* test_mesh.c: OBJ, PLY and Mitsuba serialized readers (fan triangulation, index forms, binary PLY, truncated and
  * oversized files, mutated files), mesh operations and method names. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,6 +11,7 @@
 #include "mesh.h"
 #include "scene.h"
 #include "test_helpers_fs.h"
+#include "test_helpers_serialized.h"
 
 static char g_dir[64];
 
@@ -273,6 +274,90 @@ static void test_ply_header_errors(void **state) {
   }
 }
 
+
+/* Mitsuba serialized files: versions 3 and 4, single and double precision, any shapeIndex,
+ * normals and texture coordinates; hostile and broken files fail with one line. */
+static void test_serialized(void **state) {
+  (void)state;
+  static const float tri_p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, quad_p[] = {0, 0, 1, 2, 0, 1, 2, 2, 1, 0, 2, 1};
+  static const float tri_n[] = {0, 0, 1, 0, 0, 1, 0, 0, 1}, quad_uv[] = {0, 0, 1, 0, 1, 1, 0, 1};
+  static const uint32_t tri_i[] = {0, 1, 2}, quad_i[] = {0, 1, 2, 0, 2, 3};
+  th_ser_shape shapes[2] = {{3, 1, tri_p, tri_n, NULL, tri_i, 3, 1, 0}, {4, 2, quad_p, NULL, quad_uv, quad_i, 4, 2, 0}};
+  char path[256];
+  snprintf(path, sizeof path, "%s/m.serialized", g_dir);
+  for (int version = 3; version <= 4; version++)
+    for (int dbl = 0; dbl <= 1; dbl++) {
+      assert_int_equal(th_write_serialized(path, shapes, 2, version, dbl), 0);
+      pc_mesh m;
+      pc_err e = {0};
+      bool fn = true;
+      int rc = pc_mesh_load_serialized(path, 1, &m, &fn, &e);
+      if (rc) print_error("v%d dbl %d: %s\n", version, dbl, e.msg);
+      assert_int_equal(rc, 0);
+      assert_false(fn);
+      assert_int_equal(m.nverts, 4);
+      assert_int_equal(m.ntris, 2);
+      assert_null(m.n);
+      assert_non_null(m.uv);
+      assert_true(m.p[2].x == 2 && m.p[2].y == 2 && m.p[2].z == 1 && m.uv[2].x == 1 && m.idx[5] == 3);
+      pc_mesh_free(&m);
+      assert_int_equal(pc_mesh_load_serialized(path, 0, &m, &fn, &e), 0);
+      assert_int_equal(m.ntris, 1);
+      assert_non_null(m.n);
+      assert_true(m.n[1].z == 1 && m.p[1].x == 1);
+      pc_mesh_free(&m);
+      assert_int_equal(pc_mesh_load_serialized(path, 2, &m, &fn, &e), PC_EINVAL);
+      assert_non_null(strstr(e.msg, "shapeIndex 2"));
+    }
+  pc_mesh m;
+  pc_err e = {0};
+  bool fn;
+  /* the file's face-normals flag */
+  th_ser_shape flat = {3, 1, tri_p, NULL, NULL, tri_i, 3, 1, 0x10};
+  assert_int_equal(th_write_serialized(path, &flat, 1, 4, 0), 0);
+  assert_int_equal(pc_mesh_load_serialized(path, 0, &m, &fn, &e), 0);
+  assert_true(fn);
+  pc_mesh_free(&m);
+  /* a header claiming 2^40 vertices: one line, no allocation of that size */
+  th_ser_shape huge = {(uint64_t)1 << 40, 1, tri_p, NULL, NULL, tri_i, 3, 1, 0};
+  assert_int_equal(th_write_serialized(path, &huge, 1, 4, 0), 0);
+  assert_int_equal(pc_mesh_load_serialized(path, 0, &m, &fn, &e), PC_ELIMIT);
+  assert_non_null(strstr(e.msg, "1099511627776 vertices"));
+  assert_null(strchr(e.msg, '\n'));
+  /* fewer data than the counts claim */
+  th_ser_shape shortd = {30, 1, tri_p, NULL, NULL, tri_i, 3, 1, 0};
+  assert_int_equal(th_write_serialized(path, &shortd, 1, 4, 0), 0);
+  assert_int_equal(pc_mesh_load_serialized(path, 0, &m, &fn, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "ends early"));
+  /* an index out of range */
+  static const uint32_t bad_i[] = {0, 1, 7};
+  th_ser_shape badidx = {3, 1, tri_p, NULL, NULL, bad_i, 3, 1, 0};
+  assert_int_equal(th_write_serialized(path, &badidx, 1, 4, 0), 0);
+  assert_int_equal(pc_mesh_load_serialized(path, 0, &m, &fn, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "vertex 7"));
+  /* not a serialized file, a bad dictionary, every truncation and byte flip of a good file */
+  assert_int_equal(pc_mesh_load_serialized(put("x.serialized", "hello world!", 12), 0, &m, &fn, &e), PC_EPARSE);
+  assert_int_equal(th_write_serialized(path, shapes, 2, 4, 0), 0);
+  size_t len = 0;
+  char *good = th_read(path, &len);
+  assert_non_null(good);
+  good[len - 4] = 9; /* 9 shapes */
+  assert_int_equal(pc_mesh_load_serialized(put("d.serialized", good, len), 1, &m, &fn, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "dictionary"));
+  good[len - 4] = 2;
+  for (size_t cut = 0; cut < len; cut++) {
+    if (pc_mesh_load_serialized(put("t.serialized", good, cut), 1, &m, &fn, &e) == 0) pc_mesh_free(&m);
+  }
+  for (size_t i = 0; i < len; i++) {
+    char *mut = malloc(len);
+    memcpy(mut, good, len);
+    mut[i] ^= (char)0x5a;
+    if (pc_mesh_load_serialized(put("f.serialized", mut, len), (int)(i % 2), &m, &fn, &e) == 0) pc_mesh_free(&m);
+    free(mut);
+  }
+  free(good);
+}
+
 static void test_mesh_ops(void **state) {
   (void)state;
   /* three right triangles meeting at the origin, one per coordinate plane, all facing out of
@@ -373,7 +458,7 @@ int main(void) {
       cmocka_unit_test(test_obj_errors),          cmocka_unit_test(test_ply_ascii),
       cmocka_unit_test(test_ply_binary),          cmocka_unit_test(test_ply_header_errors),
       cmocka_unit_test(test_mesh_ops),            cmocka_unit_test(test_methods),
-      cmocka_unit_test(test_mutations),
+      cmocka_unit_test(test_mutations),           cmocka_unit_test(test_serialized),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -256,10 +256,46 @@ static void film_blocks(void **st) {
   free_film(&a); free_film(&b);
 }
 
+/* A delta's sums are bounded per sample of their layer (2^64 each): 1.7e308 in one sample is
+ * refused, even though finite (two such add to +inf); a sum near the bound for its count is
+ * taken; a checkpoint (unpack) is only checked for finiteness. (Issue 10, failure 6.) */
+static void film_bounds(void **st) {
+  (void)st;
+  pc_film a, b;
+  make_film(&a, 50, 50);
+  make_film(&b, 50, 50);
+  a.layers[0].count = 1;
+  a.layers[1].count = 1000;
+  a.layers[0].sum[4100] = 1.7e308;
+  uint8_t *buf;
+  size_t n;
+  pc_err e;
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  assert_int_equal(pc_wire_film_add(buf, n, &b, NULL, NULL, &e), PC_ENUMERIC);
+  assert_non_null(strstr(e.msg, "beyond any radiance for 1 samples"));
+  assert_true(b.layers[0].sum[4100] == 0 && b.layers[0].count == 0);
+  assert_int_equal(pc_wire_film_unpack(buf, n, &b, &e), 0);
+  free(buf);
+  a.layers[0].sum[4100] = 1.5e19;   /* < 2^64 for 1 sample */
+  a.layers[1].sum[7499] = -1.5e22;  /* < 1000 * 2^64 */
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  free_film(&b);
+  make_film(&b, 50, 50);
+  assert_int_equal(pc_wire_film_add(buf, n, &b, NULL, NULL, &e), 0);
+  free(buf);
+  a.layers[1].sum[7499] = -1e30;    /* > 1024 * 2^64 */
+  assert_int_equal(pc_wire_film_pack(&a, &buf, &n, &e), 0);
+  assert_int_equal(pc_wire_film_add(buf, n, &b, NULL, NULL, &e), PC_ENUMERIC);
+  assert_non_null(strstr(e.msg, "layer 1 at pixel 2499"));
+  free(buf);
+  free_film(&a); free_film(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
+    cmocka_unit_test(film_bounds),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

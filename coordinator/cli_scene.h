@@ -1,0 +1,17 @@
+/* cli_scene.h: loading a request's scene for the verbs that render (see cli_scene.c). */
+#ifndef PC_CLI_SCENE_H
+#define PC_CLI_SCENE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bundle.h"
+#include "render_flags.h"
+
+/* Loads path with req's loader options (warnings to stderr as "pcbpt-coord VERB: ..."), then
+ * lets the scene fill what the flags left open (64 iterations if neither it nor they say). */
+int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path, pc_scene *s, pc_err *e);
+/* The bundle of a loaded scene: every file it read, below its root folder. */
+int pc_cli_scene_bundle(const pc_scene *s, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
+
+#endif
