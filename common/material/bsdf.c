@@ -8,6 +8,7 @@
 
 void pc_material_prepare(pc_material *m) {
   if (m->type == PC_MAT_PLASTIC || m->type == PC_MAT_ROUGHPLASTIC) pc_plastic_prepare(m);
+  if (m->type == PC_MAT_WARD) m->spec_sampling_weight = pc_spec_weight(m);
 }
 
 bool pc_bsdf_is_delta(const pc_material *m) {
@@ -44,6 +45,7 @@ static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_PLASTIC: return pc_plastic_eval(c, wo, wi);
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_eval(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_eval(c, wo, wi);
+  case PC_MAT_WARD: return pc_ward_eval(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC: break;
@@ -58,6 +60,7 @@ static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_PLASTIC: return pc_plastic_pdf(c, wo, wi);
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_pdf(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_pdf(c, wo, wi);
+  case PC_MAT_WARD: return pc_ward_pdf(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC: break;
@@ -75,6 +78,7 @@ static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float
   case PC_MAT_DIELECTRIC: return pc_dielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_THINDIELECTRIC: return pc_thindielectric_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_WARD: return pc_ward_sample(c, wo, u0, u1, u2, s);
   }
   return false;
 }
@@ -175,6 +179,9 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
   case PC_MAT_THINDIELECTRIC:
     q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)),
               v3_maxc(pc_slot_eval(&m->transmittance, texs, uv)));
+    break;
+  case PC_MAT_WARD: /* the two lobes add */
+    q = v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
     break;
   }
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;

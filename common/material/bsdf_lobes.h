@@ -40,6 +40,14 @@ static inline float pc_rel_eta(const pc_material *m) {
   return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
 }
 
+/* Mitsuba's specularSamplingWeight of plastic and ward: luminance of the average specular vs
+ * diffuse reflectance. A textured slot contributes its `value`, which the scene loader sets to
+ * the texture's average. */
+static inline float pc_spec_weight(const pc_material *m) {
+  float s = v3_luminance(m->specular.value), d = v3_luminance(m->reflectance.value);
+  return (s + d > 0.f && isfinite(s + d)) ? s / (s + d) : 0.5f;
+}
+
 /* Cosine-weighted hemisphere (Shirley-Chiu concentric map, as Mitsuba). */
 vec3 pc_sample_cosine_hemisphere(float u1, float u2);
 
@@ -65,5 +73,9 @@ bool pc_thindielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1,
 vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_ward_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_ward_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_ward_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
 #endif

@@ -144,10 +144,7 @@ static float rough_transmittance(const pc_microfacet *mf, float eta, float mu) {
 void pc_plastic_prepare(pc_material *m) {
   float eta = pc_rel_eta(m);
   m->fdr_int = pc_fresnel_diffuse_reflectance(1.f / eta);
-  /* Mitsuba: luminance of the average specular vs diffuse reflectance. A textured slot
-   * contributes its `value`, which the scene loader sets to the texture's average. */
-  float s = v3_luminance(m->specular.value), d = v3_luminance(m->reflectance.value);
-  m->spec_sampling_weight = (s + d > 0.f && isfinite(s + d)) ? s / (s + d) : 0.5f;
+  m->spec_sampling_weight = pc_spec_weight(m);
   if (m->type != PC_MAT_ROUGHPLASTIC) return;
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)

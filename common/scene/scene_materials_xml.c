@@ -38,14 +38,9 @@ static int check_max1(pc_sx *c, const pc_param *p, const pc_tex_slot *s, const c
   return 0;
 }
 
-static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
-                       float a, float u, float v, const char *dist, pc_material *m) {
-  /* Mitsuba's default when no distribution is given is beckmann. */
-  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
-  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
-  else
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
-                   n->line, what, dist);
+/* alpha, or alphaU and alphaV (equal: pcbpt's rough models are isotropic), into m->alpha. */
+static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
+                           float a, float u, float v, pc_material *m) {
   if (au->set != av->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both alphaU and alphaV or neither", c->file, n->line, what);
   if (au->set) {
@@ -58,6 +53,17 @@ static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_para
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);
   m->alpha = a;
   return 0;
+}
+
+static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
+                       float a, float u, float v, const char *dist, pc_material *m) {
+  /* Mitsuba's default when no distribution is given is beckmann. */
+  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
+  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
+  else
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
+                   n->line, what, dist);
+  return check_roughness(c, n, what, alpha, au, av, a, u, v, m);
 }
 
 static int check_ior(pc_sx *c, const pc_xml_node *n, const char *what, const char *name, float v) {
@@ -138,6 +144,28 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if (rough && (rc = check_alpha(c, n, what, &p[5], &p[6], &p[7], m->alpha, au, av, dist, m))) return rc;
     if (m->int_ior == m->ext_ior)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: intIOR equals extIOR (an invisible interface)", c->file, n->line, what);
+  } else if (strcmp(type, "ward") == 0) {
+    const char *variant = "balanced";
+    float au = 0, av = 0;
+    m->type = PC_MAT_WARD;
+    m->reflectance = konst(0.5f);
+    m->specular = konst(0.2f);
+    m->alpha = 0.1f;
+    pc_param p[] = {{"variant", PC_P_STRING, &variant, 0, 0}, {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
+                    {"diffuseReflectance", PC_P_SLOT, &m->reflectance, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
+                    {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
+    if ((rc = params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
+      return rc;
+    if (strcmp(variant, "balanced") == 0) m->ward = PC_WARD_BALANCED;
+    else if (strcmp(variant, "ward") == 0) m->ward = PC_WARD_ORIGINAL;
+    else if (strcmp(variant, "ward-duer") == 0) m->ward = PC_WARD_DUER;
+    else
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: variant '%s' unknown (ward, ward-duer or balanced)", c->file, p[0].line,
+                     what, variant);
+    /* The lobes add: Mitsuba would scale both down to keep their sum at most 1. */
+    if (m->specular.tex < 0 && m->reflectance.tex < 0 && v3_maxc(v3_add(m->specular.value, m->reflectance.value)) > 1.f)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: specularReflectance + diffuseReflectance above 1 would create energy",
+                     c->file, n->line, what);
   } else if (strcmp(type, "twosided") == 0) {
     if ((rc = pc_sx_params(c, n, what, NULL, 0))) return rc;
     const pc_xml_node *inner = NULL;

@@ -183,6 +183,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"bsdf 'dielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
       {"bsdf 'roughdielectric'", " distribution alpha alphaU alphaV intIOR extIOR specularReflectance specularTransmittance sampleVisible "},
       {"bsdf 'thindielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
+      {"bsdf 'ward'", " variant alpha alphaU alphaV specularReflectance diffuseReflectance "},
       {"bsdf 'twosided'", " "},
       {"texture 'bitmap'", " filename wrapMode wrapModeU wrapModeV gamma filterType maxAnisotropy cache uoffset voffset uscale vscale channel "},
       {"texture 'checkerboard'", " color0 color1 uoffset voffset uscale vscale "},

@@ -341,6 +341,10 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"dielectric\">\n<string name=\"intIOR\" value=\"unobtainium\"/></bsdf>", 3, "unobtainium"},
     {"<bsdf type=\"dielectric\">\n<float name=\"intIOR\" value=\"-1\"/></bsdf>", 2, "intIOR"},
     {"<bsdf type=\"roughdielectric\"><float name=\"alpha\" value=\"2\"/></bsdf>", 2, "alpha"},
+    {"<bsdf type=\"ward\">\n<string name=\"variant\" value=\"walter\"/></bsdf>", 3, "variant 'walter'"},
+    {"<bsdf type=\"ward\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"ward\"><rgb name=\"specularReflectance\" value=\"0.6\"/><rgb name=\"diffuseReflectance\" value=\"0.5\"/></bsdf>", 2, "energy"},
+    {"<bsdf type=\"ward\"><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
     {"<bsdf type=\"twosided\">\n<bsdf type=\"roughdielectric\"/></bsdf>", 3, "dielectric"},
     {"<bsdf type=\"twosided\">\n<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "twosided"},
     {"<bsdf type=\"twosided\">\n<bsdf type=\"dielectric\"/></bsdf>", 3, "dielectric"},
@@ -674,6 +678,36 @@ static void test_defaults_and_values(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's ward: its defaults (balanced, alpha 0.1, specular 0.2, diffuse 0.5) and the
+ * parameters as dp-veach-lamp writes them. */
+static void test_ward(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"ward\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"ward\"><spectrum name=\"diffuseReflectance\" value=\"0\"/>"
+                            "<rgb name=\"specularReflectance\" value=\"0.61600 0.47520 0.35200\"/><float name=\"alphaU\" value=\"0.4\"/>"
+                            "<float name=\"alphaV\" value=\"0.4\"/><string name=\"variant\" value=\"ward-duer\"/></bsdf></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *m = s.materials;
+  assert_int_equal(m[0].type, PC_MAT_WARD);
+  assert_int_equal(m[0].ward, PC_WARD_BALANCED);
+  assert_true(m[0].alpha == 0.1f);
+  near3(m[0].specular.value, v3s(0.2f), 0);
+  near3(m[0].reflectance.value, v3s(0.5f), 0);
+  assert_int_equal(m[1].type, PC_MAT_WARD);
+  assert_int_equal(m[1].ward, PC_WARD_DUER);
+  assert_true(m[1].alpha == 0.4f);
+  near3(m[1].specular.value, v3(0.616f, 0.4752f, 0.352f), 1e-6f);
+  near3(m[1].reflectance.value, v3s(0), 0);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -790,7 +824,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
       cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_include_and_defines),
+      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
