@@ -368,10 +368,11 @@ def env_objects():
 
 def thin_glass():
     """A closed room lit by a ceiling panel; the camera looks through a thin glass pane
-    (thindielectric) standing across the room at a rough GGX glass cube and a diffuse sphere."""
+    (thindielectric) standing across the room at a rough GGX glass cube, a diffuse sphere and a
+    Ward sphere (Mitsuba's default balanced variant) behind them."""
     s = Scene("thin-glass", "pcbpt", -1,
-              "Thin glass pane (thindielectric) in front of a rough glass cube (roughdielectric, GGX) "
-              "and a diffuse sphere in a closed room lit by a ceiling panel")
+              "Thin glass pane (thindielectric) in front of a rough glass cube (roughdielectric, GGX), "
+              "a diffuse sphere and a Ward sphere in a closed room lit by a ceiling panel")
     s.preview = False
     s.camera((0.0, 1.3, 2.6), (0.0, 0.7, -0.5), (0, 1, 0), 60)
     s.bsdf("wall", ("diffuse", '<rgb name="reflectance" value="0.7, 0.7, 0.7"/>'))
@@ -383,6 +384,9 @@ def thin_glass():
           'value="ggx"/><float name="alpha" value="0.15"/><float name="intIOR" value="1.5"/>'
           '<float name="extIOR" value="1"/></bsdf>', rot_y=25)
     s.sphere((0.6, 0.4, -0.6), 0.4, diffuse((0.8, 0.4, 0.2)))
+    s.sphere((-0.1, 0.3, -1.5), 0.3, '<bsdf type="ward"><float name="alpha" value="0.2"/>'
+             '<rgb name="specularReflectance" value="0.6, 0.45, 0.35"/>'
+             '<rgb name="diffuseReflectance" value="0.2, 0.2, 0.3"/></bsdf>')
     return s
 
 

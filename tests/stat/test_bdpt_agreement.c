@@ -211,7 +211,8 @@ static void test_agree_near_specular(void **state) {
   free(bd);
 }
 
-/* A thin glass pane (delta, so light tracing cannot see through it) and a rough glass cube. */
+/* A thin glass pane (delta, so light tracing cannot see through it), a rough glass cube and a
+ * Ward sphere. */
 static void test_agree_thin_glass(void **state) {
   (void)state;
   agree("thin-glass", 96, false, true);
