@@ -18,7 +18,7 @@ int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path
   int rc = pc_scene_load_with(path, &o, s, e);
   if (rc) return rc;
   pc_render_request_apply_scene(req, s);
-  if (req->spp == 0 && req->seconds == 0) req->spp = 64;
+  if (req->spp == 0 && req->seconds == 0 && req->halt_noise == 0) req->spp = 64;
   return 0;
 }
 

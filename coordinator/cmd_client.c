@@ -100,6 +100,7 @@ int pc_cmd_submit(int argc, char **argv) {
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&req.set, &ps, &psb);
+  ps.halt_noise = req.halt_noise;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   const char *base = strrchr(scene_path, '/');
   sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);
@@ -148,12 +149,17 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     json_str(j->error);
     printf(", \"image\": ");
     json_str(j->image);
-    printf("}");
+    /* null while the image cannot tell its error (fewer than 2 iterations ...) */
+    if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
+    else printf(", \"relmse_estimate\": null");
+    printf(", \"halt_noise\": %.6g}", j->halt_noise);
     return;
   }
-  printf("%-6llu %-10s %-6s %8llu/%-8llu %6.1fs %8.2f it/s  eta %6.1fs  %u workers  %s%s%s\n",
+  char est[32] = "-";
+  if (j->relmse_estimate >= 0) snprintf(est, sizeof est, "%.4g", j->relmse_estimate);
+  printf("%-6llu %-10s %-6s %8llu/%-8llu %6.1fs %8.2f it/s  eta %6.1fs  relMSE~%-9s %u workers  %s%s%s\n",
          (unsigned long long)j->job_id, j->state, j->method, (unsigned long long)j->iterations_done,
-         (unsigned long long)j->halt_iterations, j->elapsed, j->iterations_per_second, j->eta_seconds, j->workers, j->name,
+         (unsigned long long)j->halt_iterations, j->elapsed, j->iterations_per_second, j->eta_seconds, est, j->workers, j->name,
          *j->error ? "  error: " : "", j->error);
 }
 

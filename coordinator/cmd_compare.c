@@ -1,6 +1,8 @@
 /* cmd_compare.c: `pcbpt-coord compare A.exr REF.exr`: RMSE, relMSE and L1 of A against the
- * reference REF, for the beauty and every layer present in both files. */
+ * reference REF, for the beauty and every layer present in both files, and the relMSE each
+ * image estimated for itself (docs/variance.md) when its header has it. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "image.h"
@@ -10,7 +12,16 @@
 static const char compare_help[] =
     "usage: pcbpt-coord compare A.exr REF.exr [--json]\n"
     "Error of A against the reference REF for the beauty and every layer present in both:\n"
-    "RMSE, relMSE = mean (a-b)^2/(b^2+0.01), L1 = mean |a-b|, and both means.\n";
+    "RMSE, relMSE = mean (a-b)^2/(b^2+0.01), L1 = mean |a-b|, and both means; then each image's own\n"
+    "estimate of its beauty relMSE when its header has one (pcbpt.relmse_estimate): for independent\n"
+    "renders the measured relMSE is about the sum of the two.\n";
+
+/* The image's own relMSE estimate from its header, or -1. */
+static double own_estimate(const pc_exr_file *x) {
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], "pcbpt.relmse_estimate") == 0) return strtod(x->attr_values[i], NULL);
+  return -1;
+}
 
 int pc_cmd_compare(int argc, char **argv) {
   const char *paths[2] = {NULL, NULL};
@@ -58,7 +69,21 @@ int pc_cmd_compare(int argc, char **argv) {
       printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
              m->nonfinite ? "  (non-finite samples skipped)" : "");
   }
-  if (json) printf("]}\n");
+  double ea = own_estimate(&a), eb = own_estimate(&b);
+  if (json) {
+    printf("], \"relmse_estimate\": ");
+    if (ea >= 0) printf("%.9g", ea);
+    else printf("null");
+    printf(", \"relmse_estimate_ref\": ");
+    if (eb >= 0) printf("%.9g", eb);
+    else printf("null");
+    printf("}\n");
+  } else if (ea >= 0 || eb >= 0) {
+    char sa[32] = "-", sb[32] = "-";
+    if (ea >= 0) snprintf(sa, sizeof sa, "%.6e", ea);
+    if (eb >= 0) snprintf(sb, sizeof sb, "%.6e", eb);
+    printf("estimated beauty relMSE (own iterations): %s, reference %s\n", sa, sb);
+  }
   status = 0;
 done:
   pc_layer_metrics_free(lm, n);

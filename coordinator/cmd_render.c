@@ -32,7 +32,7 @@ static const char render_help[] =
     "  --out FILE.exr        output image (default: <scene folder name>.exr); the preview is FILE.png\n"
     "  --exposure E          preview exposure in stops (default 0)\n"
     "  --quiet               no progress bar\n"
-    "Without --spp or --time, renders 64 iterations.\n";
+    "Without --spp, --time or --halt-noise, renders 64 iterations.\n";
 
 /* SIGINT/SIGTERM so far: the first stops the render and writes what it has, the second
  * abandons that and ends without an image, and any after it kill the process (the handler
@@ -96,7 +96,8 @@ typedef struct progress_state {
   uint64_t done_before;
 } progress_state;
 
-static void draw_progress(progress_state *p, int fd, uint64_t done) {
+/* relmse: the merged image's estimated relMSE (< 0: not known yet). */
+static void draw_progress(progress_state *p, int fd, uint64_t done, double relmse) {
   if (!p->show) return;
   double el = now_s() - p->t0;
   double frac = p->target ? (double)done / (double)p->target : (p->seconds > 0 ? el / p->seconds : 0);
@@ -104,6 +105,7 @@ static void draw_progress(progress_state *p, int fd, uint64_t done) {
   int bar = (int)(frac * 30);
   dprintf(fd, "\r[%.*s%*s] %3d%%  %llu it  %.1fs ", bar, "==============================", 30 - bar, "",
           (int)(frac * 100), (unsigned long long)done, el);
+  if (relmse >= 0) dprintf(fd, " relMSE~%.3g ", relmse);
 }
 
 static void sleep_s(double s) {
@@ -131,6 +133,7 @@ static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&req->set, &ps, &psb);
+  ps.halt_noise = req->halt_noise;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)scene_path;
   sub.bundle_hash.data = (uint8_t *)hash;
@@ -192,7 +195,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
       pcbpt__envelope__free_unpacked(env, NULL);
       break;
     }
-    draw_progress(prog, farm->term_fd, st->iterations_done);
+    draw_progress(prog, farm->term_fd, st->iterations_done, st->relmse_estimate);
     pcbpt__envelope__free_unpacked(env, NULL);
     if (atomic_load(&g_interrupts) && !halted) {
       halted = true;
@@ -213,6 +216,12 @@ static double attr_number(const pc_exr_file *x, const char *name) {
   for (int i = 0; i < x->nattrs; i++)
     if (strcmp(x->attr_names[i], name) == 0) return strtod(x->attr_values[i], NULL);
   return 0;
+}
+
+static bool has_attr(const pc_exr_file *x, const char *name) {
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], name) == 0) return true;
+  return false;
 }
 
 int pc_cmd_render(int argc, char **argv) {
@@ -324,9 +333,12 @@ int pc_cmd_render(int argc, char **argv) {
   double it = attr_number(&img, "pcbpt.iterations"), rays = attr_number(&img, "pcbpt.rays");
   double dropped = attr_number(&img, "pcbpt.dropped_nonfinite");
   double samples = it * img.w * img.h;
-  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s -> %s, %s\n",
+  char est[48] = "";
+  if (has_attr(&img, "pcbpt.relmse_estimate"))
+    snprintf(est, sizeof est, ", est. relMSE %.4g", attr_number(&img, "pcbpt.relmse_estimate"));
+  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
          pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
-         threads ? (int)threads : pc_cpu_count(), dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
+         threads ? (int)threads : pc_cpu_count(), est, dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
   if (it > 0)
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,

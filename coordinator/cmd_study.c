@@ -17,7 +17,7 @@
 #include "verbs.h"
 
 static const char study_help[] =
-    "usage: pcbpt-coord study SCENE.xml --methods M1,M2,... --seconds S --reference REF.exr --out DIR [flags]\n"
+    "usage: pcbpt-coord study SCENE.xml --methods M1,M2,... --seconds S [--reference REF.exr] --out DIR [flags]\n"
     "Renders SCENE with each method in turn for S seconds of render time on the same threads and seed,\n"
     "measures relMSE, RMSE and L1 against REF at logarithmically spaced snapshots (from 1/64 of S to S)\n"
     "for the beauty and every standard layer (pt, nee, lt, inner) present in REF, and writes into DIR:\n"
@@ -25,10 +25,13 @@ static const char study_help[] =
     "Ratios are to the first method listed: put the method to compare against first.\n"
     "Per-layer errors compare like with like only when the methods share the reference's strategies\n"
     "(e.g. inner of bdpt and pcbpt against a bdpt reference); a method that leaves a layer empty is\n"
-    "left out of that layer's comparison.\n\n"
+    "left out of that layer's comparison.\n"
+    "Without --reference the beauty's relMSE and RMSE are each image's own estimates from the spread of\n"
+    "its iterations (docs/variance.md; L1 and the other layers are not measured), and the output says so.\n\n"
     "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt (each at most once)\n"
     "  --seconds S           render time per method (snapshots and metrics are not counted)\n"
-    "  --reference REF.exr   reference image of the same size (its layers are compared by name)\n"
+    "  --reference REF.exr   reference image of the same size (its layers are compared by name);\n"
+    "                        without it, errors are estimated\n"
     "  --out DIR             output folder (created if missing)\n"
     "  --threads N           render threads (default 0 = every core)\n"
     "  --snapshots K         snapshots per method (default 12)\n"
@@ -119,7 +122,8 @@ static int parse_args(study_args *a, int argc, char **argv, pc_err *e) {
   if (!a->scene) return pc_errf(e, PC_EINVAL, "missing SCENE.xml (see --help)");
   if (!a->nmethods) return pc_errf(e, PC_EINVAL, "--methods: required (e.g. --methods pcbpt,bdpt,pt)");
   if (!(a->seconds > 0)) return pc_errf(e, PC_EINVAL, "--seconds: required");
-  if (!a->reference) return pc_errf(e, PC_EINVAL, "--reference: required");
+  if (!a->reference && a->layer != PC_STUDY_BEAUTY)
+    return pc_errf(e, PC_EINVAL, "--layer: only the beauty's error is estimated without --reference");
   if (!a->out) return pc_errf(e, PC_EINVAL, "--out: required");
   a->req.method_set = true; /* the scene's integrator element does not choose the methods */
   a->req.set.method = a->methods[0];
@@ -229,16 +233,24 @@ static int run_study(study_args *a, pc_err *e) {
   pc_study_ref ref;
   pc_render_request *req = &a->req;
   int nruns = 0;
-  int rc = pc_exr_read_layers(a->reference, &ref_file, e);
-  if (rc == PC_OK) rc = reference_slots(&ref_file, a->reference, &ref, e);
-  if (rc == PC_OK && !ref.rgb[a->layer])
+  int rc = PC_OK;
+  memset(&ref, 0, sizeof ref);
+  ref.estimated = !a->reference;
+  if (a->reference) rc = pc_exr_read_layers(a->reference, &ref_file, e);
+  if (rc == PC_OK && a->reference) rc = reference_slots(&ref_file, a->reference, &ref, e);
+  if (rc == PC_OK && !pc_study_ref_has(&ref, a->layer))
     rc = pc_errf(e, PC_EINVAL, "--layer: %s has no '%s' layer", a->reference, pc_study_layer_name(a->layer));
   if (rc == PC_OK) rc = pc_cli_load_scene("study", req, a->scene, &scene, e);
   if (rc == PC_OK) rc = pc_render_settings_check(&req->set, e);
+  if (rc == PC_OK && ref.estimated) {
+    ref.w = req->set.width;
+    ref.h = req->set.height;
+    printf("no --reference: every error below is estimated from the spread of each image's own iterations\n");
+  }
   if (rc == PC_OK && (req->set.width != ref.w || req->set.height != ref.h))
     rc = pc_errf(e, PC_EINVAL, "--reference: %s is %dx%d but the study renders %dx%d (set --width/--height to match)",
                  a->reference, ref.w, ref.h, req->set.width, req->set.height);
-  if (rc == PC_OK) warn_same_seed(&ref_file, a->reference, req->set.seed);
+  if (rc == PC_OK && a->reference) warn_same_seed(&ref_file, a->reference, req->set.seed);
   if (rc == PC_OK) rc = pc_scene_build(&scene, e);
   if (rc == PC_OK) rc = check_methods(a, &scene, e);
   if (rc == PC_OK) rc = make_dir(a->out, e);
@@ -256,9 +268,10 @@ static int run_study(study_args *a, pc_err *e) {
     if (rc == PC_OK) rc = write_images(a, &film, &runs[m], e);
     if (rc == PC_OK) {
       const pc_study_snap *last = &runs[m].snaps[runs[m].nsnaps - 1];
-      printf("%s: %llu iterations in %.2f s on %d threads, %d snapshots, final beauty relMSE %.4e -> %s/%s.exr\n",
+      printf("%s: %llu iterations in %.2f s on %d threads, %d snapshots, final beauty relMSE%s %.4e -> %s/%s.exr\n",
              pc_method_name(set.method), (unsigned long long)last->iterations, last->seconds, runs[m].threads,
-             runs[m].nsnaps, last->m[PC_STUDY_BEAUTY].relmse, a->out, pc_method_name(set.method));
+             runs[m].nsnaps, ref.estimated ? " (estimated)" : "", last->m[PC_STUDY_BEAUTY].relmse, a->out,
+             pc_method_name(set.method));
       fflush(stdout);
       if (film.dropped_nonfinite)
         fprintf(stderr, "pcbpt-coord study: warning: %s dropped %llu non-finite samples\n", pc_method_name(set.method),
@@ -286,6 +299,7 @@ static int run_study(study_args *a, pc_err *e) {
       rc = pc_study_write_chart(a->out, &info, runs, nruns, 1 + PC_LAYER_INNER, e);
     if (rc == PC_OK) {
       printf("\n");
+      if (ref.estimated) printf("relMSE estimated from each image's own iterations (no reference):\n");
       pc_study_table_print(stdout, &table);
       for (int m = 1; m < table.nmethods; m++) {
         char line[512];

@@ -53,6 +53,9 @@ typedef struct pc_job {
   pc_render_settings set;
   uint64_t halt_iterations;  /* 0: none */
   double halt_seconds;       /* 0: none */
+  double halt_noise;         /* 0: none; else halt once the estimated relMSE is at most this */
+  double relmse_est;         /* the merged film's estimated relMSE, < 0 while it cannot tell */
+  uint64_t noise_check_at;   /* iterations merged before --halt-noise looks again */
   int priority;
   pc_job_state state;
   uint64_t next_iter, done, ckpt_gen;

@@ -37,6 +37,8 @@ struct pc_op {
   uint8_t *buf;
   size_t len;
   int64_t light_per_iter;
+  double relmse_est;         /* merge: the film's estimated relMSE after it (< 0: cannot tell) */
+  uint64_t est_iterations;   /* ... over this many iterations */
   pc_render_stats stats;     /* merge: the upload's; checkpoint: the job's merged total */
   /* checkpoint */
   uint64_t gen;
@@ -78,7 +80,7 @@ static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
   const pc_film *f = &op->j->film;
   for (int l = 0; l < f->nlayers; l++) {
     uint64_t cnt = counts[l];
-    if (f->layers[l].norm == PC_NORM_EYE) {
+    if (f->layers[l].norm != PC_NORM_LIGHT) {
       if (cnt != op->count)
         return pc_errf(e, PC_EINVAL, "inconsistent counts: layer '%s' counts %llu for %llu iterations", f->layers[l].name,
                        (unsigned long long)cnt, (unsigned long long)op->count);
@@ -91,6 +93,27 @@ static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
     }
   }
   return 0;
+}
+
+/* The film's estimated relMSE (-1 when it cannot tell) and the iterations behind it. */
+static void film_estimate(const pc_film *f, double *relmse, uint64_t *iterations) {
+  if (!pc_film_relmse_estimate(f, relmse)) *relmse = -1;
+  *iterations = f->layers[PC_LAYER_PT].count;
+}
+
+/* --halt-noise (docs/variance.md): the estimate is looked at only from NOISE_MIN_ITERATIONS
+ * on and then each time the merged iterations grew by an eighth, so the stop depends on a
+ * handful of decisions, each on an estimate from many iterations, not on the first lucky dip
+ * of a noisy one. */
+#define NOISE_MIN_ITERATIONS 16
+static void check_noise(pc_coord *c, pc_job *j, uint64_t iterations) {
+  if (!(j->halt_noise > 0) || j->state != PC_JOB_RUNNING || j->relmse_est < 0) return;
+  if (iterations < NOISE_MIN_ITERATIONS || iterations < j->noise_check_at) return;
+  j->noise_check_at = iterations + (iterations + 7) / 8;
+  if (j->relmse_est > j->halt_noise) return;
+  pc_wire_log("job %llu: estimated relMSE %.4g <= %.4g after %llu iterations", (unsigned long long)j->id, j->relmse_est,
+              j->halt_noise, (unsigned long long)iterations);
+  pc_job_halt(c, j);
 }
 
 static void merge_work(uv_work_t *w) {
@@ -106,6 +129,7 @@ static void merge_work(uv_work_t *w) {
   if (!raw) { op->rc = op->err.code; return; }
   if ((op->rc = pc_wire_decompress_to(op->buf, op->len, raw, want, &op->err)) != 0) return;
   op->rc = pc_wire_film_add(raw, want, &j->film, judge_counts, op, &op->err);
+  if (!op->rc) film_estimate(&j->film, &op->relmse_est, &op->est_iterations);
 }
 
 static void ckpt_work(uv_work_t *w) {
@@ -160,6 +184,7 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.time_connect", .type = PC_ATTR_DOUBLE, .d = st->t_connect},
     {.name = "pcbpt.pmf_bytes", .type = PC_ATTR_DOUBLE, .d = (double)st->pmf_bytes},
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
+    {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
   };
   /* the image is written like the checkpoint: a failure is the data dir's (retried) */
@@ -326,7 +351,9 @@ static void op_after(uv_work_t *w, int status) {
       pc_render_stats_add(&j->stats_merged, &op->stats);
       j->merges++;
       j->light_per_iter = op->light_per_iter;
+      j->relmse_est = op->relmse_est;
       j->dirty = true;
+      check_noise(c, j, op->est_iterations);
       pc_pending_ack *a = calloc(1, sizeof *a);
       if (a) {
         a->peer = op->peer;
@@ -519,21 +546,24 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
     snprintf(leaf, sizeof leaf, "ckpt.%llu", (unsigned long long)j->ckpt_gen);
     pc_job_path(c, j, leaf, path, sizeof path);
     FILE *f = fopen(path, "rb");
-    uint8_t *z = NULL, *raw = NULL;
+    uint8_t *z = NULL;
     long zn = -1;
     if (f && fseek(f, 0, SEEK_END) == 0) zn = ftell(f);
     if (f && zn > 0 && fseek(f, 0, SEEK_SET) == 0 && (z = malloc((size_t)zn)) && fread(z, 1, (size_t)zn, f) == (size_t)zn) {
-      size_t want = pc_wire_film_size(&j->film);
-      rc = pc_wire_decompress(z, (size_t)zn, want, want, &raw, e);
-      if (!rc) rc = pc_wire_film_unpack(raw, want, &j->film, e);
+      rc = pc_wire_film_load(z, (size_t)zn, &j->film, e);
+      if (rc) {
+        pc_err why = *e; /* names the checkpoint: a refused one must say which file */
+        pc_errf(e, rc, "%s: %s", path, why.msg);
+      }
     } else {
       rc = pc_errf(e, PC_EIO, "%s: cannot read checkpoint: %s", path, strerror(errno));
     }
     if (f) fclose(f);
     free(z);
-    free(raw);
     if (rc) { pc_film_free(&j->film); return rc; }
   }
+  uint64_t n;
+  film_estimate(&j->film, &j->relmse_est, &n);
   j->film_ready = true;
   if (j->state == PC_JOB_QUEUED) {
     j->state = PC_JOB_RUNNING;

@@ -489,8 +489,10 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   if (access(path, R_OK) != 0) pc_errf(&e, PC_EINVAL, "submit: scene bundle %.16s... was not uploaded", hex);
   else if (pc_wire_settings_from_proto(s->settings, &j->set, &e) != 0) {}
   else if (j->set.width < 1 || j->set.height < 1) pc_errf(&e, PC_EINVAL, "submit: film size missing");
-  else if (s->halt_iterations == 0 && !(s->halt_seconds > 0)) pc_errf(&e, PC_EINVAL, "submit: needs --spp or --time");
+  else if (s->halt_iterations == 0 && !(s->halt_seconds > 0) && !(s->settings->halt_noise > 0))
+    pc_errf(&e, PC_EINVAL, "submit: needs --spp, --time or --halt-noise");
   else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
+  else if (!(s->settings->halt_noise >= 0 && s->settings->halt_noise <= 1e6)) pc_errf(&e, PC_EINVAL, "submit: bad --halt-noise");
   if (e.code) {
     pc_wire_log("%s: %s", p->conn.peer, e.msg);
     send_error(p, e.msg);
@@ -507,6 +509,8 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pcbpt__settings__pack(s->settings, j->settings_blob);
   j->halt_iterations = s->halt_iterations;
   j->halt_seconds = s->halt_seconds;
+  j->halt_noise = s->settings->halt_noise;
+  j->relmse_est = -1;
   j->priority = s->priority;
   j->state = PC_JOB_QUEUED;
   if (pc_store_insert_job(c, j, &e) != 0) {
@@ -554,6 +558,8 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->iterations_done = j->done;
     s->halt_iterations = j->halt_iterations;
     s->halt_seconds = j->halt_seconds;
+    s->halt_noise = j->halt_noise;
+    s->relmse_estimate = j->relmse_est;
     s->elapsed = j->elapsed;
     for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
@@ -811,6 +817,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
+    if (s) j->halt_noise = s->halt_noise;
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0 || pc_job_activate(c, j, &je) != 0)
       pc_job_fail(c, j, s ? je.msg : "stored settings do not decode");
     else
@@ -822,6 +829,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_QUEUED) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
+    if (s) j->halt_noise = s->halt_noise;
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0) pc_job_fail(c, j, "stored settings do not decode");
     if (s) pcbpt__settings__free_unpacked(s, NULL);
   }

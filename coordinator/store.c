@@ -247,6 +247,7 @@ int pc_store_load(pc_coord *c, pc_err *e) {
     j->stats.pmf_bytes = (uint64_t)sqlite3_column_int64(st, 19);
     j->failures = sqlite3_column_int(st, 20);
     j->stats_merged = j->stats;
+    j->relmse_est = -1; /* until its film is loaded */
     *tail = j;
     tail = &j->next;
     if (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING || j->state == PC_JOB_QUEUED)

@@ -3,7 +3,9 @@
  * eight byte planes (byte 0 of every value, then byte 1, ...): the sign/exponent and high
  * mantissa planes of nearby pixels repeat, so zstd at a fast level packs them ~20% smaller
  * and ~3x faster than interleaved doubles. PCFILM01 (plain little-endian doubles) is still
- * read, so checkpoints of older coordinators load. */
+ * read, so checkpoints of older coordinators load, and so is a checkpoint without the film's
+ * last layer, beauty_sq (written before it existed): it loads with beauty_sq empty, and the
+ * job's error estimate says it cannot tell (film.h). Uploads must be whole. */
 #include "wire_film.h"
 
 #include <math.h>
@@ -26,9 +28,18 @@ static void put64(uint8_t *p, uint64_t v) { for (int i = 0; i < 8; i++) p[i] = (
 static uint32_t get32(const uint8_t *p) { uint32_t v = 0; for (int i = 3; i >= 0; i--) v = v << 8 | p[i]; return v; }
 static uint64_t get64(const uint8_t *p) { uint64_t v = 0; for (int i = 7; i >= 0; i--) v = v << 8 | p[i]; return v; }
 
-size_t pc_wire_film_size(const pc_film *f) {
+static size_t size_of(const pc_film *f, int nlayers) {
   size_t px = (size_t)f->w * (size_t)f->h * 3;
-  return HEAD + (size_t)f->nlayers * (LAYER_HEAD + px * 8);
+  return HEAD + (size_t)nlayers * (LAYER_HEAD + px * 8);
+}
+
+size_t pc_wire_film_size(const pc_film *f) { return size_of(f, f->nlayers); }
+
+/* Layers a serialized film of `like`'s shape may hold: all, or (old checkpoints) all but a
+ * last beauty_sq. */
+static int short_layers(const pc_film *like) {
+  int q = pc_film_square_layer(like);
+  return q >= 0 && q == like->nlayers - 1 ? like->nlayers - 1 : like->nlayers;
 }
 
 /* Plane by plane, so the loops vectorize. */
@@ -108,39 +119,45 @@ int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e) {
   return 0;
 }
 
-/* Checks a serialized film's header against the shape of `like`; *planes tells the format. */
-static int check_header(const uint8_t *buf, size_t n, const pc_film *like, bool *planes, pc_err *e) {
+/* Checks a serialized film's header against the shape of `like`; *planes tells the format,
+ * *nl how many of like's layers it holds (all, or with `whole` false maybe all but beauty_sq). */
+static int check_header(const uint8_t *buf, size_t n, const pc_film *like, bool whole, bool *planes, int *nlp,
+                        pc_err *e) {
   bool v1 = n >= HEAD && memcmp(buf, MAGIC_V1, 8) == 0, v2 = n >= HEAD && memcmp(buf, MAGIC_V2, 8) == 0;
   if (!v1 && !v2) return pc_errf(e, PC_EPARSE, "film: not a serialized film (bad magic or %zu bytes)", n);
   uint32_t w = get32(buf + 8), h = get32(buf + 12), nl = get32(buf + 16);
   if ((int)w != like->w || (int)h != like->h)
     return pc_errf(e, PC_EINVAL, "film: resolution %ux%u, the job has %dx%d", w, h, like->w, like->h);
-  if ((int)nl != like->nlayers) return pc_errf(e, PC_EINVAL, "film: %u layers, the job has %d", nl, like->nlayers);
-  if (n != pc_wire_film_size(like)) return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", n, pc_wire_film_size(like));
+  if ((int)nl != like->nlayers && (whole || (int)nl != short_layers(like)))
+    return pc_errf(e, PC_EINVAL, "film: %u layers, the job has %d", nl, like->nlayers);
+  if (n != size_of(like, (int)nl)) return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", n, size_of(like, (int)nl));
   const uint8_t *p = buf + HEAD;
-  for (int l = 0; l < like->nlayers; l++, p += LAYER_HEAD) {
+  for (int l = 0; l < (int)nl; l++, p += LAYER_HEAD) {
     char name[17] = {0};
     memcpy(name, p, 16);
     if (strncmp(name, like->layers[l].name, 16) != 0 || get32(p + 16) != (uint32_t)like->layers[l].norm)
       return pc_errf(e, PC_EINVAL, "film: layer %d is '%s', the job has '%s'", l, name, like->layers[l].name);
   }
   *planes = v2;
+  *nlp = (int)nl;
   return 0;
 }
 
 /* The header checks, then that every sum is finite and, for a delta (bounded), under
- * 2^PC_WIRE_SAMPLE_LOG2 per sample of its layer (a biased exponent of at most 1023 + that +
- * the bit length of the count - 1), before anything is read into a film. */
-static int check(const uint8_t *buf, size_t n, const pc_film *like, bool bounded, bool *planes, pc_err *e) {
-  int rc = check_header(buf, n, like, planes, e);
+ * 2^PC_WIRE_SAMPLE_LOG2 per sample of its layer (2^(2 PC_WIRE_SAMPLE_LOG2) for beauty_sq, whose
+ * samples are squares; a biased exponent of at most 1023 + that + the bit length of the count
+ * - 1), before anything is read into a film. A delta holds every layer; a checkpoint may be
+ * one written before beauty_sq (*nl tells). */
+static int check(const uint8_t *buf, size_t n, const pc_film *like, bool bounded, bool *planes, int *nl, pc_err *e) {
+  int rc = check_header(buf, n, like, bounded, planes, nl, e);
   if (rc) return rc;
   size_t px = (size_t)like->w * (size_t)like->h * 3;
-  const uint8_t *d = buf + HEAD + (size_t)like->nlayers * LAYER_HEAD;
-  for (int l = 0; l < like->nlayers; l++) {
+  const uint8_t *d = buf + HEAD + (size_t)*nl * LAYER_HEAD;
+  for (int l = 0; l < *nl; l++) {
     uint64_t count = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
-    unsigned bits = 0;
+    unsigned bits = 0, sample_log2 = like->layers[l].norm == PC_NORM_SQUARE ? 2 * PC_WIRE_SAMPLE_LOG2 : PC_WIRE_SAMPLE_LOG2;
     while (bits < 64 && count >> bits) bits++;
-    unsigned max_exp = bounded ? 1023 + PC_WIRE_SAMPLE_LOG2 + bits - 1 : 0x7fe;
+    unsigned max_exp = bounded ? 1023 + sample_log2 + bits - 1 : 0x7fe;
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
       size_t i = first_over(d, *planes, m, max_exp);
@@ -160,7 +177,8 @@ static int check(const uint8_t *buf, size_t n, const pc_film *like, bool bounded
 static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_counts_judge judge, void *user,
                  pc_err *e) {
   bool planes = false;
-  int rc = check(buf, n, into, add, &planes, e);
+  int nl = 0;
+  int rc = check(buf, n, into, add, &planes, &nl, e);
   if (rc) return rc;
   if (judge) {
     uint64_t counts[PC_FILM_MAX_LAYERS];
@@ -168,13 +186,17 @@ static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_
     if ((rc = judge(user, counts, e)) != 0) return rc;
   }
   size_t px = (size_t)into->w * (size_t)into->h * 3;
-  const uint8_t *d = buf + HEAD + (size_t)into->nlayers * LAYER_HEAD;
+  const uint8_t *d = buf + HEAD + (size_t)nl * LAYER_HEAD;
   double v[PLANE_BLOCK];
   uint64_t dropped = get64(buf + 20);
   into->dropped_nonfinite = add ? into->dropped_nonfinite + dropped : dropped;
   const uint8_t *p = buf + HEAD;
-  for (int l = 0; l < into->nlayers; l++, p += LAYER_HEAD) into->layers[l].count = (add ? into->layers[l].count : 0) + get64(p + 20);
-  for (int l = 0; l < into->nlayers; l++)
+  for (int l = 0; l < nl; l++, p += LAYER_HEAD) into->layers[l].count = (add ? into->layers[l].count : 0) + get64(p + 20);
+  for (int l = nl; l < into->nlayers; l++) { /* an old checkpoint's missing beauty_sq (set only) */
+    into->layers[l].count = 0;
+    if (into->layers[l].sum) memset(into->layers[l].sum, 0, px * sizeof(double));
+  }
+  for (int l = 0; l < nl; l++)
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
       double *s = into->layers[l].sum + k;
@@ -191,6 +213,17 @@ int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e) 
 }
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e) {
   return apply(buf, n, into, true, judge, user, e);
+}
+
+int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e) {
+  unsigned long long cs = ZSTD_getFrameContentSize(z, zn);
+  size_t whole = pc_wire_film_size(into), old = size_of(into, short_layers(into));
+  size_t want = cs == (unsigned long long)old ? old : whole;
+  uint8_t *raw = NULL;
+  int rc = pc_wire_decompress(z, zn, want, whole, &raw, e);
+  if (!rc) rc = pc_wire_film_unpack(raw, want, into, e);
+  free(raw);
+  return rc;
 }
 
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e) {

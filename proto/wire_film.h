@@ -20,7 +20,8 @@ size_t pc_wire_film_size(const pc_film *f);
 void pc_wire_film_pack_to(const pc_film *f, uint8_t *out);
 int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
 /* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
- * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error. */
+ * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error.
+ * A film serialized before beauty_sq existed (one layer short) loads with beauty_sq empty. */
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
 /* A delta's sum per sample of its layer stays under 2^PC_WIRE_SAMPLE_LOG2 (1.8e19; no real
  * radiance comes near): larger finite sums would add to infinity or overflow the image's
@@ -33,6 +34,10 @@ typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *
  * (NULL: any counts), then adds buf's sums, counts and dropped samples into `into`
  * (unchanged on error): a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
+
+/* A checkpoint: a zstd frame of a serialized film (whole, or of an older coordinator without
+ * beauty_sq) decompressed and unpacked into `into` as pc_wire_film_unpack does. */
+int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);

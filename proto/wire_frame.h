@@ -10,7 +10,7 @@
 #include "error.h"
 #include "pcbpt.pb-c.h"
 
-#define PC_WIRE_PROTOCOL_VERSION 2u   /* 2: films as byte planes (PCFILM02) */
+#define PC_WIRE_PROTOCOL_VERSION 3u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq */
 #define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's payload */
 #define PC_WIRE_CHUNK (256u << 10)     /* bulk payload bytes per frame; well under the limit */
 /* A rendering worker uploads what it has at least this often (seconds; a range shorter than

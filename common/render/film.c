@@ -1,6 +1,8 @@
-/* film.c: per-strategy layers of unnormalized sums and their sample counts (DESIGN.md §4.2). */
+/* film.c: per-strategy layers of unnormalized sums and their sample counts (DESIGN.md §4.2),
+ * and the beauty's variance estimated from the beauty_sq layer (docs/variance.md). */
 #include "film.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +41,8 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
       rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, e);
       if (rc == PC_OK) f->strategy_index[k + 1 - t][t] = (int8_t)(f->nlayers - 1);
     }
+  /* last, so a film serialized before it existed is this film's layers but the last */
+  if (rc == PC_OK) rc = add_layer(f, "beauty_sq", PC_NORM_SQUARE, e);
   if (rc != PC_OK) pc_film_free(f);
   return rc;
 }
@@ -48,9 +52,22 @@ void pc_film_free(pc_film *f) {
   memset(f, 0, sizeof *f);
 }
 
+int pc_film_square_layer(const pc_film *f) {
+  for (int i = f->nlayers - 1; i >= 0; i--)
+    if (f->layers[i].norm == PC_NORM_SQUARE) return i;
+  return -1;
+}
+
+void pc_film_drop_square(pc_film *f) {
+  int q = pc_film_square_layer(f);
+  if (q < 0) return;
+  free(f->layers[q].sum);
+  f->layers[q].sum = NULL;
+}
+
 void pc_film_clear(pc_film *f) {
   for (int i = 0; i < f->nlayers; i++) {
-    memset(f->layers[i].sum, 0, (size_t)f->w * f->h * 3 * sizeof(double));
+    if (f->layers[i].sum) memset(f->layers[i].sum, 0, (size_t)f->w * f->h * 3 * sizeof(double));
     f->layers[i].count = 0;
   }
   f->dropped_nonfinite = 0;
@@ -68,20 +85,25 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
   for (int i = 0; i < dst->nlayers; i++) {
     double *d = dst->layers[i].sum;
     const double *s = src->layers[i].sum;
-    for (size_t j = 0; j < n; j++) d[j] += s[j];
+    if (d && s)
+      for (size_t j = 0; j < n; j++) d[j] += s[j];
     dst->layers[i].count += src->layers[i].count;
   }
   dst->dropped_nonfinite += src->dropped_nonfinite;
   return PC_OK;
 }
 
+/* What a layer's sums are multiplied by to make its image. */
+static double layer_scale(const pc_film *f, const pc_film_layer *l) {
+  if (l->count == 0) return 0.0;
+  return l->norm == PC_NORM_LIGHT ? (double)f->w * f->h / (double)l->count : 1.0 / (double)l->count;
+}
+
 void pc_film_layer_image(const pc_film *f, int i, float *out) {
   const pc_film_layer *l = &f->layers[i];
   size_t n = (size_t)f->w * f->h * 3;
-  double scale = 0.0;
-  if (l->count > 0)
-    scale = l->norm == PC_NORM_EYE ? 1.0 / (double)l->count : (double)f->w * f->h / (double)l->count;
-  for (size_t j = 0; j < n; j++) out[j] = (float)(l->sum[j] * scale);
+  double scale = layer_scale(f, l);
+  for (size_t j = 0; j < n; j++) out[j] = l->sum ? (float)(l->sum[j] * scale) : 0.f;
 }
 
 void pc_film_beauty(const pc_film *f, float *out) {
@@ -90,15 +112,57 @@ void pc_film_beauty(const pc_film *f, float *out) {
   for (int i = 0; i < PC_LAYER_STD_COUNT && i < f->nlayers; i++) {
     const pc_film_layer *l = &f->layers[i];
     if (l->count == 0) continue;
-    double scale = l->norm == PC_NORM_EYE ? 1.0 / (double)l->count : (double)f->w * f->h / (double)l->count;
+    double scale = layer_scale(f, l);
     for (size_t j = 0; j < n; j++) out[j] += (float)(l->sum[j] * scale);
   }
+}
+
+/* Calls fn(user, j, variance of the mean, mean) for every value j of the beauty, in double
+ * precision; false when the film cannot tell (see pc_film_variance). */
+static bool each_variance(const pc_film *f, void (*fn)(void *, size_t, double, double), void *user) {
+  int q = pc_film_square_layer(f);
+  if (q < 0 || !f->layers[q].sum || f->nlayers <= PC_LAYER_STD_COUNT) return false;
+  uint64_t n_it = f->layers[q].count;
+  if (n_it < 2 || n_it != f->layers[PC_LAYER_PT].count) return false;
+  double scale[PC_LAYER_STD_COUNT], inv_n = 1.0 / (double)n_it, inv_n1 = 1.0 / (double)(n_it - 1);
+  for (int i = 0; i < PC_LAYER_STD_COUNT; i++) scale[i] = layer_scale(f, &f->layers[i]);
+  const double *sq = f->layers[q].sum;
+  size_t n = (size_t)f->w * f->h * 3;
+  for (size_t j = 0; j < n; j++) {
+    double m = 0.0;
+    for (int i = 0; i < PC_LAYER_STD_COUNT; i++) m += f->layers[i].sum[j] * scale[i];
+    /* rounding can make the difference of two close sums slightly negative */
+    double v = (sq[j] * inv_n - m * m) * inv_n1;
+    fn(user, j, v > 0.0 ? v : 0.0, m);
+  }
+  return true;
+}
+
+static void put_variance(void *user, size_t j, double v, double m) {
+  (void)m;
+  ((float *)user)[j] = (float)v;
+}
+
+bool pc_film_variance(const pc_film *f, float *out) { return each_variance(f, put_variance, out); }
+
+/* E[m^2] = exact^2 + v, so the denominator subtracts v (docs/variance.md). */
+static void add_relative(void *user, size_t j, double v, double m) {
+  (void)j;
+  *(double *)user += v / (fmax(m * m - v, 0.0) + PC_RELMSE_EPS);
+}
+
+bool pc_film_relmse_estimate(const pc_film *f, double *out) {
+  double sum = 0.0;
+  *out = NAN;
+  if (!each_variance(f, add_relative, &sum)) return false;
+  *out = sum / ((double)f->w * f->h * 3);
+  return true;
 }
 
 bool pc_film_is_finite(const pc_film *f) {
   size_t n = (size_t)f->w * f->h * 3;
   for (int i = 0; i < f->nlayers; i++)
-    for (size_t j = 0; j < n; j++)
+    for (size_t j = 0; j < n && f->layers[i].sum; j++)
       if (!isfinite(f->layers[i].sum[j])) return false;
   return true;
 }

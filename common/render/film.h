@@ -2,7 +2,11 @@
  * its own sample count (DESIGN.md §4.2). Workers ship sums and counts; whoever writes an image
  * divides each layer by its own count. Eye-side layers (pt, nee, inner, s>=0,t>=2 debug layers)
  * count iterations, i.e. samples per pixel; light-side layers (lt, t=1 debug layers) count
- * light paths and are scaled by W*H/count. */
+ * light paths and are scaled by W*H/count. The last layer, "beauty_sq", holds the per-pixel sum
+ * over iterations of the square of each iteration's whole beauty (its eye layers plus its light
+ * splats scaled by W*H/N_L): with the sums it gives an unbiased estimate of the variance of the
+ * mean, i.e. of the image's own error (docs/variance.md). It counts iterations like an eye layer
+ * and is added, shipped and checkpointed like every other layer. */
 #ifndef PC_FILM_H
 #define PC_FILM_H
 
@@ -17,12 +21,17 @@ enum { PC_LAYER_PT = 0, PC_LAYER_NEE = 1, PC_LAYER_LT = 2, PC_LAYER_INNER = 3, P
 #define PC_FILM_MAX_LAYERS 64
 #define PC_FILM_MAX_ST 10 /* s and t of per-strategy layers stay below this */
 
-typedef enum { PC_NORM_EYE, PC_NORM_LIGHT } pc_norm;
+/* PC_NORM_SQUARE: the beauty_sq layer (counts iterations; not an image of its own). */
+typedef enum { PC_NORM_EYE, PC_NORM_LIGHT, PC_NORM_SQUARE } pc_norm;
+
+/* relMSE = mean over pixels and channels of (a - ref)^2 / (ref^2 + PC_RELMSE_EPS): the one
+ * definition `compare`, studies and the film's own estimate use. */
+#define PC_RELMSE_EPS 0.01
 
 typedef struct pc_film_layer {
   char name[16];   /* "pt", "nee", "lt", "inner", or "s2t3" for per-strategy debug layers */
   pc_norm norm;
-  double *sum;     /* w*h*3 */
+  double *sum;     /* w*h*3; NULL for beauty_sq in films only rendered into (pc_film_drop_square) */
   uint64_t count;  /* iterations (eye) or light paths (light) accumulated */
 } pc_film_layer;
 
@@ -35,7 +44,7 @@ typedef struct pc_film {
 } pc_film;
 
 /* Creates the four standard layers; with strategy_depth > 0 also one layer per (s,t) with
- * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d". */
+ * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d"; then beauty_sq. */
 int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
 void pc_film_free(pc_film *f);
 void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
@@ -43,14 +52,32 @@ void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
 static inline int pc_film_strategy_layer(const pc_film *f, int s, int t) {
   return s >= 0 && t >= 0 && s < PC_FILM_MAX_ST && t < PC_FILM_MAX_ST ? f->strategy_index[s][t] : -1;
 }
+/* Index of the beauty_sq layer, or -1. */
+int pc_film_square_layer(const pc_film *f);
+/* Frees the beauty_sq storage of a film that is only rendered into and never read or merged
+ * (the renderer's scratch and per-thread splats), so a job holds one extra layer per film it
+ * keeps, not per thread. */
+void pc_film_drop_square(pc_film *f);
 /* Adds src into dst (same shape, same layers): sums and counts. */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
 /* Normalized RGB of layer i into out (w*h*3). */
 void pc_film_layer_image(const pc_film *f, int i, float *out);
 /* Beauty = sum of the normalized standard layers. */
 void pc_film_beauty(const pc_film *f, float *out);
+/* Per-pixel unbiased estimate of the variance of the beauty's mean into out (w*h*3), from the
+ * spread of the iterations: (sum_sq/N - mean^2) / (N - 1). Returns false (out untouched) when
+ * the film cannot tell: fewer than 2 iterations, or beauty_sq has not seen every iteration the
+ * sums have (a job resumed from a checkpoint written before beauty_sq existed). */
+bool pc_film_variance(const pc_film *f, float *out);
+/* The beauty's relMSE as `compare` would measure it against the exact image, estimated from
+ * the film alone: the mean over pixels and channels of variance / (max(mean^2 - variance, 0) +
+ * PC_RELMSE_EPS), where mean^2 - variance is the unbiased estimate of the exact value's square
+ * (mean^2 alone overestimates it by the variance and biases the estimate low). Returns false
+ * like pc_film_variance (*out = NAN). */
+bool pc_film_relmse_estimate(const pc_film *f, double *out);
 /* Writes the beauty and every layer (each normalized by its count) to a multi-layer EXR, with
- * the per-layer counts and `extra` attributes in the header. */
+ * the per-layer counts and `extra` attributes in the header; when the film can tell, also the
+ * layer `variance` (pc_film_variance) and the attribute pcbpt.relmse_estimate. */
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e);
 /* True if every sum is finite. */
 bool pc_film_is_finite(const pc_film *f);

@@ -1,6 +1,7 @@
 /* film_exr.c: writes a film as a multi-layer EXR: the beauty in R,G,B, every layer
- * normalized by its own count as <layer>.R/G/B, and each layer's count in the header
- * (pcbpt.count.<layer>) so a reader can recover the sums. */
+ * normalized by its own count as <layer>.R/G/B, the per-pixel variance of the beauty's mean as
+ * variance.R/G/B, and each layer's count (pcbpt.count.<layer>) and the estimated relMSE
+ * (pcbpt.relmse_estimate) in the header, so a reader can recover the sums and knows the error. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -8,10 +9,10 @@
 
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e) {
   size_t n = (size_t)f->w * f->h * 3;
-  int nl = f->nlayers + 1;
+  int nl = f->nlayers + 1; /* the beauty, every layer but beauty_sq, and the variance */
   float *pix = malloc(sizeof(float) * n * (size_t)nl);
   pc_exr_layer *layers = calloc((size_t)nl, sizeof *layers);
-  pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 1 + nextra), sizeof *attrs);
+  pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 2 + nextra), sizeof *attrs);
   char(*names)[40] = calloc((size_t)f->nlayers, sizeof *names);
   int rc;
   if (!pix || !layers || !attrs || !names) {
@@ -21,18 +22,27 @@ int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *ext
   pc_film_beauty(f, pix);
   layers[0].name = "";
   layers[0].rgb = pix;
-  int na = 0;
+  int na = 0, k = 1;
   for (int i = 0; i < f->nlayers; i++) {
-    float *dst = pix + n * (size_t)(i + 1);
-    pc_film_layer_image(f, i, dst);
-    layers[i + 1].name = f->layers[i].name;
-    layers[i + 1].rgb = dst;
     snprintf(names[i], sizeof names[i], "pcbpt.count.%s", f->layers[i].name);
     attrs[na++] = (pc_exr_attr){.name = names[i], .type = PC_ATTR_DOUBLE, .d = (double)f->layers[i].count};
+    if (f->layers[i].norm == PC_NORM_SQUARE) continue; /* a means to the variance, not an image */
+    float *dst = pix + n * (size_t)k;
+    pc_film_layer_image(f, i, dst);
+    layers[k].name = f->layers[i].name;
+    layers[k++].rgb = dst;
+  }
+  double relmse;
+  if (pc_film_variance(f, pix + n * (size_t)k)) {
+    layers[k].name = "variance";
+    layers[k].rgb = pix + n * (size_t)k;
+    k++;
+    pc_film_relmse_estimate(f, &relmse);
+    attrs[na++] = (pc_exr_attr){.name = "pcbpt.relmse_estimate", .type = PC_ATTR_DOUBLE, .d = relmse};
   }
   attrs[na++] = (pc_exr_attr){.name = "pcbpt.dropped_nonfinite", .type = PC_ATTR_DOUBLE, .d = (double)f->dropped_nonfinite};
   for (int i = 0; i < nextra; i++) attrs[na++] = extra[i];
-  rc = pc_exr_write(path, f->w, f->h, layers, nl, attrs, na, e);
+  rc = pc_exr_write(path, f->w, f->h, layers, k, attrs, na, e);
 done:
   free(pix);
   free(layers);

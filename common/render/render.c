@@ -7,6 +7,7 @@
  * and the light layers count N_L light paths. */
 #include "render.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -119,6 +120,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   r->tiles_x = (settings->width + TILE - 1) / TILE;
   r->tiles_y = (settings->height + TILE - 1) / TILE;
   rc = pc_film_init(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
+  pc_film_drop_square(&r->scratch); /* fold_iteration squares straight into the caller's film */
   if (rc == PC_OK) rc = pc_pool_create(threads, &r->pool, e);
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
@@ -126,8 +128,10 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->verts = calloc((size_t)threads * 2 * (PC_MAX_SEGMENTS + 2), sizeof(pc_path_vertex));
     if (!r->splat || !r->tctx || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
-  for (int i = 0; rc == PC_OK && i < threads; i++)
+  for (int i = 0; rc == PC_OK && i < threads; i++) {
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
+    pc_film_drop_square(&r->splat[i]);
+  }
   if (rc != PC_OK) {
     pc_renderer_destroy(r);
     return rc;
@@ -209,13 +213,18 @@ static void light_chunk(void *arg, int thread, int item) {
 
 /* Folds a finished iteration into the caller's film, in parallel over bands of rows: each
  * layer's scratch sums plus, for light layers, every thread's splats, which are zeroed on the
- * way so the next iteration starts clean. Done serially this pass would cap the thread
- * speed-up (it moves every layer of the image once per iteration). */
+ * way so the next iteration starts clean; and the square of the iteration's whole beauty into
+ * beauty_sq (its light splats are complete only here, after every thread's light paths). Done
+ * serially this pass would cap the thread speed-up (it moves every layer of the image once per
+ * iteration). */
 #define FOLD_ROWS 8
 typedef struct fold_job {
   pc_renderer *r;
   pc_film *film;
   bool light;
+  int square;                  /* the film's beauty_sq layer, -1 if none */
+  double beauty_scale[PC_LAYER_STD_COUNT]; /* one iteration's layer sums -> its beauty */
+  atomic_uint_fast64_t dropped; /* squares that overflowed */
 } fold_job;
 
 static void fold_rows(void *arg, int thread, int item) {
@@ -228,9 +237,10 @@ static void fold_rows(void *arg, int thread, int item) {
   size_t n = row * (size_t)r->set.height;
   if (hi > n) hi = n;
   int nthreads = pc_pool_size(r->pool);
-  for (int i = 0; i < r->scratch.nlayers; i++) {
-    double *d = j->film->layers[i].sum, *s = r->scratch.layers[i].sum;
-    if (j->light && r->scratch.layers[i].norm == PC_NORM_LIGHT)
+  if (j->light)
+    for (int i = 0; i < r->scratch.nlayers; i++) {
+      if (r->scratch.layers[i].norm != PC_NORM_LIGHT) continue;
+      double *s = r->scratch.layers[i].sum;
       for (int t = 0; t < nthreads; t++) {
         double *p = r->splat[t].layers[i].sum;
         for (size_t k = lo; k < hi; k++) {
@@ -238,6 +248,27 @@ static void fold_rows(void *arg, int thread, int item) {
           p[k] = 0.0;
         }
       }
+    }
+  if (j->square >= 0) {
+    double *q = j->film->layers[j->square].sum;
+    const double *s0 = r->scratch.layers[0].sum, *s1 = r->scratch.layers[1].sum, *s2 = r->scratch.layers[2].sum,
+                 *s3 = r->scratch.layers[3].sum;
+    const double *c = j->beauty_scale;
+    uint64_t bad = 0;
+    /* each square is rounded to single precision (relative 6e-8, far below any variance
+     * worth estimating): a few iterations' sum then leaves the low byte planes of an upload
+     * zero, which halves what beauty_sq adds to its compressed size (docs/variance.md) */
+    for (size_t k = lo; k < hi; k++) {
+      double b = s0[k] * c[0] + s1[k] * c[1] + s2[k] * c[2] + s3[k] * c[3];
+      double b2 = (double)(float)(b * b);
+      if (isfinite(b2)) q[k] += b2;
+      else bad++;
+    }
+    if (bad) atomic_fetch_add(&j->dropped, bad);
+  }
+  for (int i = 0; i < r->scratch.nlayers; i++) {
+    double *d = j->film->layers[i].sum, *s = r->scratch.layers[i].sum;
+    if (!s) continue;
     for (size_t k = lo; k < hi; k++) {
       d[k] += s[k];
       s[k] = 0.0;
@@ -246,13 +277,23 @@ static void fold_rows(void *arg, int thread, int item) {
 }
 
 static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
-  fold_job j = {r, film, light};
+  fold_job j = {.r = r, .film = film, .light = light, .square = pc_film_square_layer(film)};
+  _Static_assert(PC_LAYER_PT == 0 && PC_LAYER_NEE == 1 && PC_LAYER_LT == 2 && PC_LAYER_INNER == 3 &&
+                     PC_LAYER_STD_COUNT == 4, "fold_rows adds the four standard layers by index");
+  /* the beauty is the standard layers each normalized by its count: 1 iteration for the eye
+   * layers, N_L light paths (W*H/N_L per path) for lt when this iteration traced light */
+  for (int i = 0; i < PC_LAYER_STD_COUNT; i++)
+    j.beauty_scale[i] = r->scratch.layers[i].norm == PC_NORM_EYE ? 1.0
+                        : light ? (double)r->set.width * r->set.height / (double)r->n_light
+                                : 0.0;
+  if (j.square >= 0 && !film->layers[j.square].sum) j.square = -1;
+  atomic_init(&j.dropped, 0);
   pc_pool_run(r->pool, (r->set.height + FOLD_ROWS - 1) / FOLD_ROWS, fold_rows, &j);
   for (int i = 0; i < film->nlayers; i++) {
-    if (r->scratch.layers[i].norm == PC_NORM_EYE) film->layers[i].count += 1;
+    if (r->scratch.layers[i].norm != PC_NORM_LIGHT) film->layers[i].count += 1;
     else if (light) film->layers[i].count += r->n_light;
   }
-  film->dropped_nonfinite += r->scratch.dropped_nonfinite;
+  film->dropped_nonfinite += r->scratch.dropped_nonfinite + atomic_load(&j.dropped);
   r->scratch.dropped_nonfinite = 0;
   for (int t = 0; t < pc_pool_size(r->pool); t++) {
     film->dropped_nonfinite += r->splat[t].dropped_nonfinite;

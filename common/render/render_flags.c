@@ -9,6 +9,8 @@ const char pc_render_flags_help[] =
     "  --method M            pt, lt, bdpt, cbdpt or pcbpt (default: the scene's integrator)\n"
     "  --spp N               iterations to render, one sample per pixel each\n"
     "  --time SECONDS        render for this wall time (with --spp: whichever comes first)\n"
+    "  --halt-noise E        stop once the image's estimated relMSE is at most E (--spp and\n"
+    "                        --time stay upper bounds; docs/variance.md)\n"
     "  --seed N              job seed (default 1); iteration i is seeded from (seed, i)\n"
     "  --max-depth D         Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly\n"
     "  --width W --height H  film size (default: the scene's hdrfilm)\n"
@@ -34,7 +36,7 @@ void pc_render_request_default(pc_render_request *r) {
 int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e) {
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
-                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", NULL};
+                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -132,6 +134,9 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     if (strcmp(v, "cached") == 0) s->pmf_mode = PC_PMF_CACHED;
     else if (strcmp(v, "exact") == 0) s->pmf_mode = PC_PMF_EXACT;
     else return pc_errf(e, PC_EINVAL, "%s: '%s' is not cached or exact", flag, v);
+    break;
+  case 17:
+    if (!pc_parse_f64(v, 1e-9, 1e6, &r->halt_noise)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a relMSE > 0", flag, v);
     break;
   }
   return 1;

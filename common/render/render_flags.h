@@ -18,6 +18,7 @@ typedef struct pc_render_request {
   double seconds;    /* wall-time budget (0: not given) */
   bool strict;       /* the loader's warnings are errors */
   const char *scene_root; /* folder confining the files the scene names (NULL: the scene's own) */
+  double halt_noise; /* stop at this estimated relMSE (0: not given) */
 } pc_render_request;
 
 void pc_render_request_default(pc_render_request *r);

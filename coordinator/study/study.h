@@ -25,11 +25,20 @@ enum { PC_STUDY_BEAUTY = 0, PC_STUDY_NLAYERS = 1 + PC_LAYER_STD_COUNT };
 const char *pc_study_layer_name(int slot);   /* "beauty", "pt", "nee", "lt", "inner" */
 int pc_study_layer_parse(const char *name);  /* slot, or -1 */
 
-/* The reference image, per slot; NULL where the reference lacks the layer. */
+/* The reference image, per slot; NULL where the reference lacks the layer. With `estimated`
+ * (a study without a reference) every rgb is NULL and the beauty's errors are each film's own
+ * estimates from the spread of its iterations (docs/variance.md): relMSE and RMSE estimated,
+ * L1 unknown (NAN); the other layers are not measured. */
 typedef struct pc_study_ref {
   int w, h;
   const float *rgb[PC_STUDY_NLAYERS];
+  bool estimated;
 } pc_study_ref;
+
+/* Whether the study measures layer slot. */
+static inline bool pc_study_ref_has(const pc_study_ref *r, int slot) {
+  return r->rgb[slot] || (r->estimated && slot == PC_STUDY_BEAUTY);
+}
 
 typedef struct pc_study_snap {
   double seconds;       /* render time when it was taken (metrics time excluded) */
@@ -47,7 +56,8 @@ typedef struct pc_study_run {
 } pc_study_run;
 
 /* Renders set->method for `seconds` of render time into film (initialised for the settings'
- * size, empty), one iteration at a time, taking up to max_snaps snapshots at times
+ * size, empty), one iteration at a time, taking up to max_snaps snapshots (with an estimated
+ * reference, none before 2 iterations: one iteration cannot tell its error) at times
  * seconds * PC_STUDY_FIRST_FRACTION^((K-1-k)/(K-1)), each after whole iterations. When one
  * iteration passes several snapshot times only one snapshot is taken, so run->nsnaps may be
  * smaller than max_snaps; the last one is always at the end of the budget. */
@@ -95,7 +105,7 @@ void pc_study_table_print(FILE *f, const pc_study_table *t);
 void pc_study_headline(const pc_study_table *t, int m, char *buf, size_t size);
 
 typedef struct pc_study_info {
-  const char *scene_path, *scene_name, *reference_path;
+  const char *scene_path, *scene_name, *reference_path; /* reference_path NULL: estimated errors */
   double seconds;
   int width, height, max_snaps;
   uint64_t seed;

@@ -49,7 +49,7 @@ int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, co
   for (int r = 0; r < nruns; r++)
     for (int s = 0; s < runs[r].nsnaps; s++)
       for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
-        if (!ref->rgb[slot]) continue;
+        if (!pc_study_ref_has(ref, slot)) continue;
         const pc_study_snap *sn = &runs[r].snaps[s];
         fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g\n", pc_method_name(runs[r].method), s, sn->seconds,
                 (unsigned long long)sn->iterations, pc_study_layer_name(slot), sn->m[slot].relmse, sn->m[slot].rmse,
@@ -102,7 +102,7 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       fprintf(f, "       {\"seconds\": %.6f, \"iterations\": %llu, \"layers\": {", sn->seconds,
               (unsigned long long)sn->iterations);
       for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++) {
-        if (!ref->rgb[slot]) continue;
+        if (!pc_study_ref_has(ref, slot)) continue;
         fprintf(f, "%s\"%s\": {\"relmse\": ", k++ ? ", " : "", pc_study_layer_name(slot));
         json_number(f, sn->m[slot].relmse);
         fputs(", \"rmse\": ", f);
@@ -159,7 +159,10 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
   fputs(", \"scene_name\": ", f);
   json_string(f, info->scene_name);
   fputs(", \"reference\": ", f);
-  json_string(f, info->reference_path);
+  if (info->reference_path) json_string(f, info->reference_path);
+  else fputs("null", f);
+  /* where the errors come from: a reference, or each image's own iterations (docs/variance.md) */
+  fprintf(f, ", \"errors\": \"%s\"", info->reference_path ? "measured" : "estimated");
   fprintf(f, ",\n  \"seconds\": %.6g, \"width\": %d, \"height\": %d, \"seed\": %llu, \"max_snapshots\": %d,\n",
           info->seconds, info->width, info->height, (unsigned long long)info->seed, info->max_snaps);
   json_runs(f, runs, nruns, ref);
@@ -184,8 +187,10 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
     series[ns++] = (pc_chart_series){.name = pc_method_name(runs[r].method), .x = x, .y = y, .n = runs[r].nsnaps};
   }
   char title[512], path[4096];
-  snprintf(title, sizeof title, "%s: %s relMSE against render time", info->scene_name, pc_study_layer_name(slot));
-  pc_chart c = {.title = title, .x_label = "render time (s)", .y_label = "relMSE", .width = 800, .height = 560,
+  snprintf(title, sizeof title, "%s: %s relMSE against render time%s", info->scene_name, pc_study_layer_name(slot),
+           info->reference_path ? "" : " (estimated, no reference)");
+  pc_chart c = {.title = title, .x_label = "render time (s)",
+                .y_label = info->reference_path ? "relMSE" : "estimated relMSE", .width = 800, .height = 560,
                 .series = series, .nseries = ns};
   int rc = PC_OK;
   for (int k = 0; k < 2 && rc == PC_OK; k++) {

@@ -1,6 +1,6 @@
 /* study_run.c: one method of an equal-time study: renders one iteration at a time until the
  * render-time budget is spent and, at the snapshot times, measures the film against the
- * reference. Only the time inside pc_render_iterations counts as render time, so taking
+ * reference (or, without one, takes the film's own estimate of its error). Only the time inside pc_render_iterations counts as render time, so taking
  * snapshots does not eat into a method's budget. */
 #include <math.h>
 #include <stdlib.h>
@@ -32,7 +32,25 @@ static double snapshot_time(double seconds, int k, int max_snaps) {
   return seconds * pow(PC_STUDY_FIRST_FRACTION, (double)(max_snaps - 1 - k) / (max_snaps - 1));
 }
 
+/* The beauty's relMSE and RMSE as the film estimates them (NAN when it cannot tell). */
+static void estimate(const pc_film *film, float *img, pc_metrics *m) {
+  memset(m, 0, sizeof *m);
+  m->l1 = NAN;
+  if (!pc_film_relmse_estimate(film, &m->relmse) || !pc_film_variance(film, img)) {
+    m->rmse = NAN;
+    return;
+  }
+  size_t n = (size_t)film->w * film->h * 3;
+  double v = 0;
+  for (size_t i = 0; i < n; i++) v += img[i];
+  m->rmse = sqrt(v / (double)n);
+}
+
 static int measure(const pc_film *film, const pc_study_ref *ref, float *img, pc_study_snap *snap, pc_err *e) {
+  if (ref->estimated) {
+    estimate(film, img, &snap->m[PC_STUDY_BEAUTY]);
+    return PC_OK;
+  }
   for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
     if (!ref->rgb[slot]) continue;
     if (slot == PC_STUDY_BEAUTY) pc_film_beauty(film, img);
@@ -76,7 +94,7 @@ int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int th
     render_time += now_s() - t0;
     if (rc != PC_OK) break;
     it++;
-    if (render_time < snapshot_time(seconds, next, max_snaps)) continue;
+    if (render_time < snapshot_time(seconds, next, max_snaps) || (ref->estimated && it < 2)) continue;
     while (next < max_snaps && render_time >= snapshot_time(seconds, next, max_snaps)) next++;
     pc_study_snap *s = &run->snaps[run->nsnaps++];
     s->seconds = render_time;

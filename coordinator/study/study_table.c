@@ -39,7 +39,7 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
   t->nmethods = nruns;
   for (int m = 0; m < nruns; m++) t->method[m] = runs[m].method;
   for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
-    if (!ref->rgb[slot]) continue;
+    if (!pc_study_ref_has(ref, slot)) continue;
     int row = t->nlayers++;
     t->slot[row] = slot;
     if (slot == headline_slot) t->headline = row;

@@ -17,11 +17,21 @@ check missing-value 2 "--time" -- "$bin" render "$scene" --time
 check bad-threads 2 "--threads" -- "$bin" render "$scene" --threads -1
 check missing-scene 1 "nope.xml" -- "$bin" render "$tmp/nope.xml" --spp 1
 check no-scene 2 "SCENE" -- "$bin" render --spp 1
-check render 0 "samples/s" -- "$bin" render "$scene" --method pt --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
+check bad-halt-noise 2 "--halt-noise" -- "$bin" render "$scene" --halt-noise 0
+check render 0 "est. relMSE" -- "$bin" render "$scene" --method pt --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
 [ -s "$tmp/cb.exr" ] && [ -s "$tmp/cb.png" ] || { echo "FAIL render: outputs missing"; fail=1; }
 check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
 grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }
 check compare-json 0 '"layer": "inner"' -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr" --json
+grep -q '"layer": "variance"' "$tmp/out" || { echo "FAIL render: no variance layer"; fail=1; }
+grep -q '"relmse_estimate": [0-9]' "$tmp/out" || { echo "FAIL compare: no estimate from the header"; fail=1; }
+# --halt-noise alone bounds the render: it stops once the estimated relMSE is at most 0.05 (from
+# 16 iterations on), and the image it writes says about that much
+check halt-noise 0 "est. relMSE" -- "$bin" render "$scene" --method pt --halt-noise 0.05 --width 32 --height 24 --threads 2 \
+  --quiet --out "$tmp/hn.exr"
+sed -n 's/^pt: \([0-9]*\) iterations.*est. relMSE \([0-9.e-]*\).*/\1 \2/p' "$tmp/out" | {
+  read -r it est; awk -v it="$it" -v est="$est" 'BEGIN { exit !(it >= 16 && est > 0 && est <= 0.06) }'; } ||
+  { echo "FAIL halt-noise: $(cat "$tmp/out")"; fail=1; }
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

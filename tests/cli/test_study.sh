@@ -24,7 +24,7 @@ check bad-snapshots 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapsh
 check bad-target 2 "--target-error" -- "$bin" study "$scene" "${ok[@]}" --target-error -1
 check bad-layer 2 "--layer" -- "$bin" study "$scene" "${ok[@]}" --layer s2t2
 check bad-render-flag 2 "--max-depth" -- "$bin" study "$scene" "${ok[@]}" --max-depth 0
-check no-reference 2 "--reference" -- "$bin" study "$scene" --methods pt --seconds 1 --out "$tmp/s"
+check no-reference-layer 2 "--layer" -- "$bin" study "$scene" --methods pt --seconds 1 --out "$tmp/s" --layer inner
 check no-scene 2 "SCENE" -- "$bin" study "${ok[@]}"
 check missing-reference 1 "nope.exr" -- "$bin" study "$scene" "${ok[@]}" --reference "$tmp/nope.exr"
 check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scene" "${ok[@]}" --width 16
@@ -54,4 +54,14 @@ if command -v python3 >/dev/null; then
     "$tmp/s/study.json" || { echo "FAIL json"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study outputs"
+# Without a reference: the beauty's error curves are the images' own estimates, and it says so.
+check estimated 0 "relMSE estimated from each image's own iterations" -- "$bin" study "$scene" --methods pt,bdpt --seconds 1 \
+  --out "$tmp/e" "${size[@]}" --threads 2
+awk -F, 'NR > 1 { rows++; if ($5 != "beauty" || $6 !~ /^[0-9.e+-]+$/ || $8 != "nan") bad = $0 }
+         END { if (rows < 4 || bad != "") { print "FAIL estimated csv: " rows " rows " bad; exit 1 } }' "$tmp/e/study.csv" || fail=1
+if command -v python3 >/dev/null; then
+  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert d["reference"] is None and d["errors"] == "estimated"' \
+    "$tmp/e/study.json" || { echo "FAIL estimated json"; fail=1; }
+fi
+[ $fail = 0 ] && echo "ok   study without a reference"
 exit $fail

@@ -48,7 +48,9 @@ H="--host $(cat "$F/coord.addr") --token-file $F/token"
 workers() { "$B/pcbpt-coord" workers $H --json | python3 -c 'import json,sys; print(len(json.load(sys.stdin)))'; }
 for _ in $(seq 300); do [ "$(workers 2>/dev/null || echo 0)" = 2 ] && break; sleep 0.2; done
 [ "$(workers)" = 2 ] || fail "two workers did not connect"
-SPP=240
+# Long enough (seconds) that the scancel, which Slurm may deliver a second or two late on a busy
+# machine, lands while the worker still holds a range.
+SPP=960
 J=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method pt --spp $SPP --width 64 --height 64 $H | tail -1) \
   || fail "submit"
 field() { "$B/pcbpt-coord" status "$J" $H --json | python3 -c "import json,sys; print(json.load(sys.stdin)['$1'])"; }

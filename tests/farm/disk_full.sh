@@ -18,7 +18,8 @@ SC="$S/scenes/furnace/scene.xml"
 J=$("$B/pcbpt-coord" submit "$SC" --method pt --time 4 --width 48 --height 48 $H | tail -1)
 for _ in $(seq 50); do [ "$(job_field "$J" iterations)" -gt 0 ] && break; sleep 0.1; done
 dd if=/dev/zero of="$T/mnt/fill" bs=1M 2>/dev/null || true
-sleep 3
+# The next checkpoint finds the disk full; on a busy machine that may take a few seconds.
+for _ in $(seq 150); do job_field "$J" error | grep -q "waiting for the data dir" && break; sleep 0.1; done
 [ "$(job_field "$J" state)" = running ] || fail "job $(job_field "$J" state) on a full disk: $(job_field "$J" error)"
 job_field "$J" error | grep -q "waiting for the data dir" || fail "no reason in status: '$(job_field "$J" error)'"
 echo "full disk: job $J $(job_field "$J" state) at $(job_field "$J" iterations) iterations: $(job_field "$J" error)"

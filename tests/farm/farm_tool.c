@@ -2,7 +2,10 @@
  *   farm_tool exact CKPT SCENE [render flags]   the job's merged sums (its last checkpoint)
  *       equal a single-process render of iterations [0, --spp) up to summation order:
  *       identical counts, relative 1e-9 on per-layer totals and on every pixel value
+ *       (beauty_sq included, so the estimated relMSE agrees too: printed, relative 1e-6)
  *   farm_tool mean CKPT EXPECT TOL              |mean(beauty) - EXPECT| <= TOL * EXPECT
+ *   farm_tool relmse CKPT W H EXACT             prints the film's estimated relMSE and the one
+ *       measured against the constant image EXACT (compare's definition)
  *   farm_tool upload HOST:PORT TOKEN nan|size|huge|wrap   speaks as a worker: takes a range
  *       and uploads a delta with a NaN sum, of the wrong size, with a finite sum no radiance
  *       reaches (1.7e308), or of 2^64-1 iterations (first + count wraps); exits 0 if the
@@ -34,21 +37,18 @@
 static int load_ckpt(const char *path, pc_film *f, int w, int h, int depth, pc_err *e) {
   FILE *fp = fopen(path, "rb");
   if (!fp) return pc_errf(e, PC_EIO, "%s: cannot open", path);
-  uint8_t *z = NULL, *raw = NULL;
+  uint8_t *z = NULL;
   long n = -1;
   int rc = PC_EIO;
   if (fseek(fp, 0, SEEK_END) == 0) n = ftell(fp);
   if (n > 0 && fseek(fp, 0, SEEK_SET) == 0 && (z = malloc((size_t)n)) && fread(z, 1, (size_t)n, fp) == (size_t)n) {
     rc = pc_film_init(f, w, h, depth, e);
-    size_t want = rc ? 0 : pc_wire_film_size(f);
-    if (!rc) rc = pc_wire_decompress(z, (size_t)n, want, want, &raw, e);
-    if (!rc) rc = pc_wire_film_unpack(raw, want, f, e);
+    if (!rc) rc = pc_wire_film_load(z, (size_t)n, f, e);
   } else {
     pc_errf(e, PC_EIO, "%s: cannot read", path);
   }
   fclose(fp);
   free(z);
-  free(raw);
   return rc;
 }
 
@@ -103,6 +103,10 @@ static int cmd_exact(int argc, char **argv) {
   }
   printf("worst per-pixel relative difference %.2e\n", worst);
   if (worst > 1e-9) bad = 1;
+  double em, ef;
+  bool hm = pc_film_relmse_estimate(&mine, &em), hf = pc_film_relmse_estimate(&farm, &ef);
+  printf("estimated relMSE %.9g/%.9g\n", ef, em);
+  if (hm != hf || (hm && rel(em, ef) > 1e-6)) bad = 1;
   pc_renderer_destroy(r);
   pc_film_free(&mine);
   pc_film_free(&farm);
@@ -128,6 +132,24 @@ static int cmd_mean(int argc, char **argv) {
   free(b);
   pc_film_free(&f);
   return fabs(mean - want) <= tol * want ? 0 : 1;
+}
+
+static int cmd_relmse(int argc, char **argv) {
+  if (argc != 5) { fprintf(stderr, "relmse CKPT W H EXACT\n"); return 2; }
+  pc_film f = {0};
+  pc_err e = {0};
+  if (load_ckpt(argv[1], &f, atoi(argv[2]), atoi(argv[3]), 0, &e)) { fprintf(stderr, "relmse: %s\n", e.msg); return 1; }
+  size_t n = (size_t)f.w * f.h * 3;
+  float *b = malloc(n * sizeof *b);
+  if (!b) return 1;
+  pc_film_beauty(&f, b);
+  double exact = atof(argv[4]), meas = 0, est;
+  for (size_t k = 0; k < n; k++) meas += (b[k] - exact) * (b[k] - exact) / (exact * exact + PC_RELMSE_EPS);
+  int rc = pc_film_relmse_estimate(&f, &est) ? 0 : 1;
+  printf("%.9g %.9g\n", est, meas / (double)n);
+  free(b);
+  pc_film_free(&f);
+  return rc;
 }
 
 /* Connects as a worker and asks until the coordinator assigns a range (*in holds it). */
@@ -179,7 +201,8 @@ static int send_delta(pc_client *cl, const Pcbpt__Assign *a, uint64_t first, uin
   pc_render_settings s;
   pc_film f;
   if (pc_wire_settings_from_proto(a->settings, &s, e) || pc_film_init(&f, s.width + dw, s.height, s.strategy_layers, e)) return 1;
-  for (int l = 0; l < f.nlayers; l++) f.layers[l].count = f.layers[l].norm == PC_NORM_EYE ? count : count * (uint64_t)s.width * s.height;
+  /* beauty_sq counts iterations like an eye layer */
+  for (int l = 0; l < f.nlayers; l++) f.layers[l].count = f.layers[l].norm != PC_NORM_LIGHT ? count : count * (uint64_t)s.width * s.height;
   f.layers[PC_LAYER_PT].sum[7] = value;
   uint8_t *raw = NULL, *z = NULL;
   size_t rn, zn;
@@ -457,14 +480,15 @@ static int cmd_bundle(int argc, char **argv) {
 int main(int argc, char **argv) {
   if (argc >= 4 && strcmp(argv[1], "exact") == 0) return cmd_exact(argc - 2, argv + 2);
   if (argc >= 2 && strcmp(argv[1], "mean") == 0) return cmd_mean(argc - 1, argv + 1);
+  if (argc >= 2 && strcmp(argv[1], "relmse") == 0) return cmd_relmse(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "upload") == 0) return cmd_upload(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "bundle") == 0) return cmd_bundle(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "fail") == 0) return cmd_fail(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "cancelack") == 0) return cmd_cancelack(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "hoard") == 0) return cmd_hoard(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "badbundle") == 0) return cmd_badbundle(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | upload HOST:PORT TOKEN nan|size|huge|wrap"
-                  " | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN | cancelack HOST:PORT TOKEN | hoard HOST:PORT TOKEN JOB SECONDS"
-                  " | badbundle HOST:PORT TOKEN KIND\n");
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | relmse CKPT W H EXACT"
+                  " | upload HOST:PORT TOKEN nan|size|huge|wrap | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN"
+                  " | cancelack HOST:PORT TOKEN | hoard HOST:PORT TOKEN JOB SECONDS | badbundle HOST:PORT TOKEN KIND\n");
   return 2;
 }

@@ -1,7 +1,8 @@
 # furnace_kill.sh: the white furnace (L = 2 for maxDepth -1) rendered as one job over two
 # workers, one SIGKILLed once the job is under way (its first iterations acknowledged; a fixed
 # 3-second wait let a quick farm finish first): the job finishes with exactly --spp 96 iterations and
-# its mean is 2 within 2%. The method is PCBPT (METHOD=... runs another one; FK_SIZE sets the
+# its mean is 2 within 2%, and its merged sums and per-iteration squares (beauty_sq, the
+# variance data) are exactly those of a single-process render. The method is PCBPT (METHOD=... runs another one; FK_SIZE sets the
 # resolution, FK_TIMEOUT the seconds allowed).
 . "$(dirname "$0")/lib.inc"
 SCENE="$S/scenes/furnace/scene.xml"
@@ -21,4 +22,7 @@ timeout "${FK_TIMEOUT:-55}" "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "wa
 [ "$(job_field "$J" iterations)" = 96 ] || fail "iterations $(job_field "$J" iterations) != 96"
 CK=$(ls "$T/data/jobs/$J"/ckpt.* | sort -t. -k2 -n | tail -1)
 "$B/tests/farm_tool" mean "$CK" "$SIZE" "$SIZE" 2 0.02 || fail "$METHOD: furnace mean is not 2 within 2%"
+"$B/tests/farm_tool" exact "$CK" "$SCENE" --method "$METHOD" --spp 96 --width "$SIZE" --height "$SIZE" >"$T/exact.out" \
+  || { cat "$T/exact.out"; fail "$METHOD: the merged sums or squares differ from a single-process render"; }
+grep -E "beauty_sq|estimated" "$T/exact.out"
 echo "PASS ($METHOD)"

@@ -20,8 +20,10 @@ static void test_layers_and_normalization(void **state) {
   pc_film f;
   pc_err e = {0};
   assert_int_equal(pc_film_init(&f, 4, 2, 2, &e), 0);
-  /* 4 standard + path length 1 (s1t1, s0t2) + length 2 (s2t1, s1t2, s0t3) */
-  assert_int_equal(f.nlayers, 9);
+  /* 4 standard + path length 1 (s1t1, s0t2) + length 2 (s2t1, s1t2, s0t3) + beauty_sq */
+  assert_int_equal(f.nlayers, 10);
+  assert_int_equal(pc_film_square_layer(&f), 9);
+  assert_int_equal(f.layers[9].norm, PC_NORM_SQUARE);
   assert_string_equal(f.layers[PC_LAYER_LT].name, "lt");
   assert_int_equal(f.layers[PC_LAYER_LT].norm, PC_NORM_LIGHT);
   int l = pc_film_strategy_layer(&f, 1, 2);
@@ -70,11 +72,79 @@ static void test_layers_and_normalization(void **state) {
   assert_int_equal(pc_film_write_exr(&f, path, NULL, 0, &e), 0);
   pc_exr_file x;
   assert_int_equal(pc_exr_read_layers(path, &x, &e), 0);
-  assert_int_equal(x.nlayers, 1 + f.nlayers);
+  /* the beauty and every layer but beauty_sq; no variance: beauty_sq saw no iteration */
+  assert_int_equal(x.nlayers, f.nlayers);
+  double v = 0;
+  assert_false(pc_film_relmse_estimate(&f, &v));
+  assert_true(isnan(v));
   int found = 0;
   for (int i = 0; i < x.nattrs; i++)
     if (strcmp(x.attr_names[i], "pcbpt.count.lt") == 0) found = atoi(x.attr_values[i]) == 16;
   assert_true(found);
+  pc_exr_file_free(&x);
+  unlink(path);
+  rmdir(dir);
+  pc_film_free(&f);
+}
+
+/* Three "iterations" of known beauty at every pixel: the variance of the mean is the sample
+ * variance over 3, and the relMSE estimate is its mean over (mean^2 - variance + 0.01); the EXR carries
+ * both. */
+static void test_variance(void **state) {
+  (void)state;
+  pc_film f;
+  pc_err e = {0};
+  assert_int_equal(pc_film_init(&f, 2, 1, 0, &e), 0);
+  int q = pc_film_square_layer(&f);
+  assert_int_equal(q, PC_LAYER_STD_COUNT);
+  /* iteration beauties at value j: pt gives j+1, 2j+1, 4j+1; lt adds 0.5 each time with
+   * W*H = 2 light paths per iteration (scale 1) */
+  for (int it = 0; it < 3; it++)
+    for (int j = 0; j < 6; j++) {
+      double b = (double)(1 << it) * j + 1;
+      f.layers[PC_LAYER_PT].sum[j] += b;
+      f.layers[PC_LAYER_LT].sum[j] += 0.5;
+      f.layers[q].sum[j] += (b + 0.5) * (b + 0.5);
+    }
+  f.layers[PC_LAYER_PT].count = f.layers[PC_LAYER_NEE].count = f.layers[PC_LAYER_INNER].count = 3;
+  f.layers[PC_LAYER_LT].count = 6;
+  f.layers[q].count = 3;
+  float var[6];
+  assert_true(pc_film_variance(&f, var));
+  double rel = 0;
+  for (int j = 0; j < 6; j++) {
+    double x[3] = {j + 1.5, 2.0 * j + 1.5, 4.0 * j + 1.5}, m = (x[0] + x[1] + x[2]) / 3, s2 = 0;
+    for (int k = 0; k < 3; k++) s2 += (x[k] - m) * (x[k] - m);
+    double want = s2 / 2 / 3;
+    assert_true(fabs(var[j] - want) <= 1e-6 * (want + 1));
+    rel += want / (fmax(m * m - want, 0) + PC_RELMSE_EPS);
+  }
+  double est;
+  assert_true(pc_film_relmse_estimate(&f, &est));
+  assert_true(fabs(est - rel / 6) < 1e-12);
+  /* beauty_sq behind the sums (a job resumed from an old checkpoint): cannot tell */
+  f.layers[q].count = 2;
+  assert_false(pc_film_variance(&f, var));
+  f.layers[q].count = 3;
+
+  char dir[] = "/tmp/pcbpt-film-XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char path[256];
+  snprintf(path, sizeof path, "%s/v.exr", dir);
+  assert_int_equal(pc_film_write_exr(&f, path, NULL, 0, &e), 0);
+  pc_exr_file x;
+  assert_int_equal(pc_exr_read_layers(path, &x, &e), 0);
+  int found = -1;
+  for (int i = 0; i < x.nlayers; i++) {
+    assert_string_not_equal(x.names[i], "beauty_sq");
+    if (strcmp(x.names[i], "variance") == 0) found = i;
+  }
+  assert_true(found >= 0);
+  assert_true(fabsf(x.layers[found].rgb[5] - var[5]) <= 1e-6f * var[5]);
+  bool attr = false;
+  for (int i = 0; i < x.nattrs; i++)
+    if (strcmp(x.attr_names[i], "pcbpt.relmse_estimate") == 0) attr = fabs(strtod(x.attr_values[i], NULL) - est) < 1e-9 * est;
+  assert_true(attr);
   pc_exr_file_free(&x);
   unlink(path);
   rmdir(dir);
@@ -92,6 +162,7 @@ static void test_bad_sizes(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_layers_and_normalization),
+      cmocka_unit_test(test_variance),
       cmocka_unit_test(test_bad_sizes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
