@@ -20,6 +20,7 @@ int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e) {
   size_t n;
   int rc = pc_wire_encode(env, &buf, &n, e);
   if (rc) return rc;
+  if (cl->seal_tx.on && (rc = pc_seal_frame(&cl->seal_tx, buf, &n, e)) != 0) { free(buf); return rc; }
   size_t off = 0;
   while (off < n) {
     ssize_t w = send(cl->fd, buf + off, n - off, MSG_NOSIGNAL);
@@ -66,6 +67,7 @@ void pc_client_close(pc_client *cl) {
   if (cl->fd >= 0) close(cl->fd);
   cl->fd = -1;
   pc_wire_decoder_free(&cl->dec);
+  pc_seal_wipe(&cl->seal_tx);
 }
 
 int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e) {
@@ -78,6 +80,7 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
   uint8_t key[PC_AUTH_KEY];
   cl->fd = -1;
   pc_wire_decoder_init(&cl->dec, 0);
+  memset(&cl->seal_tx, 0, sizeof cl->seal_tx);
   if (pc_wire_parse_hostport(hostport, host, sizeof host, &port, 7878) != 0) return pc_errf(e, PC_EINVAL, "--host: expected HOST[:PORT], got '%s'", hostport);
   int rc = pc_auth_init(e);
   if (!rc) rc = pc_auth_load_token(token_file, key, e);
@@ -94,7 +97,7 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
   }
   freeaddrinfo(ai);
   if (cl->fd < 0) return pc_errf(e, PC_EIO, "cannot connect to %s:%d: %s", host, port, strerror(errno));
-  uint8_t cn[PC_AUTH_NONCE], mac[PC_AUTH_MAC];
+  uint8_t cn[PC_AUTH_NONCE], sn[PC_AUTH_NONCE], mac[PC_AUTH_MAC];
   pc_auth_nonce(cn);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__Hello h = PCBPT__HELLO__INIT;
@@ -115,6 +118,7 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
     goto fail;
   }
   if ((rc = pc_auth_mac(key, false, in->challenge->nonce.data, cn, mac)) != 0) goto fail;
+  memcpy(sn, in->challenge->nonce.data, PC_AUTH_NONCE);
   pcbpt__envelope__free_unpacked(in, NULL);
   in = NULL;
   Pcbpt__AuthResponse ar = PCBPT__AUTH_RESPONSE__INIT;
@@ -129,6 +133,9 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
     goto fail;
   }
   pcbpt__envelope__free_unpacked(in, NULL);
+  in = NULL;
+  /* pc_client_recv read nothing past AuthResult, so the next byte is the first sealed frame */
+  if ((rc = pc_seal_derive(key, false, cn, sn, &cl->seal_tx, &cl->dec.open, e)) != 0) goto fail;
   sodium_memzero(key, sizeof key);
   return 0;
 fail:

@@ -7,11 +7,12 @@
 
 typedef struct pc_client {
   int fd;
-  pc_wire_decoder dec;
+  pc_wire_decoder dec;  /* holds the receiving direction's seal */
+  pc_seal_dir seal_tx;
 } pc_client;
 
 /* Connects to "HOST[:PORT]", says hello as a client and completes the challenge/response,
- * checking the coordinator's proof too. */
+ * checking the coordinator's proof too; every later frame is sealed (wire_seal.h). */
 int pc_client_connect(const char *hostport, const char *token_file, pc_client *cl, pc_err *e);
 /* The same with another role (the farm tests speak as a worker). */
 int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Role role, pc_client *cl, pc_err *e);

@@ -66,8 +66,6 @@ typedef struct pc_job {
   double storage_retry;      /* ... at this time */
   bool film_ready;
   pc_film film;
-  uint8_t *wire_buf;         /* a serialized film's room, reused by the ops (merges decompress
-                                into it, checkpoints pack into it) instead of a fresh one each */
   pc_range *ranges;          /* open ranges */
   bool busy;                 /* a background op runs on the film */
   pc_op *ops, *ops_tail;
@@ -108,7 +106,10 @@ struct pc_peer {
                                 sets its ranges' progress deadlines */
   uint64_t mrate_job;
   uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
+  double hb_frac;            /* ... and of the iteration in progress ... */
   double hb_time;            /* ... at this time */
+  double hb_advanced;        /* when its heartbeats last showed that range advance: progress
+                                like an upload's, for iterations longer than any deadline */
   /* upload being assembled */
   uint8_t *up_buf; size_t up_len, up_cap;
   uint32_t up_next, up_nchunks;
@@ -140,6 +141,7 @@ struct pc_coord {
   /* upload bytes held (being assembled or waiting to merge), over all peers: above
    * max_buffered, peers sending uploads are paused so memory does not grow with them */
   size_t buffered, max_buffered;
+  size_t merging;            /* of which complete uploads waiting for (or in) their merge */
   /* tunables */
   double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;
   double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
@@ -200,7 +202,8 @@ void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const c
 void pc_peer_send_cancel(pc_peer *p, uint64_t job, uint64_t range, bool upload_partial);
 void pc_peer_ref(pc_peer *p);
 void pc_peer_unref(pc_peer *p);
-/* Upload memory: account bytes taken (n > 0) or released (n < 0); resumes paused peers. */
-void pc_coord_buffered(pc_coord *c, long long n);
+/* Upload memory: account bytes taken (n > 0) or released (n < 0; merged: bytes of a complete
+ * upload whose merge ended); resumes paused peers once under the limit or with no merge left. */
+void pc_coord_buffered(pc_coord *c, long long n, bool merged);
 
 #endif

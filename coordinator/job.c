@@ -66,13 +66,6 @@ static void queue_op(pc_job *j, pc_op *op) {
   if (!j->busy) op_start(j);
 }
 
-/* The job's serialized-film buffer, allocated by the first op that needs it. */
-static uint8_t *wire_buf(pc_job *j, pc_err *e) {
-  if (!j->wire_buf && !(j->wire_buf = malloc(pc_wire_film_size(&j->film))))
-    pc_errf(e, PC_ENOMEM, "out of memory for a %zu-byte film", pc_wire_film_size(&j->film));
-  return j->wire_buf;
-}
-
 /* An upload's per-layer counts must be those of op->count iterations: eye layers count the
  * iterations, light layers the same light paths per iteration as every upload before. */
 static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
@@ -125,11 +118,15 @@ static void merge_work(uv_work_t *w) {
                      (unsigned long long)op->raw, j->film.w, j->film.h, j->film.nlayers, want);
     return;
   }
-  uint8_t *raw = wire_buf(j, &op->err);
-  if (!raw) { op->rc = op->err.code; return; }
-  if ((op->rc = pc_wire_decompress_to(op->buf, op->len, raw, want, &op->err)) != 0) return;
-  op->rc = pc_wire_film_add(raw, want, &j->film, judge_counts, op, &op->err);
+  op->rc = pc_wire_film_add_z(op->buf, op->len, &j->film, judge_counts, op, &op->err);
   if (!op->rc) film_estimate(&j->film, &op->relmse_est, &op->est_iterations);
+}
+
+/* The checkpoint streams into its file as it is compressed (no serialized copy of the film). */
+typedef struct file_sink { int fd; const char *path; } file_sink;
+static int write_sink(void *user, const uint8_t *p, size_t n, pc_err *e) {
+  file_sink *f = user;
+  return pc_write_all(f->fd, p, n) == 0 ? 0 : pc_errf(e, PC_EIO, "%s: %s", f->path, strerror(errno));
 }
 
 static void ckpt_work(uv_work_t *w) {
@@ -139,20 +136,18 @@ static void ckpt_work(uv_work_t *w) {
   pc_job_path(op->c, j, NULL, dir, sizeof dir);
   snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  uint8_t *raw = wire_buf(j, &op->err), *z = NULL;
-  size_t zn;
-  if (!raw) { op->rc = op->err.code; return; }
-  pc_wire_film_pack_to(&j->film, raw);
-  if ((op->rc = pc_wire_compress(raw, pc_wire_film_size(&j->film), &z, &zn, &op->err)) != 0) return;
   bool sync = !op->c->volatile_store;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0 || pc_write_all(fd, z, zn) != 0 || (sync && fsync(fd) != 0)) {
+  if (fd < 0) {
     op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
-    if (fd >= 0) close(fd);
-    free(z);
     return;
   }
-  free(z);
+  file_sink fs = {fd, tmp};
+  if ((op->rc = pc_wire_film_compress(&j->film, write_sink, &fs, NULL, &op->err)) != 0 ||
+      (sync && fsync(fd) != 0 && (op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno))))) {
+    close(fd);
+    return;
+  }
   if (close(fd) != 0 || rename(tmp, path) != 0) {
     op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
     return;
@@ -366,7 +361,7 @@ static void op_after(uv_work_t *w, int status) {
     }
     pc_peer_unref(op->peer);
     free(op->buf);
-    pc_coord_buffered(c, -(long long)op->len);
+    pc_coord_buffered(c, -(long long)op->len, true);
   } else {
     pc_err e = {0};
     bool stored = !op->rc && commit_ckpt(c, j, op, &e) == 0;
@@ -404,8 +399,6 @@ static void op_after(uv_work_t *w, int status) {
   if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
       j->film_ready) {
     pc_film_free(&j->film);
-    free(j->wire_buf);
-    j->wire_buf = NULL;
     j->film_ready = false;
   }
 }
@@ -429,7 +422,7 @@ void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf,
   pc_op *op = calloc(1, sizeof *op);
   if (!op) {
     free(buf);
-    pc_coord_buffered(c, -(long long)len);
+    pc_coord_buffered(c, -(long long)len, true);
     pc_peer_send_ack(p, r->id, 0, "coordinator out of memory");
     return;
   }
@@ -640,7 +633,6 @@ void pc_job_free(pc_job *j) {
     free(a);
   }
   if (j->film_ready) pc_film_free(&j->film);
-  free(j->wire_buf);
   free(j->settings_blob);
   free(j);
 }

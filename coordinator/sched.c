@@ -238,7 +238,10 @@ void pc_sched_check_progress(pc_coord *c, pc_job *j) {
     pc_peer *p = r->owner;
     /* an upload arriving, or held back by our own back-pressure, is not overdue */
     if (!p || p->closed || r->final || p->paused || p->up_next > 0 || r->progress_at <= 0 || waits_for_ack(j, p)) continue;
-    double idle = now - r->progress_at;
+    /* heartbeats that show the range advancing count like uploads: an iteration of a large
+     * film on a slow worker may take longer than any allowance, and is not hoarding */
+    double last = p->hb_range == r->id && p->rate_job == j->id && p->hb_advanced > r->progress_at ? p->hb_advanced : r->progress_at;
+    double idle = now - last;
     if (idle <= allowance(c, j, p)) continue;
     if (!r->stop_asked) {
       pc_wire_log("job %llu: range %llu overdue on %s (no upload for %.1f s): asking it to upload what it has and stop",

@@ -55,9 +55,11 @@ void pc_peer_unref(pc_peer *p) {
   if (--p->refs == 0) free(p);
 }
 
-void pc_coord_buffered(pc_coord *c, long long n) {
+void pc_coord_buffered(pc_coord *c, long long n, bool merged) {
   c->buffered = n < 0 && (size_t)-n > c->buffered ? 0 : (size_t)((long long)c->buffered + n);
-  if (n >= 0 || c->buffered > c->max_buffered) return;
+  if (merged && n < 0) c->merging = (size_t)-n > c->merging ? 0 : c->merging - (size_t)-n;
+  /* with no merge left to free memory, paused peers resume (and elect a new leader) */
+  if (n >= 0 || (c->buffered > c->max_buffered && c->merging > 0)) return;
   for (pc_peer *p = c->peers; p; p = p->next) {
     if (!p->paused) continue;
     p->paused = false;
@@ -69,7 +71,7 @@ void pc_coord_buffered(pc_coord *c, long long n) {
 /* Drops the upload being assembled (after a refusal or when the peer goes); its buffer is
  * freed, so an idle peer holds no upload memory. */
 static void upload_reset(pc_peer *p) {
-  pc_coord_buffered(p->coord, -(long long)p->up_len);
+  pc_coord_buffered(p->coord, -(long long)p->up_len, false);
   free(p->up_buf);
   p->up_buf = NULL;
   p->up_len = p->up_cap = 0;
@@ -167,6 +169,8 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
   r.ok = true;
   r.reason = "";
   pc_conn_send(&p->conn, &env);
+  /* the last clear frame: the peer sends nothing more until it has read it */
+  if (pc_conn_seal(&p->conn, p->coord->key, true, p->client_nonce, p->nonce) != 0) return;
   if (p->role == PCBPT__ROLE__ROLE_WORKER)
     pc_wire_log("%s: worker '%s' joined (%u threads)", p->conn.peer, p->name, p->threads);
 }
@@ -176,8 +180,12 @@ static void on_auth(pc_peer *p, const Pcbpt__AuthResponse *a) {
 static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_coord *c = p->coord;
   if (h->iterations_per_second >= 0 && h->iterations_per_second < 1e9) p->rate = h->iterations_per_second;
+  double frac = h->iteration_fraction >= 0 && h->iteration_fraction < 1 ? h->iteration_fraction : 0;
+  if (h->range_id && h->range_id == p->hb_range && (h->iterations_done != p->hb_done || frac != p->hb_frac))
+    p->hb_advanced = p->last_seen;
   p->hb_range = h->range_id;
   p->hb_done = h->iterations_done;
+  p->hb_frac = frac;
   p->hb_time = p->last_seen;
   if (!h->range_id) return;
   p->rate_job = h->job_id; /* a busy worker's rate is measured on the job it renders */
@@ -293,6 +301,19 @@ static void on_bundle_request(pc_peer *p, const Pcbpt__BundleRequest *b) {
       pc_job_fail(p->coord, j, why);
 }
 
+/* Over max_buffered, uploads being assembled are paused, except one while no merge is
+ * pending: the one furthest along (ties to the first in the list), so it completes and its
+ * merge frees memory. Pausing them all deadlocks once uploads outgrow max_buffered /
+ * (their number): a 4K film's are ~40 MB each. */
+static bool upload_leader(const pc_coord *c, const pc_peer *p) {
+  if (c->merging > 0) return false;
+  for (const pc_peer *q = c->peers; q; q = q->next)
+    if (q != p && !q->paused && q->up_len > p->up_len) return false;
+  for (const pc_peer *q = c->peers; q && q != p; q = q->next)
+    if (!q->paused && q->up_len == p->up_len && q->up_len > 0) return false;
+  return true;
+}
+
 static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   pc_coord *c = p->coord;
   if (u->index != p->up_next || u->nchunks == 0 || u->index >= u->nchunks) {
@@ -345,11 +366,10 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   }
   if (u->data.len) memcpy(p->up_buf + p->up_len, u->data.data, u->data.len);
   p->up_len += u->data.len;
-  pc_coord_buffered(c, (long long)u->data.len);
+  pc_coord_buffered(c, (long long)u->data.len, false);
   p->up_next = u->index + 1;
   if (p->up_next < p->up_nchunks) {
-    /* back-pressure, but only while a merge is pending that will free memory (no deadlock) */
-    if (c->buffered > c->max_buffered && c->buffered > p->up_len && !p->paused) {
+    if (c->buffered > c->max_buffered && !p->paused && !upload_leader(c, p)) {
       int r = pc_conn_pause(&p->conn, true);
       if (r) { drop(p, "pause: %s", uv_strerror(r)); return; }
       p->paused = true;
@@ -416,9 +436,10 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     return;
   }
   pc_sched_progress(j, r, p, p->up_count);
-  /* the bytes stay accounted in c->buffered until the merge frees them */
+  /* the bytes stay accounted in c->buffered, and now in c->merging, until the merge frees them */
   uint8_t *buf = p->up_buf;
   size_t len = p->up_len;
+  c->merging += len;
   p->up_buf = NULL;
   p->up_len = p->up_cap = 0;
   pc_job_merge(c, j, p, r, buf, len, p->up_raw, p->up_first, p->up_count, p->up_final, &p->up_stats);
@@ -734,6 +755,7 @@ static void loop_stalled(pc_coord *c, double by) {
     p->connected += by;
     p->last_seen += by;
     p->hb_time += by;
+    p->hb_advanced += by;
   }
   for (pc_job *j = c->jobs; j; j = j->next) {
     if (j->stopping_since > 0) j->stopping_since += by;
@@ -876,6 +898,8 @@ static const char serve_help[] =
     "                         uploading (60); a measured one gets 3 upload intervals of its rate.\n"
     "                         An overdue worker is asked to upload what it has and stop; one that\n"
     "                         ignores that loses the range to others\n"
+    "  --max-buffered-mb N    upload bytes held before senders are paused (64); one upload\n"
+    "                         always proceeds, so a film's upload may exceed it\n"
     "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
 
 int pc_cmd_serve(int argc, char **argv) {
@@ -897,7 +921,14 @@ int pc_cmd_serve(int argc, char **argv) {
     else if (strcmp(a, "--data-dir") == 0) dir = argv[++i];
     else if (strcmp(a, "--token-file") == 0) token = argv[++i];
     else if (strcmp(a, "--port-file") == 0) port_file = argv[++i];
-    else { fprintf(stderr, "pcbpt-coord serve: unknown argument '%s' (see --help)\n", a); return 2; }
+    else if (strcmp(a, "--max-buffered-mb") == 0) {
+      double mb;
+      if (!pc_parse_f64(argv[++i], 0.25, 1 << 20, &mb)) {
+        fprintf(stderr, "pcbpt-coord serve: --max-buffered-mb: expected megabytes in [0.25, 1048576]\n");
+        return 2;
+      }
+      c.max_buffered = (size_t)(mb * 1048576);
+    } else { fprintf(stderr, "pcbpt-coord serve: unknown argument '%s' (see --help)\n", a); return 2; }
   }
   if (!listen || !dir || !token) { fprintf(stderr, "pcbpt-coord serve: --listen, --data-dir and --token-file are required\n"); return 2; }
   char host[256];

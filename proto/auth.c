@@ -58,18 +58,24 @@ int pc_auth_load_token(const char *path, uint8_t key[PC_AUTH_KEY], pc_err *e) {
 
 void pc_auth_nonce(uint8_t nonce[PC_AUTH_NONCE]) { randombytes_buf(nonce, PC_AUTH_NONCE); }
 
-int pc_auth_mac(const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t *n1, const uint8_t *n2,
-                uint8_t mac[PC_AUTH_MAC]) {
-  /* The direction label keeps a peer from reflecting the coordinator's proof back at it. */
-  const char *label = is_server ? "pcbpt-auth-server-v1" : "pcbpt-auth-client-v1";
+int pc_auth_hash(const uint8_t key[PC_AUTH_KEY], const char *label, const uint8_t *n1, const uint8_t *n2,
+                 uint8_t out[PC_AUTH_MAC]) {
   crypto_generichash_state st;
+  int rc = 0;
   if (crypto_generichash_init(&st, key, PC_AUTH_KEY, PC_AUTH_MAC) != 0 ||
       crypto_generichash_update(&st, (const unsigned char *)label, strlen(label)) != 0 ||
       crypto_generichash_update(&st, n1, PC_AUTH_NONCE) != 0 ||
       crypto_generichash_update(&st, n2, PC_AUTH_NONCE) != 0 ||
-      crypto_generichash_final(&st, mac, PC_AUTH_MAC) != 0)
-    return PC_EIO;
-  return 0;
+      crypto_generichash_final(&st, out, PC_AUTH_MAC) != 0)
+    rc = PC_EIO;
+  sodium_memzero(&st, sizeof st); /* the state holds the keyed hash's key */
+  return rc;
+}
+
+int pc_auth_mac(const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t *n1, const uint8_t *n2,
+                uint8_t mac[PC_AUTH_MAC]) {
+  /* The direction label keeps a peer from reflecting the coordinator's proof back at it. */
+  return pc_auth_hash(key, is_server ? "pcbpt-auth-server-v1" : "pcbpt-auth-client-v1", n1, n2, mac);
 }
 
 bool pc_auth_verify(const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t *n1, const uint8_t *n2,

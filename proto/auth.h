@@ -21,6 +21,10 @@ int pc_auth_init(pc_err *e);
  * (trailing whitespace ignored). Derives the MAC key; the token itself is wiped. */
 int pc_auth_load_token(const char *path, uint8_t key[PC_AUTH_KEY], pc_err *e);
 void pc_auth_nonce(uint8_t nonce[PC_AUTH_NONCE]);
+/* Keyed BLAKE2b-256 of (label || n1 || n2), each nonce PC_AUTH_NONCE bytes: the MACs below and
+ * the connection keys (wire_seal.c) differ by their labels. */
+int pc_auth_hash(const uint8_t key[PC_AUTH_KEY], const char *label, const uint8_t *n1, const uint8_t *n2,
+                 uint8_t out[PC_AUTH_MAC]);
 /* MAC of the client (is_server false) or the coordinator over (first nonce || second nonce). */
 int pc_auth_mac(const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t *n1, const uint8_t *n2,
                 uint8_t mac[PC_AUTH_MAC]);

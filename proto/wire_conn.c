@@ -103,6 +103,12 @@ static void write_cb(uv_write_t *req, int status) {
 }
 
 static int write_frame(pc_conn *c, uint8_t *buf, size_t len, bool bulk) {
+  pc_err e;
+  if (c->seal_tx.on && pc_seal_frame(&c->seal_tx, buf, &len, &e) != 0) {
+    pc_wire_log("%s: cannot send: %s", c->peer, e.msg);
+    free(buf);
+    return UV_EINVAL;
+  }
   write_req *w = malloc(sizeof *w);
   if (!w) { free(buf); return UV_ENOMEM; }
   w->buf = buf;
@@ -143,6 +149,16 @@ int pc_conn_send(pc_conn *c, const Pcbpt__Envelope *env) {
   return r;
 }
 
+int pc_conn_seal(pc_conn *c, const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t client_nonce[PC_AUTH_NONCE],
+                 const uint8_t server_nonce[PC_AUTH_NONCE]) {
+  pc_err e;
+  if (pc_seal_derive(key, is_server, client_nonce, server_nonce, &c->seal_tx, &c->dec.open, &e) != 0) {
+    pc_conn_close(c, e.msg);
+    return UV_EINVAL;
+  }
+  return 0;
+}
+
 int pc_conn_send_bulk(pc_conn *c, const Pcbpt__Envelope *env) {
   if (c->closing) return UV_ECANCELED;
   pc_conn_frame *f = malloc(sizeof *f);
@@ -181,6 +197,7 @@ static void closed_cb(uv_handle_t *h) {
   }
   c->bulk_tail = NULL;
   pc_wire_decoder_free(&c->dec);
+  pc_seal_wipe(&c->seal_tx);
   if (c->cbs.on_closed) c->cbs.on_closed(c);
 }
 

@@ -2,7 +2,8 @@
  * bytes go through the incremental decoder; a decode error closes this connection only, with
  * the reason logged. Outgoing frames are either control (written at once) or bulk (uploads,
  * bundles: written one chunk at a time), so a heartbeat, cancel or ack waits behind at most
- * one bulk chunk. */
+ * one bulk chunk. After the handshake both directions are sealed (pc_conn_seal); a frame is
+ * sealed when it is handed to the socket, so the counters follow the order on the wire. */
 #ifndef PC_WIRE_CONN_H
 #define PC_WIRE_CONN_H
 
@@ -22,7 +23,8 @@ typedef struct pc_conn_cbs {
 
 struct pc_conn {
   uv_tcp_t tcp;
-  pc_wire_decoder dec;
+  pc_wire_decoder dec;  /* holds the receiving direction's seal */
+  pc_seal_dir seal_tx;
   pc_conn_cbs cbs;
   void *data;
   pc_conn_frame *bulk_head, *bulk_tail;
@@ -36,6 +38,11 @@ int pc_conn_init(uv_loop_t *loop, pc_conn *c, const pc_conn_cbs *cbs, void *data
 /* Records the peer address and starts reading. */
 int pc_conn_start(pc_conn *c);
 int pc_conn_send(pc_conn *c, const Pcbpt__Envelope *env);
+/* Seals every frame from now on in both directions (pc_seal_derive). Call it exactly where the
+ * handshake ends: the coordinator right after sending AuthResult(ok), the connecting side on
+ * receiving it (from on_msg, so the next frame in the same read is already opened). */
+int pc_conn_seal(pc_conn *c, const uint8_t key[PC_AUTH_KEY], bool is_server, const uint8_t client_nonce[PC_AUTH_NONCE],
+                 const uint8_t server_nonce[PC_AUTH_NONCE]);
 int pc_conn_send_bulk(pc_conn *c, const Pcbpt__Envelope *env);
 /* Stops (paused true) or resumes reading: back-pressure while the reader cannot take more. */
 int pc_conn_pause(pc_conn *c, bool paused);

@@ -88,19 +88,24 @@ static size_t first_over(const uint8_t *d, bool planes, size_t m, unsigned max_e
   return m;
 }
 
-void pc_wire_film_pack_to(const pc_film *f, uint8_t *out) {
-  size_t px = (size_t)f->w * (size_t)f->h * 3;
-  uint8_t *p = out;
+/* The header: magic, shape, dropped samples, then each layer's name, norm and count. */
+static size_t put_header(const pc_film *f, uint8_t *p) {
+  uint8_t *start = p;
   memcpy(p, MAGIC_V2, 8); p += 8;
   put32(p, (uint32_t)f->w); put32(p + 4, (uint32_t)f->h); put32(p + 8, (uint32_t)f->nlayers); p += 12;
   put64(p, f->dropped_nonfinite); p += 8;
-  for (int l = 0; l < f->nlayers; l++) {
+  for (int l = 0; l < f->nlayers; l++, p += LAYER_HEAD) {
     memset(p, 0, 16);
     memcpy(p, f->layers[l].name, strnlen(f->layers[l].name, 16));
     put32(p + 16, (uint32_t)f->layers[l].norm);
     put64(p + 20, f->layers[l].count);
-    p += LAYER_HEAD;
   }
+  return (size_t)(p - start);
+}
+
+void pc_wire_film_pack_to(const pc_film *f, uint8_t *out) {
+  size_t px = (size_t)f->w * (size_t)f->h * 3;
+  uint8_t *p = out + put_header(f, out);
   for (int l = 0; l < f->nlayers; l++)
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
@@ -119,79 +124,176 @@ int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e) {
   return 0;
 }
 
-/* Checks a serialized film's header against the shape of `like`; *planes tells the format,
- * *nl how many of like's layers it holds (all, or with `whole` false maybe all but beauty_sq). */
-static int check_header(const uint8_t *buf, size_t n, const pc_film *like, bool whole, bool *planes, int *nlp,
-                        pc_err *e) {
-  bool v1 = n >= HEAD && memcmp(buf, MAGIC_V1, 8) == 0, v2 = n >= HEAD && memcmp(buf, MAGIC_V2, 8) == 0;
-  if (!v1 && !v2) return pc_errf(e, PC_EPARSE, "film: not a serialized film (bad magic or %zu bytes)", n);
+/* A serialized film read front to back, from memory or from a zstd frame decompressed
+ * through a window of WINDOW bytes, so a film of any size is checked and merged without a
+ * whole second copy of it. Reads are of at most a block (8 * PLANE_BLOCK bytes) or the
+ * header. */
+#define WINDOW ((size_t)256 << 10)
+/* Our frames use level 1's window (2^19 for films); anything wider is not ours. */
+#define WINDOW_LOG_MAX 24
+typedef struct film_src {
+  const uint8_t *data;   /* raw bytes, or a zstd frame (dctx set) */
+  size_t n;
+  size_t total;          /* the serialized film's size */
+  size_t pos;            /* raw: bytes read */
+  ZSTD_DCtx *dctx;
+  ZSTD_inBuffer in;
+  uint8_t *win;          /* decompressed, not yet read: win[lo, hi) */
+  size_t lo, hi;
+  bool ended;            /* the frame is complete */
+} film_src;
+
+static void src_raw(film_src *s, const uint8_t *buf, size_t n) { *s = (film_src){.data = buf, .n = n, .total = n}; }
+
+static int src_zstd(film_src *s, const uint8_t *z, size_t zn, pc_err *e) {
+  *s = (film_src){.data = z, .n = zn};
+  unsigned long long cs = ZSTD_getFrameContentSize(z, zn);
+  if (cs == ZSTD_CONTENTSIZE_ERROR || cs == ZSTD_CONTENTSIZE_UNKNOWN)
+    return pc_errf(e, PC_EPARSE, "zstd: not a zstd frame with a known size");
+  if (cs > PC_WIRE_FILM_MAX) return pc_errf(e, PC_EINVAL, "zstd: content size %llu over the limit", cs);
+  s->total = (size_t)cs;
+  s->dctx = ZSTD_createDCtx();
+  s->win = malloc(WINDOW);
+  if (!s->dctx || !s->win) return pc_errf(e, PC_ENOMEM, "zstd: out of memory for a decompression stream");
+  if (ZSTD_isError(ZSTD_DCtx_setParameter(s->dctx, ZSTD_d_windowLogMax, WINDOW_LOG_MAX)))
+    return pc_errf(e, PC_EIO, "zstd: cannot bound the window");
+  s->in = (ZSTD_inBuffer){z, zn, 0};
+  return 0;
+}
+
+static void src_free(film_src *s) {
+  ZSTD_freeDCtx(s->dctx);
+  free(s->win);
+}
+
+/* Back to the first byte, for a second pass over the same bytes. */
+static void src_rewind(film_src *s) {
+  s->pos = s->lo = s->hi = 0;
+  s->ended = false;
+  if (s->dctx) {
+    ZSTD_DCtx_reset(s->dctx, ZSTD_reset_session_only);
+    s->in.pos = 0;
+  }
+}
+
+/* The next n bytes, or NULL (e set) when the film ends before them. */
+static const uint8_t *src_read(film_src *s, size_t n, pc_err *e) {
+  if (!s->dctx) {
+    if (n > s->n - s->pos) { pc_errf(e, PC_EINVAL, "film: %zu bytes, expected more", s->n); return NULL; }
+    s->pos += n;
+    return s->data + s->pos - n;
+  }
+  if (s->hi - s->lo < n) {
+    memmove(s->win, s->win + s->lo, s->hi - s->lo);
+    s->hi -= s->lo;
+    s->lo = 0;
+    while (s->hi < n && !s->ended) {
+      ZSTD_outBuffer out = {s->win, WINDOW, s->hi};
+      size_t r = ZSTD_decompressStream(s->dctx, &out, &s->in);
+      if (ZSTD_isError(r)) { pc_errf(e, PC_EPARSE, "zstd: decompress failed: %s", ZSTD_getErrorName(r)); return NULL; }
+      if (r == 0) s->ended = true;
+      else if (out.pos == s->hi && s->in.pos == s->in.size) break; /* truncated frame */
+      s->hi = out.pos;
+    }
+    if (s->hi < n) { pc_errf(e, PC_EPARSE, "zstd: the frame ends inside the film"); return NULL; }
+  }
+  s->lo += n;
+  return s->win + s->lo - n;
+}
+
+/* After the last byte: nothing may follow (no data in the frame, no bytes after it). */
+static int src_end(film_src *s, pc_err *e) {
+  if (!s->dctx) return s->pos == s->n ? 0 : pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", s->n, s->pos);
+  uint8_t extra;
+  while (!s->ended && s->lo == s->hi) {
+    ZSTD_outBuffer out = {&extra, 1, 0};
+    size_t r = ZSTD_decompressStream(s->dctx, &out, &s->in);
+    if (ZSTD_isError(r)) return pc_errf(e, PC_EPARSE, "zstd: decompress failed: %s", ZSTD_getErrorName(r));
+    if (out.pos) s->hi = s->lo + 1;
+    else if (r == 0) s->ended = true;
+    else if (s->in.pos == s->in.size) return pc_errf(e, PC_EPARSE, "zstd: truncated frame");
+  }
+  if (s->lo != s->hi) return pc_errf(e, PC_EPARSE, "zstd: more data than the film");
+  if (s->in.pos != s->in.size) return pc_errf(e, PC_EPARSE, "zstd: %zu bytes after the frame", s->in.size - s->in.pos);
+  return 0;
+}
+
+/* Reads and checks a serialized film's header against the shape of `like`; *planes tells the
+ * format, *nl how many of like's layers it holds (all, or with `whole` false maybe all but
+ * beauty_sq), counts[] and *dropped its counts. */
+static int read_header(film_src *s, const pc_film *like, bool whole, bool *planes, int *nlp, uint64_t *counts,
+                       uint64_t *dropped, pc_err *e) {
+  const uint8_t *buf = s->total >= HEAD ? src_read(s, HEAD, e) : NULL;
+  if (!buf && s->total >= HEAD) return e->code;
+  bool v1 = buf && memcmp(buf, MAGIC_V1, 8) == 0, v2 = buf && memcmp(buf, MAGIC_V2, 8) == 0;
+  if (!v1 && !v2) return pc_errf(e, PC_EPARSE, "film: not a serialized film (bad magic or %zu bytes)", s->total);
   uint32_t w = get32(buf + 8), h = get32(buf + 12), nl = get32(buf + 16);
+  *dropped = get64(buf + 20);
   if ((int)w != like->w || (int)h != like->h)
     return pc_errf(e, PC_EINVAL, "film: resolution %ux%u, the job has %dx%d", w, h, like->w, like->h);
   if ((int)nl != like->nlayers && (whole || (int)nl != short_layers(like)))
     return pc_errf(e, PC_EINVAL, "film: %u layers, the job has %d", nl, like->nlayers);
-  if (n != size_of(like, (int)nl)) return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", n, size_of(like, (int)nl));
-  const uint8_t *p = buf + HEAD;
+  if (s->total != size_of(like, (int)nl))
+    return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", s->total, size_of(like, (int)nl));
+  const uint8_t *p = src_read(s, (size_t)nl * LAYER_HEAD, e);
+  if (!p) return e->code;
   for (int l = 0; l < (int)nl; l++, p += LAYER_HEAD) {
     char name[17] = {0};
     memcpy(name, p, 16);
     if (strncmp(name, like->layers[l].name, 16) != 0 || get32(p + 16) != (uint32_t)like->layers[l].norm)
       return pc_errf(e, PC_EINVAL, "film: layer %d is '%s', the job has '%s'", l, name, like->layers[l].name);
+    counts[l] = get64(p + 20);
   }
   *planes = v2;
   *nlp = (int)nl;
   return 0;
 }
 
-/* The header checks, then that every sum is finite and, for a delta (bounded), under
+/* The first pass: the header, then that every sum is finite and, for a delta (bounded), under
  * 2^PC_WIRE_SAMPLE_LOG2 per sample of its layer (2^(2 PC_WIRE_SAMPLE_LOG2) for beauty_sq, whose
  * samples are squares; a biased exponent of at most 1023 + that + the bit length of the count
  * - 1), before anything is read into a film. A delta holds every layer; a checkpoint may be
  * one written before beauty_sq (*nl tells). */
-static int check(const uint8_t *buf, size_t n, const pc_film *like, bool bounded, bool *planes, int *nl, pc_err *e) {
-  int rc = check_header(buf, n, like, bounded, planes, nl, e);
+static int check(film_src *s, const pc_film *like, bool bounded, bool *planes, int *nl, uint64_t *counts, pc_err *e) {
+  uint64_t dropped;
+  int rc = read_header(s, like, bounded, planes, nl, counts, &dropped, e);
   if (rc) return rc;
   size_t px = (size_t)like->w * (size_t)like->h * 3;
-  const uint8_t *d = buf + HEAD + (size_t)*nl * LAYER_HEAD;
   for (int l = 0; l < *nl; l++) {
-    uint64_t count = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
     unsigned bits = 0, sample_log2 = like->layers[l].norm == PC_NORM_SQUARE ? 2 * PC_WIRE_SAMPLE_LOG2 : PC_WIRE_SAMPLE_LOG2;
-    while (bits < 64 && count >> bits) bits++;
+    while (bits < 64 && counts[l] >> bits) bits++;
     unsigned max_exp = bounded ? 1023 + sample_log2 + bits - 1 : 0x7fe;
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
+      const uint8_t *d = src_read(s, 8 * m, e);
+      if (!d) return e->code;
       size_t i = first_over(d, *planes, m, max_exp);
       if (i < m && first_over(d, *planes, m, 0x7fe) == i)
         return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
       if (i < m)
         return pc_errf(e, PC_ENUMERIC, "film: a sum in layer %d at pixel %zu is beyond any radiance for %llu samples", l,
-                       (k + i) / 3, (unsigned long long)count);
-      d += 8 * m;
+                       (k + i) / 3, (unsigned long long)counts[l]);
     }
   }
-  return 0;
+  return src_end(s, e);
 }
 
-/* Sets (add = false) or adds the serialized film into `into` once it passed check() and
- * judge, so `into` is unchanged on error. */
-static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_counts_judge judge, void *user,
-                 pc_err *e) {
+/* Sets (add = false) or adds the serialized film into `into` once a first pass over it
+ * passed check() and judge, so `into` is unchanged on error; the second pass reads the same
+ * bytes again. */
+static int apply(film_src *s, pc_film *into, bool add, pc_wire_counts_judge judge, void *user, pc_err *e) {
   bool planes = false;
   int nl = 0;
-  int rc = check(buf, n, into, add, &planes, &nl, e);
+  uint64_t counts[PC_FILM_MAX_LAYERS], dropped;
+  int rc = check(s, into, add, &planes, &nl, counts, e);
+  if (!rc && judge) rc = judge(user, counts, e);
   if (rc) return rc;
-  if (judge) {
-    uint64_t counts[PC_FILM_MAX_LAYERS];
-    for (int l = 0; l < into->nlayers; l++) counts[l] = get64(buf + HEAD + (size_t)l * LAYER_HEAD + 20);
-    if ((rc = judge(user, counts, e)) != 0) return rc;
-  }
+  src_rewind(s);
+  if ((rc = read_header(s, into, add, &planes, &nl, counts, &dropped, e)) != 0) return rc;
   size_t px = (size_t)into->w * (size_t)into->h * 3;
-  const uint8_t *d = buf + HEAD + (size_t)nl * LAYER_HEAD;
   double v[PLANE_BLOCK];
-  uint64_t dropped = get64(buf + 20);
   into->dropped_nonfinite = add ? into->dropped_nonfinite + dropped : dropped;
-  const uint8_t *p = buf + HEAD;
-  for (int l = 0; l < nl; l++, p += LAYER_HEAD) into->layers[l].count = (add ? into->layers[l].count : 0) + get64(p + 20);
+  for (int l = 0; l < nl; l++) into->layers[l].count = (add ? into->layers[l].count : 0) + counts[l];
   for (int l = nl; l < into->nlayers; l++) { /* an old checkpoint's missing beauty_sq (set only) */
     into->layers[l].count = 0;
     if (into->layers[l].sum) memset(into->layers[l].sum, 0, px * sizeof(double));
@@ -199,31 +301,115 @@ static int apply(const uint8_t *buf, size_t n, pc_film *into, bool add, pc_wire_
   for (int l = 0; l < nl; l++)
     for (size_t k = 0; k < px; k += PLANE_BLOCK) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
-      double *s = into->layers[l].sum + k;
-      get_block(d, planes, m, add ? v : s);
-      d += 8 * m;
+      double *sum = into->layers[l].sum + k;
+      /* the first pass read these bytes: only a failing allocator could stop this one */
+      const uint8_t *d = src_read(s, 8 * m, e);
+      if (!d) return e->code;
+      get_block(d, planes, m, add ? v : sum);
       if (add)
-        for (size_t i = 0; i < m; i++) s[i] += v[i];
+        for (size_t i = 0; i < m; i++) sum[i] += v[i];
     }
   return 0;
 }
 
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e) {
-  return apply(buf, n, into, false, NULL, NULL, e);
+  film_src s;
+  src_raw(&s, buf, n);
+  return apply(&s, into, false, NULL, NULL, e);
 }
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e) {
-  return apply(buf, n, into, true, judge, user, e);
+  film_src s;
+  src_raw(&s, buf, n);
+  return apply(&s, into, true, judge, user, e);
+}
+
+int pc_wire_film_add_z(const uint8_t *z, size_t zn, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e) {
+  film_src s;
+  int rc = src_zstd(&s, z, zn, e);
+  if (!rc) rc = apply(&s, into, true, judge, user, e);
+  src_free(&s);
+  return rc;
 }
 
 int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e) {
-  unsigned long long cs = ZSTD_getFrameContentSize(z, zn);
-  size_t whole = pc_wire_film_size(into), old = size_of(into, short_layers(into));
-  size_t want = cs == (unsigned long long)old ? old : whole;
-  uint8_t *raw = NULL;
-  int rc = pc_wire_decompress(z, zn, want, whole, &raw, e);
-  if (!rc) rc = pc_wire_film_unpack(raw, want, into, e);
-  free(raw);
+  film_src s;
+  int rc = src_zstd(&s, z, zn, e);
+  if (!rc) rc = apply(&s, into, false, NULL, NULL, e);
+  src_free(&s);
   return rc;
+}
+
+/* Packs blocks into a staging buffer of about STAGE bytes and compresses it into the sink as
+ * it fills, so the serialized film never exists whole. */
+#define STAGE ((size_t)1 << 20)
+int pc_wire_film_compress(const pc_film *f, pc_wire_sink sink, void *user, size_t *zn, pc_err *e) {
+  size_t px = (size_t)f->w * (size_t)f->h * 3, head = HEAD + (size_t)f->nlayers * LAYER_HEAD;
+  size_t cap = STAGE > head ? STAGE : head, outcap = ZSTD_CStreamOutSize();
+  ZSTD_CCtx *cc = ZSTD_createCCtx();
+  uint8_t *stage = malloc(cap), *out = malloc(outcap);
+  int rc = 0;
+  if (!cc || !stage || !out) rc = pc_errf(e, PC_ENOMEM, "zstd: out of memory for a compression stream");
+  if (!rc && (ZSTD_isError(ZSTD_CCtx_setParameter(cc, ZSTD_c_compressionLevel, ZSTD_LEVEL)) ||
+              ZSTD_isError(ZSTD_CCtx_setPledgedSrcSize(cc, pc_wire_film_size(f)))))
+    rc = pc_errf(e, PC_EIO, "zstd: cannot set up the compression stream");
+  size_t fill = rc ? 0 : put_header(f, stage), total = 0;
+  int l = 0;
+  size_t k = 0;
+  while (!rc) {
+    /* stage blocks until the next would not fit, or the film is done */
+    while (l < f->nlayers) {
+      size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
+      if (fill + 8 * m > cap) break;
+      put_block(stage + fill, f->layers[l].sum + k, m);
+      fill += 8 * m;
+      if ((k += m) >= px) k = 0, l++;
+    }
+    bool last = l == f->nlayers;
+    ZSTD_inBuffer in = {stage, fill, 0};
+    size_t left;
+    do {
+      ZSTD_outBuffer o = {out, outcap, 0};
+      left = ZSTD_compressStream2(cc, &o, &in, last ? ZSTD_e_end : ZSTD_e_continue);
+      if (ZSTD_isError(left)) { rc = pc_errf(e, PC_EIO, "zstd: compress failed: %s", ZSTD_getErrorName(left)); break; }
+      if (o.pos && (rc = sink(user, out, o.pos, e)) != 0) break;
+      total += o.pos;
+    } while (last ? left != 0 : in.pos < in.size);
+    fill = 0;
+    if (last) break;
+  }
+  ZSTD_freeCCtx(cc);
+  free(stage);
+  free(out);
+  if (!rc && zn) *zn = total;
+  return rc;
+}
+
+typedef struct grow_buf { uint8_t *p; size_t n, cap; } grow_buf;
+static int grow_sink(void *user, const uint8_t *p, size_t n, pc_err *e) {
+  grow_buf *b = user;
+  if (n > b->cap - b->n) {
+    size_t cap = b->cap ? b->cap : (size_t)1 << 16;
+    while (n > cap - b->n) cap *= 2;
+    uint8_t *q = realloc(b->p, cap);
+    if (!q) return pc_errf(e, PC_ENOMEM, "zstd: out of memory for %zu compressed bytes", cap);
+    b->p = q;
+    b->cap = cap;
+  }
+  memcpy(b->p + b->n, p, n);
+  b->n += n;
+  return 0;
+}
+
+int pc_wire_film_zip(const pc_film *f, uint8_t **out, size_t *outn, pc_err *e) {
+  grow_buf b = {0};
+  int rc = pc_wire_film_compress(f, grow_sink, &b, NULL, e);
+  if (rc) {
+    free(b.p);
+    return rc;
+  }
+  *out = b.p;
+  *outn = b.n;
+  return 0;
 }
 
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e) {
@@ -240,7 +426,7 @@ int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, p
   return 0;
 }
 
-int pc_wire_decompress_to(const uint8_t *in, size_t n, uint8_t *out, size_t expect, pc_err *e) {
+static int decompress_to(const uint8_t *in, size_t n, uint8_t *out, size_t expect, pc_err *e) {
   unsigned long long cs = ZSTD_getFrameContentSize(in, n);
   if (cs == ZSTD_CONTENTSIZE_ERROR || cs == ZSTD_CONTENTSIZE_UNKNOWN)
     return pc_errf(e, PC_EPARSE, "zstd: not a zstd frame with a known size");
@@ -255,7 +441,7 @@ int pc_wire_decompress(const uint8_t *in, size_t n, size_t expect, size_t limit,
   if (expect > limit) return pc_errf(e, PC_EINVAL, "zstd: content size %zu over the limit %zu", expect, limit);
   uint8_t *b = malloc(expect ? expect : 1);
   if (!b) return pc_errf(e, PC_ENOMEM, "zstd: out of memory for %zu bytes", expect);
-  int rc = pc_wire_decompress_to(in, n, b, expect, e);
+  int rc = decompress_to(in, n, b, expect, e);
   if (rc) {
     free(b);
     return rc;

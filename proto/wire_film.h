@@ -35,15 +35,25 @@ typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *
  * (unchanged on error): a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 
+/* pc_wire_film_add of a zstd frame of a serialized film (an upload), decompressed twice through
+ * a small window (once to check, once to add) instead of into a copy of the film. */
+int pc_wire_film_add_z(const uint8_t *z, size_t zn, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 /* A checkpoint: a zstd frame of a serialized film (whole, or of an older coordinator without
- * beauty_sq) decompressed and unpacked into `into` as pc_wire_film_unpack does. */
+ * beauty_sq) checked and unpacked into `into` as pc_wire_film_unpack does, the same way. */
 int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e);
+
+/* Where pc_wire_film_compress puts the compressed bytes as they come: 0, or an error code. */
+typedef int (*pc_wire_sink)(void *user, const uint8_t *p, size_t n, pc_err *e);
+/* Serializes and compresses f as one zstd frame (what pc_wire_compress of pc_wire_film_pack
+ * gives, and the loaders read) through a 1 MiB staging buffer, so no serialized copy of the
+ * film is ever whole in memory; *zn (may be NULL) gets the compressed size. */
+int pc_wire_film_compress(const pc_film *f, pc_wire_sink sink, void *user, size_t *zn, pc_err *e);
+/* The same into a malloc'd buffer (an upload). */
+int pc_wire_film_zip(const pc_film *f, uint8_t **out, size_t *outn, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);
 /* Decompresses a zstd frame whose content size must be exactly `expect` (<= limit). */
 int pc_wire_decompress(const uint8_t *in, size_t n, size_t expect, size_t limit, uint8_t **out, pc_err *e);
-/* The same into a caller's buffer of `expect` bytes. */
-int pc_wire_decompress_to(const uint8_t *in, size_t n, uint8_t *out, size_t expect, pc_err *e);
 
 #endif

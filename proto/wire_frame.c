@@ -10,6 +10,7 @@ void pc_wire_decoder_init(pc_wire_decoder *d, size_t max_frame) {
 }
 
 void pc_wire_decoder_free(pc_wire_decoder *d) {
+  pc_seal_wipe(&d->open);
   free(d->buf);
   d->buf = NULL;
   d->hdr_have = d->len = d->have = 0;
@@ -24,9 +25,10 @@ int pc_wire_decoder_push(pc_wire_decoder *d, const uint8_t *data, size_t n, size
   if (!d->buf) {
     uint32_t len = (uint32_t)d->hdr[0] << 24 | (uint32_t)d->hdr[1] << 16 | (uint32_t)d->hdr[2] << 8 | d->hdr[3];
     if (len == 0) { *used = i; return pc_errf(e, PC_EPARSE, "wire: empty frame"); }
-    if (len > d->max) {
+    size_t limit = d->max + (d->open.on ? PC_SEAL_TAG : 0);
+    if (len > limit) {
       *used = i;
-      return pc_errf(e, PC_ELIMIT, "wire: frame of %u bytes exceeds the limit of %zu", len, d->max);
+      return pc_errf(e, PC_ELIMIT, "wire: frame of %u bytes exceeds the limit of %zu", len, limit);
     }
     d->buf = malloc(len);
     if (!d->buf) { *used = i; return pc_errf(e, PC_ENOMEM, "wire: out of memory for a %u-byte frame", len); }
@@ -39,11 +41,13 @@ int pc_wire_decoder_push(pc_wire_decoder *d, const uint8_t *data, size_t n, size
   i += take;
   *used = i;
   if (d->have < d->len) return 0;
-  Pcbpt__Envelope *env = pcbpt__envelope__unpack(NULL, d->len, d->buf);
   size_t len = d->len;
+  int rc = d->open.on ? pc_seal_open(&d->open, d->hdr, d->buf, d->len, &len, e) : 0;
+  Pcbpt__Envelope *env = rc ? NULL : pcbpt__envelope__unpack(NULL, len, d->buf);
   free(d->buf);
   d->buf = NULL;
   d->hdr_have = d->len = d->have = 0;
+  if (rc) return rc;
   if (!env) return pc_errf(e, PC_EPARSE, "wire: malformed %zu-byte frame (protobuf decode failed)", len);
   if (env->msg_case == PCBPT__ENVELOPE__MSG__NOT_SET) {
     pcbpt__envelope__free_unpacked(env, NULL);
@@ -58,7 +62,7 @@ int pc_wire_encode(const Pcbpt__Envelope *env, uint8_t **out, size_t *outlen, pc
   if (len == 0 || len > PC_WIRE_MAX_FRAME)
     return pc_errf(e, PC_ELIMIT, "wire: %s message of %zu bytes does not fit a frame",
                    pc_wire_msg_name(env->msg_case), len);
-  uint8_t *b = malloc(4 + len);
+  uint8_t *b = malloc(4 + len + PC_SEAL_TAG);
   if (!b) return pc_errf(e, PC_ENOMEM, "wire: out of memory encoding a frame");
   b[0] = (uint8_t)(len >> 24); b[1] = (uint8_t)(len >> 16); b[2] = (uint8_t)(len >> 8); b[3] = (uint8_t)len;
   size_t packed = pcbpt__envelope__pack(env, b + 4);

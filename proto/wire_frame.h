@@ -1,6 +1,7 @@
 /* wire_frame.h: the farm's framing: a 4-byte big-endian length, then one protobuf Envelope
- * (proto/pcbpt.proto). The decoder is incremental (bytes arrive in any split across reads) and
- * refuses empty, oversized and malformed frames; every frame is untrusted input. */
+ * (proto/pcbpt.proto), sealed (wire_seal.h) once the handshake is done. The decoder is
+ * incremental (bytes arrive in any split across reads) and refuses empty, oversized, malformed
+ * and (when sealed) unauthentic frames; every frame is untrusted input. */
 #ifndef PC_WIRE_FRAME_H
 #define PC_WIRE_FRAME_H
 
@@ -9,9 +10,11 @@
 
 #include "error.h"
 #include "pcbpt.pb-c.h"
+#include "wire_seal.h"
 
-#define PC_WIRE_PROTOCOL_VERSION 3u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq */
-#define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's payload */
+#define PC_WIRE_PROTOCOL_VERSION 4u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq;
+                                        * 4: sealed frames (wire_seal.h) */
+#define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's plaintext payload */
 #define PC_WIRE_CHUNK (256u << 10)     /* bulk payload bytes per frame; well under the limit */
 /* A rendering worker uploads what it has at least this often (seconds; a range shorter than
  * this, at its end): the coordinator's progress deadlines count on it. */
@@ -22,7 +25,8 @@ typedef struct pc_wire_decoder {
   size_t hdr_have;
   uint8_t *buf;     /* payload being assembled, allocated once the length is known */
   size_t len, have;
-  size_t max;       /* frame limit for this decoder (PC_WIRE_MAX_FRAME unless lowered) */
+  size_t max;       /* plaintext limit for this decoder (PC_WIRE_MAX_FRAME unless lowered) */
+  pc_seal_dir open; /* when on, every frame is sealed and opened before it is parsed */
 } pc_wire_decoder;
 
 void pc_wire_decoder_init(pc_wire_decoder *d, size_t max_frame);
@@ -35,7 +39,8 @@ void pc_wire_decoder_free(pc_wire_decoder *d);
 int pc_wire_decoder_push(pc_wire_decoder *d, const uint8_t *data, size_t n, size_t *used,
                          Pcbpt__Envelope **out, pc_err *e);
 
-/* Encodes env as one frame (length prefix included) into a malloc'd buffer. */
+/* Encodes env as one frame (length prefix included) into a malloc'd buffer with PC_SEAL_TAG
+ * bytes of room after it, so pc_seal_frame can seal it in place. */
 int pc_wire_encode(const Pcbpt__Envelope *env, uint8_t **out, size_t *outlen, pc_err *e);
 
 /* Name of an envelope's message kind, for log lines. */

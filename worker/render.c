@@ -1,12 +1,15 @@
 /* render.c: the worker's render thread: loads and builds the job's scene once per job, then
- * renders the assigned range in batches of about half a second into a scratch film and adds
- * each finished batch to the pending film the loop uploads. Cancel is polled by the renderer
- * between work items, so it takes effect well within a second. */
+ * renders the assigned range in batches of about half a second into a scratch film, adds each
+ * finished batch to the pending film, and compresses that into an upload when the loop asks.
+ * Cancel is polled by the renderer between work items, so it takes effect well within a
+ * second. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "render_flags.h"
+#include "wire_film.h"
 #include "scene.h"
 #include "wire_log.h"
 #include "worker.h"
@@ -18,24 +21,29 @@ static double now_s(void) {
 }
 
 typedef struct job_ctx {
-  uint64_t job_id;
   bool loaded;
   pc_scene scene;
   pc_renderer *rend;
-  pc_film work;
+  pc_film work;     /* one batch */
+  pc_film pending;  /* batches not yet taken for upload */
+  bool pending_dirty;
 } job_ctx;
 
-static void ctx_free(job_ctx *c) {
+static void ctx_free(job_ctx *c, pc_wrender *w) {
   if (!c->loaded) return;
+  uv_mutex_lock(&w->mu);
+  w->rend = NULL;
+  uv_mutex_unlock(&w->mu);
   pc_renderer_destroy(c->rend);
   pc_film_free(&c->work);
+  pc_film_free(&c->pending);
   pc_scene_free(&c->scene);
   c->loaded = false;
 }
 
-static int ctx_load(job_ctx *c, const pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
+static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
                     pc_err *e) {
-  ctx_free(c);
+  ctx_free(c, w);
   memset(&c->scene, 0, sizeof c->scene);
   /* The client checked the scene and showed its warnings; the worker loads the same files with
    * the same -D values and needs no warnings. */
@@ -53,11 +61,54 @@ static int ctx_load(job_ctx *c, const pc_wrender *w, const pc_render_settings *s
   if (!rc) rc = pc_renderer_create(&c->scene, set, w->threads, &c->rend, e);
   if (!rc) {
     rc = pc_film_init(&c->work, set->width, set->height, set->strategy_layers, e);
+    if (!rc && (rc = pc_film_init(&c->pending, set->width, set->height, set->strategy_layers, e)) != 0)
+      pc_film_free(&c->work);
     if (rc) pc_renderer_destroy(c->rend);
   }
   if (rc) { pc_scene_free(&c->scene); return rc; }
   c->loaded = true;
+  c->pending_dirty = false;
+  uv_mutex_lock(&w->mu);
+  w->rend = c->rend;
+  uv_mutex_unlock(&w->mu);
   return 0;
+}
+
+/* The loop asked for an upload: compresses what is pending (outside the lock: a 4K film takes
+ * seconds) and hands it over, unless the range changed meanwhile (then it is dropped). */
+static void take_pending(pc_wrender *w, job_ctx *c) {
+  uv_mutex_lock(&w->mu);
+  uint64_t range = w->range_id, first = w->pend_first, count = w->pend_count;
+  pc_render_stats st = w->pend_stats;
+  uv_mutex_unlock(&w->mu);
+  uint8_t *z = NULL;
+  size_t zn = 0;
+  pc_err e = {0};
+  int rc = count && c->loaded ? pc_wire_film_zip(&c->pending, &z, &zn, &e) : 0;
+  if (rc) pc_wire_log("upload: %s", e.msg);
+  uv_mutex_lock(&w->mu);
+  w->take = false;
+  if (z && w->range_id == range && w->pend_count == count) {
+    w->zip = z;
+    w->zip_len = zn;
+    w->zip_raw = pc_wire_film_size(&c->pending);
+    w->zip_range = range;
+    w->zip_first = first;
+    w->zip_count = count;
+    w->zip_stats = st;
+    w->zip_ready = true;
+    w->pend_first = first + count;
+    w->pend_count = 0;
+    memset(&w->pend_stats, 0, sizeof w->pend_stats);
+    z = NULL;
+  }
+  uv_mutex_unlock(&w->mu);
+  free(z);
+  if (!rc && count && c->loaded) {
+    pc_film_clear(&c->pending);
+    c->pending_dirty = false;
+  }
+  uv_async_send(w->notify);
 }
 
 static void thread_main(void *arg) {
@@ -66,8 +117,13 @@ static void thread_main(void *arg) {
   uint64_t loaded_job = 0;
   for (;;) {
     uv_mutex_lock(&w->mu);
-    while (!w->quit && !(w->have_range && !w->range_done)) uv_cond_wait(&w->cv, &w->mu);
+    while (!w->quit && !(w->have_range && !w->range_done) && !w->take) uv_cond_wait(&w->cv, &w->mu);
     if (w->quit) { uv_mutex_unlock(&w->mu); break; }
+    if (w->take) {
+      uv_mutex_unlock(&w->mu);
+      take_pending(w, &ctx);
+      continue;
+    }
     uint64_t job = w->job_id, first = w->first, count = w->count;
     pc_render_settings set = w->set;
     char path[sizeof w->scene_path], root[sizeof w->scene_root];
@@ -80,6 +136,10 @@ static void thread_main(void *arg) {
     if (!ctx.loaded || loaded_job != job) {
       rc = ctx_load(&ctx, w, &set, path, root, &e);
       loaded_job = rc ? 0 : job;
+    }
+    if (!rc && ctx.pending_dirty) { /* a dropped range's batches */
+      pc_film_clear(&ctx.pending);
+      ctx.pending_dirty = false;
     }
     uint64_t done = 0;
     while (!rc && done < count && !atomic_load(&w->cancel)) {
@@ -97,18 +157,21 @@ static void thread_main(void *arg) {
       uint64_t got = ctx.work.layers[PC_LAYER_PT].count;
       if (rc == PC_ECANCELED) rc = 0;
       if (rc || got > batch) break;
+      if (got && (rc = pc_film_add(&ctx.pending, &ctx.work, &e)) != 0) break;
+      ctx.pending_dirty |= got > 0;
       uv_mutex_lock(&w->mu);
       if (got) {
         if (w->pend_count == 0) w->pend_first = first + done;
-        rc = pc_film_add(&w->pending, &ctx.work, &e);
         w->pend_count += got;
         pc_render_stats_add(&w->pend_stats, &st);
         w->rendered += got;
         if (dt > 0) w->rate = w->rate > 0 ? 0.5 * w->rate + 0.5 * (double)got / dt : (double)got / dt;
       }
+      bool take = w->take;
       uv_mutex_unlock(&w->mu);
       done += got;
-      uv_async_send(w->notify);
+      if (take) take_pending(w, &ctx);
+      else uv_async_send(w->notify);
       if (got < batch) break; /* cancelled part-way */
     }
     uv_mutex_lock(&w->mu);
@@ -120,7 +183,7 @@ static void thread_main(void *arg) {
     uv_mutex_unlock(&w->mu);
     uv_async_send(w->notify);
   }
-  ctx_free(&ctx);
+  ctx_free(&ctx, w);
 }
 
 int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e) {
@@ -140,43 +203,38 @@ void pc_wrender_stop(pc_wrender *w) {
   uv_cond_signal(&w->cv);
   uv_mutex_unlock(&w->mu);
   uv_thread_join(&w->thread);
-  if (w->pending_ready) pc_film_free(&w->pending);
+  free(w->zip);
   uv_cond_destroy(&w->cv);
   uv_mutex_destroy(&w->mu);
 }
 
-int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
-                      const pc_render_settings *s, const char *scene_path, const char *scene_root, pc_err *e) {
+void pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
+                       const pc_render_settings *s, const char *scene_path, const char *scene_root) {
   uv_mutex_lock(&w->mu);
-  int rc = 0;
-  if (w->pending_ready && (w->pending.w != s->width || w->pending.h != s->height)) {
-    pc_film_free(&w->pending);
-    w->pending_ready = false;
-  }
-  if (!w->pending_ready) {
-    rc = pc_film_init(&w->pending, s->width, s->height, s->strategy_layers, e);
-    w->pending_ready = rc == 0;
-  } else {
-    pc_film_clear(&w->pending);
-  }
-  if (!rc) {
-    if (w->job_id != job) w->rate = 0;
-    w->job_id = job;
-    w->range_id = range;
-    w->first = first;
-    w->count = count;
-    w->set = *s;
-    snprintf(w->scene_path, sizeof w->scene_path, "%s", scene_path);
-    snprintf(w->scene_root, sizeof w->scene_root, "%s", scene_root);
-    w->rendered = w->pend_count = 0;
-    memset(&w->pend_stats, 0, sizeof w->pend_stats);
-    w->pend_first = first;
-    w->failed = false;
-    w->range_done = false;
-    w->have_range = true;
-    atomic_store(&w->cancel, false);
+  if (w->job_id != job) w->rate = 0;
+  w->job_id = job;
+  w->range_id = range;
+  w->first = first;
+  w->count = count;
+  w->set = *s;
+  snprintf(w->scene_path, sizeof w->scene_path, "%s", scene_path);
+  snprintf(w->scene_root, sizeof w->scene_root, "%s", scene_root);
+  w->rendered = w->pend_count = 0;
+  memset(&w->pend_stats, 0, sizeof w->pend_stats);
+  w->pend_first = first;
+  w->failed = false;
+  w->range_done = false;
+  w->have_range = true;
+  atomic_store(&w->cancel, false);
+  uv_cond_signal(&w->cv);
+  uv_mutex_unlock(&w->mu);
+}
+
+void pc_wrender_take(pc_wrender *w) {
+  uv_mutex_lock(&w->mu);
+  if (!w->take && !w->zip_ready) {
+    w->take = true;
     uv_cond_signal(&w->cv);
   }
   uv_mutex_unlock(&w->mu);
-  return rc;
 }

@@ -33,18 +33,17 @@ struct pc_worker {
   bool handle_signals, shutting_down;
   bool wrong_token;          /* the coordinator holds another token: retrying cannot help */
   pc_conn *conn;
-  bool connected, authed, waiting_work;
+  bool connected, challenged, authed, waiting_work;
   double backoff, last_upload, next_request;
   char host[256];
   int port;
   char name[64], cache[1024];
-  uint8_t key[PC_AUTH_KEY], cnonce[PC_AUTH_NONCE];
+  uint8_t key[PC_AUTH_KEY], cnonce[PC_AUTH_NONCE], snonce[PC_AUTH_NONCE];
   int threads;
   pc_wrender r;
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
   uint64_t job, range, first, count, acked_end;
-  uint8_t *pack_buf; size_t pack_len; /* the pending film serialized, kept for the next upload */
   /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
   uint8_t *inflight; size_t inflight_len;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final, in_sent;
@@ -57,12 +56,15 @@ typedef struct pc_worker worker;
 
 static double now_s(void) { return (double)uv_hrtime() * 1e-9; }
 
+/* Only once authenticated: the coordinator opens every frame after the AuthResponse as sealed,
+ * and a range's messages belong to the connection it was assigned on anyway. */
 static void send_env(worker *w, Pcbpt__Envelope *env) {
-  if (w->conn && w->connected) pc_conn_send(w->conn, env);
+  if (w->conn && w->connected && w->authed) pc_conn_send(w->conn, env);
 }
 
 static void request_work(worker *w) {
-  if (!w->authed || w->busy || w->waiting_work) return;
+  /* (an assignment waiting for its bundle is work in hand) */
+  if (!w->authed || w->busy || w->waiting_work || w->bun_wait) return;
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__WorkRequest m = PCBPT__WORK_REQUEST__INIT;
   uv_mutex_lock(&w->r.mu);
@@ -80,6 +82,7 @@ static void send_heartbeat(worker *w) {
   uv_mutex_lock(&w->r.mu);
   h.iterations_per_second = w->r.rate;
   h.iterations_done = w->r.rendered;
+  if (w->busy && w->r.rend) h.iteration_fraction = pc_renderer_progress(w->r.rend);
   uv_mutex_unlock(&w->r.mu);
   if (w->busy) { h.job_id = w->job; h.range_id = w->range; }
   env.msg_case = PCBPT__ENVELOPE__MSG_HEARTBEAT;
@@ -161,12 +164,18 @@ static void finish_range(worker *w) {
 
 /* Takes the pending delta for upload when due; finishes the range when all is acknowledged. */
 static void pump(worker *w) {
-  if (!w->busy) return;
   uv_mutex_lock(&w->r.mu);
+  /* an upload compressed for a range that ended without it (dropped) goes */
+  if (w->r.zip_ready && (!w->busy || w->drop || w->r.zip_range != w->range)) {
+    free(w->r.zip);
+    w->r.zip = NULL;
+    w->r.zip_ready = false;
+  }
   bool done = w->r.range_done, failed = w->r.failed;
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
   double rate = w->r.rate;
   uv_mutex_unlock(&w->r.mu);
+  if (!w->busy) return;
   if (done && failed) {
     pc_wire_log("job %llu: render failed: %s; giving the range back", (unsigned long long)w->job, w->r.error);
     give_back(w, w->job, w->range, w->r.error);
@@ -179,7 +188,29 @@ static void pump(worker *w) {
     return;
   }
   if (w->inflight) return;
-  bool all = done && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
+  uv_mutex_lock(&w->r.mu);
+  bool zip = w->r.zip_ready;
+  if (zip) {
+    /* everything of the range is in it when the thread had finished and nothing is pending */
+    bool all = done && w->r.pend_count == 0 && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
+    w->inflight = w->r.zip;
+    w->inflight_len = w->r.zip_len;
+    w->in_first = w->r.zip_first;
+    w->in_count = w->r.zip_count;
+    w->in_stats = w->r.zip_stats;
+    w->in_raw = w->r.zip_raw;
+    w->r.zip = NULL;
+    w->r.zip_ready = false;
+    uv_mutex_unlock(&w->r.mu);
+    w->in_job = w->job;
+    w->in_range = w->range;
+    w->in_final = all;
+    w->in_sent = false;
+    send_inflight(w);
+    if (all) finish_range(w);
+    return;
+  }
+  uv_mutex_unlock(&w->r.mu);
   if (pend == 0) {
     if (done && w->stopping) send_closing(w);
     if (done) finish_range(w);
@@ -193,40 +224,7 @@ static void pump(worker *w) {
      * to one upload (at most about two intervals of work unacknowledged) */
     if (rate > 0 && (double)(w->count - rendered) / rate < PC_WIRE_UPLOAD_INTERVAL) return;
   }
-  pc_err e;
-  uv_mutex_lock(&w->r.mu);
-  size_t n = pc_wire_film_size(&w->r.pending);
-  if (w->pack_len != n) {
-    free(w->pack_buf);
-    w->pack_buf = malloc(n);
-    w->pack_len = w->pack_buf ? n : 0;
-  }
-  if (w->pack_buf) {
-    w->in_first = w->r.pend_first;
-    w->in_count = w->r.pend_count;
-    w->in_stats = w->r.pend_stats;
-    pc_wire_film_pack_to(&w->r.pending, w->pack_buf);
-    pc_film_clear(&w->r.pending);
-    memset(&w->r.pend_stats, 0, sizeof w->r.pend_stats);
-    w->r.pend_first += w->r.pend_count;
-    w->r.pend_count = 0;
-  }
-  uv_mutex_unlock(&w->r.mu);
-  if (!w->pack_buf) {
-    pc_wire_log("upload: out of memory packing %zu bytes", n);
-    return;
-  }
-  if (pc_wire_compress(w->pack_buf, n, &w->inflight, &w->inflight_len, &e) != 0) {
-    pc_wire_log("upload: %s", e.msg);
-    return;
-  }
-  w->in_job = w->job;
-  w->in_range = w->range;
-  w->in_raw = n;
-  w->in_final = all;
-  w->in_sent = false;
-  send_inflight(w);
-  if (all) finish_range(w);
+  pc_wrender_take(&w->r);
 }
 
 static void on_notify(uv_async_t *a) { pump(a->data); }
@@ -242,12 +240,12 @@ static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
   char root[1200];
   /* the bundle's folder is the scene's root there, as the client's root folder was */
   int bad = pc_bundle_dir(w->cache, a->bundle_hash.data, root, sizeof root) != 0 ? pc_errf(&e, PC_ELIMIT, "cache path too long") : 0;
-  if (bad || pc_wire_settings_from_proto(a->settings, &s, &e) != 0 ||
-      pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, root, &e) != 0) {
+  if (bad || pc_wire_settings_from_proto(a->settings, &s, &e) != 0) {
     pc_wire_log("job %llu: cannot start range %llu: %s", (unsigned long long)a->job_id, (unsigned long long)a->range_id, e.msg);
     give_back(w, a->job_id, a->range_id, e.msg);
     return;
   }
+  pc_wrender_assign(&w->r, a->job_id, a->range_id, a->first, a->count, &s, scene, root);
   w->busy = true;
   w->job = a->job_id;
   w->range = a->range_id;
@@ -387,6 +385,8 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     }
     uint8_t mac[PC_AUTH_MAC];
     if (pc_auth_mac(w->key, false, ch->nonce.data, w->cnonce, mac) != 0) { pc_conn_close(c, "auth: MAC failed"); return; }
+    memcpy(w->snonce, ch->nonce.data, PC_AUTH_NONCE);
+    w->challenged = true;
     Pcbpt__Envelope out = PCBPT__ENVELOPE__INIT;
     Pcbpt__AuthResponse ar = PCBPT__AUTH_RESPONSE__INIT;
     ar.mac.data = mac;
@@ -398,6 +398,8 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
   }
   case PCBPT__ENVELOPE__MSG_AUTH_RESULT:
     if (!env->auth_result->ok) { token_mismatch(w, c); return; }
+    if (w->authed || !w->challenged) { pc_conn_close(c, "auth_result out of order"); return; }
+    if (pc_conn_seal(c, w->key, false, w->cnonce, w->snonce) != 0) return;
     w->authed = true;
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
@@ -439,7 +441,7 @@ static void on_closed(pc_conn *c) {
   free(c);
   w->conn = NULL;
   if (w->shutting_down) return;
-  w->connected = w->authed = w->waiting_work = false;
+  w->connected = w->challenged = w->authed = w->waiting_work = false;
   if (w->bun_wait) {
     /* the range was never started: the coordinator takes it back */
     w->bun_wait = false;
@@ -637,7 +639,6 @@ void pc_worker_destroy(pc_worker *w) {
   uv_run(w->loop, UV_RUN_DEFAULT);
   if (uv_loop_close(w->loop) != 0) pc_wire_log("worker: loop still has open handles");
   free(w->inflight);
-  free(w->pack_buf);
   free(w->bun);
   if (w->pending_assign) pcbpt__assign__free_unpacked(w->pending_assign, NULL);
   sodium_memzero(w->key, sizeof w->key);

@@ -1,6 +1,9 @@
 /* worker.h: the farm worker, used by pcbpt-worker and by the embedded farm of
  * `pcbpt-coord render`: pc_worker runs the protocol on its own libuv loop; pc_wrender is the
- * range being rendered, shared between that loop and the render thread under one mutex. */
+ * range being rendered, shared between that loop and the render thread under one mutex. The
+ * loop never touches a film: the render thread adds batches to the pending film and, when the
+ * loop asks, compresses it into an upload, so the loop answers heartbeats at once whatever
+ * the film's size. */
 #ifndef PC_WORKER_H
 #define PC_WORKER_H
 
@@ -25,21 +28,31 @@ typedef struct pc_wrender {
   char scene_path[1200];
   char scene_root[1200];   /* the bundle's folder: what the scene's files may come from */
   atomic_bool cancel;
-  /* progress (thread writes, loop reads and takes, under mu) */
+  /* progress (thread writes, loop reads, under mu) */
   uint64_t rendered;       /* iterations of the range rendered so far */
-  pc_film pending;         /* rendered, not yet taken for upload */
-  bool pending_ready;
-  uint64_t pend_first, pend_count;
-  pc_render_stats pend_stats; /* work behind `pending` */
+  uint64_t pend_first, pend_count; /* rendered, not yet taken for upload (in the thread's film) */
+  pc_render_stats pend_stats; /* work behind them */
   double rate;             /* iterations per second */
+  const pc_renderer *rend; /* the job's renderer while it exists: its progress in an iteration */
   char error[512];
+  /* an upload: the loop asks (take), the thread compresses what is pending into zip */
+  bool take;
+  bool zip_ready;
+  uint8_t *zip;
+  size_t zip_len, zip_raw;
+  uint64_t zip_range, zip_first, zip_count;
+  pc_render_stats zip_stats;
 } pc_wrender;
 
 int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
 void pc_wrender_stop(pc_wrender *w);
-/* Starts a range (the thread must be idle). */
-int pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
-                      const pc_render_settings *s, const char *scene_path, const char *scene_root, pc_err *e);
+/* Starts a range (the thread must be idle: no range, possibly compressing an upload of the
+ * last one, which it then drops). */
+void pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t first, uint64_t count,
+                       const pc_render_settings *s, const char *scene_path, const char *scene_root);
+/* Asks the thread to compress what is pending into zip (zip_ready under mu, then notify),
+ * between batches or at once when idle; nothing if an upload is already asked or waiting. */
+void pc_wrender_take(pc_wrender *w);
 
 /* A worker connected to one coordinator (reconnecting with backoff while it is away). */
 typedef struct pc_worker pc_worker;

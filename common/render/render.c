@@ -32,6 +32,8 @@ struct pc_renderer {
   uint64_t light_first;   /* first light path of the light pass (the others are paired) */
   pc_path_vertex *verts;  /* per-thread sub-path buffers */
   pc_pcbpt *pcbpt;        /* CBDPT/PCBPT per-iteration state */
+  /* the iteration's work items (eye tiles, light chunks): all, and finished so far */
+  atomic_uint_fast64_t items_total, items_done;
 };
 
 void pc_render_settings_default(pc_render_settings *s) {
@@ -186,6 +188,12 @@ void pc_renderer_destroy(pc_renderer *r) {
 
 int pc_renderer_threads(const pc_renderer *r) { return pc_pool_size(r->pool); }
 
+double pc_renderer_progress(const pc_renderer *r) {
+  uint64_t total = atomic_load_explicit(&r->items_total, memory_order_relaxed);
+  uint64_t done = atomic_load_explicit(&r->items_done, memory_order_relaxed);
+  return total && done < total ? (double)done / (double)total : 0.0;
+}
+
 static bool cancelled(const pc_renderer *r) { return r->cancel && atomic_load(r->cancel); }
 
 static void eye_tile(void *arg, int thread, int item) {
@@ -201,6 +209,7 @@ static void eye_tile(void *arg, int thread, int item) {
                                                                          : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
     for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
+  atomic_fetch_add_explicit(&r->items_done, 1, memory_order_relaxed);
 }
 
 static void light_chunk(void *arg, int thread, int item) {
@@ -209,6 +218,7 @@ static void light_chunk(void *arg, int thread, int item) {
   uint64_t a = r->light_first + (uint64_t)item * LIGHT_CHUNK;
   uint64_t b = a + LIGHT_CHUNK < r->n_light ? a + LIGHT_CHUNK : r->n_light;
   for (uint64_t i = a; i < b; i++) pc_lt_light_path(&r->tctx[thread], i);
+  atomic_fetch_add_explicit(&r->items_done, 1, memory_order_relaxed);
 }
 
 /* Folds a finished iteration into the caller's film, in parallel over bands of rows: each
@@ -320,16 +330,19 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
       r->tctx[i].rays = 0;
       r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
     }
+    bool light = r->set.method != PC_METHOD_PT;
+    int n_eye = r->tiles_x * r->tiles_y;
+    int n_chunks = light && r->n_light > r->light_first ? (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK) : 0;
+    atomic_store_explicit(&r->items_done, 0, memory_order_relaxed);
+    atomic_store_explicit(&r->items_total, (uint64_t)(n_eye + n_chunks), memory_order_relaxed);
     double t_pmf = 0.0;
     if (r->pcbpt) {
       int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
       if (rc != PC_OK) return rc;
       t_pmf = now_seconds() - t0;
     }
-    pc_pool_run(r->pool, r->tiles_x * r->tiles_y, eye_tile, r);
-    bool light = r->set.method != PC_METHOD_PT;
-    if (light && r->n_light > r->light_first)
-      pc_pool_run(r->pool, (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK), light_chunk, r);
+    pc_pool_run(r->pool, n_eye, eye_tile, r);
+    if (n_chunks) pc_pool_run(r->pool, n_chunks, light_chunk, r);
     if (cancelled(r)) {
       pc_film_clear(&r->scratch);
       for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);

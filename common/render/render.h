@@ -69,6 +69,10 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_renderer **out, pc_err *e);
 void pc_renderer_destroy(pc_renderer *r);
 int pc_renderer_threads(const pc_renderer *r);
+/* How much of the iteration being rendered is done, in [0, 1) (0 between iterations); safe
+ * to call from another thread while pc_render_iterations runs. An iteration of a large film
+ * can take minutes: this is what a farm worker shows meanwhile to prove it renders. */
+double pc_renderer_progress(const pc_renderer *r);
 
 /* Renders iterations [first, first+count) adding into film (sums and counts) and stats.
  * `cancel`, if non-NULL, is polled between work items; when it becomes true the call returns

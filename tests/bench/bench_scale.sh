@@ -75,8 +75,8 @@ PY
   local it; it=$(echo "$st" | python3 -c "import json,sys; print(json.load(sys.stdin)['iterations'])")
   local el; el=$(echo "$st" | python3 -c "import json,sys; print(json.load(sys.stdin)['elapsed'])")
   [ "$it" = "$spp" ] || { echo "FAIL: $label: $it iterations, expected $spp"; exit 1; }
-  # one film: pt, nee, lt, inner x W x H x 3 doubles (FILM_LAYERS if the film keeps more)
-  local nl=${FILM_LAYERS:-4}
+  # one film: pt, nee, lt, inner, beauty_sq x W x H x 3 doubles (FILM_LAYERS if it keeps others)
+  local nl=${FILM_LAYERS:-5}
   local film_mb; film_mb=$(echo "$nl * $w * $h * 3 * 8 / 1048576" | bc -l)
   read -r nlat med mx <"$dir/lat"
   printf "%s: %d workers x 1 thread, %dx%d, %d iterations in %.1f s (exact); %d uploads\n" "$label" "$n" "$w" "$h" "$it" "$el" "${up:-0}"

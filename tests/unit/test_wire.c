@@ -166,6 +166,66 @@ static void film_roundtrip(void **st) {
   free_film(&a); free_film(&b); free_film(&c);
 }
 
+/* Films larger than the streaming windows (decompression 256 KiB, staging 1 MiB): compressed
+ * without a serialized copy, merged and loaded through two passes; every refusal, found
+ * anywhere in the stream, leaves the target as it was. */
+static bool films_equal(const pc_film *a, const pc_film *b) {
+  size_t n = (size_t)a->w * a->h * 3;
+  for (int l = 0; l < a->nlayers; l++)
+    if (a->layers[l].count != b->layers[l].count || memcmp(a->layers[l].sum, b->layers[l].sum, n * sizeof(double)))
+      return false;
+  return a->dropped_nonfinite == b->dropped_nonfinite;
+}
+static void film_streamed(void **st) {
+  (void)st;
+  pc_film a, b, before;
+  int w = 300, h = 200;
+  size_t n = (size_t)w * h * 3;
+  make_film(&a, w, h);
+  make_film(&b, w, h);
+  make_film(&before, w, h);
+  for (size_t i = 0; i < n; i++) { a.layers[0].sum[i] = (double)(i % 977) * 0.25; a.layers[1].sum[i] = 1.0 / (double)(i + 1); }
+  a.layers[0].count = 5;
+  a.layers[1].count = 5 * 64;
+  a.dropped_nonfinite = 2;
+  pc_err e;
+  uint8_t *z, *raw, *back;
+  size_t zn, rn;
+  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_pack(&a, &raw, &rn, &e), 0);
+  assert_true(rn > ((size_t)1 << 20) && zn < rn);
+  /* the same bytes as packing, then compressing */
+  assert_int_equal(pc_wire_decompress(z, zn, rn, rn, &back, &e), 0);
+  assert_memory_equal(raw, back, rn);
+  /* set, then add */
+  assert_int_equal(pc_wire_film_load(z, zn, &b, &e), 0);
+  assert_true(films_equal(&a, &b));
+  assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), 0);
+  assert_int_equal(b.layers[0].count, 10);
+  assert_true(b.layers[0].sum[n - 1] == 2 * a.layers[0].sum[n - 1] && b.dropped_nonfinite == 4);
+  for (int l = 0; l < 2; l++) memcpy(before.layers[l].sum, b.layers[l].sum, n * sizeof(double)), before.layers[l].count = b.layers[l].count;
+  before.dropped_nonfinite = b.dropped_nonfinite;
+  /* truncated, and with a byte after the frame */
+  assert_int_not_equal(pc_wire_film_add_z(z, zn - 1, &b, NULL, NULL, &e), 0);
+  uint8_t *longer = malloc(zn + 1);
+  memcpy(longer, z, zn);
+  longer[zn] = 0;
+  assert_int_equal(pc_wire_film_add_z(longer, zn + 1, &b, NULL, NULL, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "after the frame"));
+  assert_true(films_equal(&b, &before));
+  /* a NaN in the last block, far past the first window, refuses the whole upload */
+  a.layers[1].sum[n - 1] = 0.0 / 0.0;
+  free(z);
+  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), PC_ENUMERIC);
+  assert_true(films_equal(&b, &before));
+  /* not a zstd frame */
+  assert_int_equal(pc_wire_film_add_z(raw, rn, &b, NULL, NULL, &e), PC_EPARSE);
+  assert_true(films_equal(&b, &before));
+  free(z); free(raw); free(back); free(longer);
+  free_film(&a); free_film(&b); free_film(&before);
+}
+
 /* A counts judge that notes what it was shown and answers `answer`. */
 typedef struct seen_counts {
   uint64_t counts[2];
@@ -360,7 +420,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
-    cmocka_unit_test(film_without_square), cmocka_unit_test(film_bounds),
+    cmocka_unit_test(film_without_square), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
