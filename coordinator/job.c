@@ -129,34 +129,35 @@ static int write_sink(void *user, const uint8_t *p, size_t n, pc_err *e) {
   return pc_write_all(f->fd, p, n) == 0 ? 0 : pc_errf(e, PC_EIO, "%s: %s", f->path, strerror(errno));
 }
 
+/* The film, compressed, to dir/ckpt.GEN through a synced temporary and a rename. */
+static int write_ckpt_file(pc_op *op, pc_job *j, const char *dir) {
+  char path[600], tmp[640];
+  snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) return pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
+  file_sink fs = {fd, tmp};
+  int rc = pc_wire_film_compress(&j->film, write_sink, &fs, NULL, &op->err);
+  if (!rc && fsync(fd) != 0) rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
+  if (rc) {
+    close(fd);
+    return rc;
+  }
+  if (close(fd) != 0 || rename(tmp, path) != 0) return pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
+  int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0 || fsync(dfd) != 0) rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
+  if (dfd >= 0) close(dfd);
+  return rc;
+}
+
 static void ckpt_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
-  char dir[512], path[600], tmp[640];
+  char dir[512];
   pc_job_path(op->c, j, NULL, dir, sizeof dir);
-  snprintf(path, sizeof path, "%s/ckpt.%llu", dir, (unsigned long long)op->gen);
-  snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  bool sync = !op->c->volatile_store;
-  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0) {
-    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
-    return;
-  }
-  file_sink fs = {fd, tmp};
-  if ((op->rc = pc_wire_film_compress(&j->film, write_sink, &fs, NULL, &op->err)) != 0 ||
-      (sync && fsync(fd) != 0 && (op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno))))) {
-    close(fd);
-    return;
-  }
-  if (close(fd) != 0 || rename(tmp, path) != 0) {
-    op->rc = pc_errf(&op->err, PC_EIO, "%s: %s", path, strerror(errno));
-    return;
-  }
-  if (sync) {
-    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd < 0 || fsync(dfd) != 0) op->rc = pc_errf(&op->err, PC_EIO, "%s: fsync: %s", dir, strerror(errno));
-    if (dfd >= 0) close(dfd);
-  }
+  /* a volatile store is thrown away with its coordinator, which never restarts from it: there
+   * the checkpoint only commits the acks, and a film file would never be read */
+  if (!op->c->volatile_store) op->rc = write_ckpt_file(op, j, dir);
   if (op->rc || !op->write_exr) return;
   /* the same header as a standalone `render` writes, plus the job id */
   char img[600], idbuf[32], seed[32], version[64];

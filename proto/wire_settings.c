@@ -15,6 +15,7 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->strategy_layers = (uint32_t)s->strategy_layers;
   out->pcbpt_m = (uint32_t)s->pcbpt_m;
   out->pcbpt_k = (uint32_t)s->pcbpt_k;
+  out->pcbpt_candidates = (uint32_t)s->pcbpt_candidates;
   out->cache_fraction = s->cache_fraction;
   out->knn = (uint32_t)s->knn;
   out->uniform_mix = s->uniform_mix;
@@ -37,7 +38,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   if (!p) return pc_errf(e, PC_EINVAL, "settings: missing");
   if (pc_method_parse(p->method, &s.method) != 0) return pc_errf(e, PC_EINVAL, "settings: unknown method '%.32s'", p->method);
   if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
-      p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
+      p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
       p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT)
     return pc_errf(e, PC_EINVAL, "settings: a value is out of range (size %ux%u)", p->width, p->height);
   s.width = (int)p->width;
@@ -49,6 +50,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.strategy_layers = (int)p->strategy_layers;
   s.pcbpt_m = (int)p->pcbpt_m;
   s.pcbpt_k = (int)p->pcbpt_k;
+  s.pcbpt_candidates = (int)p->pcbpt_candidates;
   s.cache_fraction = p->cache_fraction;
   s.knn = (int)p->knn;
   s.uniform_mix = p->uniform_mix;

@@ -89,36 +89,76 @@ typedef struct local_pair {
   float go, gi; /* cosines with the geometric normal (sign irrelevant: only products used) */
 } local_pair;
 
-static bool localize(const pc_material *m, const pc_shading *sh, vec3 wo, vec3 wi, local_pair *p) {
+/* The pair in the shading frame, not yet turned over; false if the sides disagree (then every
+ * query of the pair, either way round, is zero). */
+static bool to_local(const pc_shading *sh, vec3 wo, vec3 wi, local_pair *p) {
   p->wo = frame_to_local(&sh->sh, wo);
   p->wi = frame_to_local(&sh->sh, wi);
   p->go = v3_dot(wo, sh->ng);
   p->gi = v3_dot(wi, sh->ng);
-  if (!sides_agree(p->wo.z, p->wi.z, p->go, p->gi)) return false;
-  if (flips(m, p->wo.z)) {
-    p->wo.z = -p->wo.z;
-    p->wi.z = -p->wi.z;
-  }
-  return true;
+  return sides_agree(p->wo.z, p->wi.z, p->go, p->gi);
 }
 
-vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                  vec3 wo, vec3 wi, pc_transport mode) {
-  local_pair p;
-  if (pc_bsdf_is_delta(m) || !localize(m, sh, wo, wi, &p)) return v3s(0.f);
+/* The pair as the lobes see it: turned over if twosided says so for its wo. */
+static local_pair oriented(const pc_material *m, local_pair p) {
+  if (flips(m, p.wo.z)) {
+    p.wo.z = -p.wo.z;
+    p.wi.z = -p.wi.z;
+  }
+  return p;
+}
+
+static local_pair swapped(local_pair p) { return (local_pair){p.wi, p.wo, p.gi, p.go}; }
+
+static vec3 eval_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, local_pair p,
+                       pc_transport mode) {
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
   vec3 f = lobe_eval(&c, p.wo, p.wi);
   if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(p.wo.z, p.wi.z, p.go, p.gi));
   return v3_is_finite(f) ? f : v3s(0.f);
 }
 
-float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                  vec3 wo, vec3 wi) {
-  local_pair p;
-  if (pc_bsdf_is_delta(m) || !localize(m, sh, wo, wi, &p)) return 0.f;
+static float pdf_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, local_pair p) {
   pc_lobe_ctx c = {m, texs, sh->uv, PC_RADIANCE};
   float pdf = lobe_pdf(&c, p.wo, p.wi);
   return (isfinite(pdf) && pdf > 0.f) ? pdf : 0.f;
+}
+
+vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi, pc_transport mode) {
+  local_pair p;
+  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return v3s(0.f);
+  return eval_local(m, texs, sh, oriented(m, p), mode);
+}
+
+float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                  vec3 wo, vec3 wi) {
+  local_pair p;
+  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return 0.f;
+  return pdf_local(m, texs, sh, oriented(m, p));
+}
+
+/* Both pdfs of the pair; false (pdfs 0) where every query is zero. */
+static bool pdfs_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
+                       local_pair *p, float *pdf, float *pdf_rev) {
+  *pdf = *pdf_rev = 0.f;
+  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, p)) return false;
+  *pdf = pdf_local(m, texs, sh, oriented(m, *p));
+  *pdf_rev = pdf_local(m, texs, sh, oriented(m, swapped(*p)));
+  return true;
+}
+
+void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
+                  float *pdf, float *pdf_rev) {
+  local_pair p;
+  pdfs_local(m, texs, sh, wo, wi, &p, pdf, pdf_rev);
+}
+
+vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                       vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
+  local_pair p;
+  if (!pdfs_local(m, texs, sh, wo, wi, &p, pdf, pdf_rev)) return v3s(0.f);
+  return eval_local(m, texs, sh, oriented(m, p), mode);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,

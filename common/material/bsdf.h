@@ -90,6 +90,13 @@ vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading
 /* Solid-angle pdf that pc_bsdf_sample(wo) produces wi (0 for delta lobes). */
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi);
+/* pc_bsdf_eval(wo, wi), with pc_bsdf_pdf(wo, wi) in *pdf and pc_bsdf_pdf(wi, wo) in *pdf_rev
+ * (bit for bit the same values), the pair brought into the shading frame once. */
+vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
+                       vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev);
+/* pc_bsdf_pdf(wo, wi) in *pdf and pc_bsdf_pdf(wi, wo) in *pdf_rev. */
+void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
+                  float *pdf, float *pdf_rev);
 /* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);

@@ -52,12 +52,20 @@ typedef struct pc_connection {
 bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
                 pc_connection *out);
 
+/* pc_connect in two steps, for callers that look at the unoccluded contribution before paying
+ * for the shadow ray (PCBPT's resampling): pc_connect_unoccluded is everything but the
+ * visibility test, pc_connect_visible the test itself (counted in c->rays). */
+bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,
+                           bool weighted, pc_connection *out);
+bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev);
+
 /* Adds to the layer of the strategy class and, with --strategy-layers, to layer s%dt%d. */
 /* Strategy s=1 at eye vertex ev (its t): a fresh light sample from rng, connected and added to
  * the nee layer of pixel (x,y). */
 void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_path_vertex *ev, int x, int y);
 
 void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
+void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
 
 /* Light tracing: connects light vertices v[0..nl-1] to the camera, splats into c->splat. */
 void pc_lt_splat(pc_tctx *c, const pc_path_vertex *v, int nl);
@@ -71,5 +79,12 @@ void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, 
 
 /* Monotonic clock in seconds, for the per-thread time split. */
 double pc_seconds(void);
+
+/* Reading the clock around every phase of every pixel costs a few per cent: one pixel (or light
+ * path) in PC_TIMED_EVERY is timed and counts that many times (the stats only split the render
+ * time by the phases' proportions). A prime, so the timed pixels do not line up in columns. */
+#define PC_TIMED_EVERY 17
+static inline bool pc_timed(uint64_t index) { return index % PC_TIMED_EVERY == 0; }
+static inline double pc_stamp(bool timed) { return timed ? pc_seconds() : 0.0; }
 
 #endif

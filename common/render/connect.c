@@ -20,6 +20,14 @@ void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int
   }
 }
 
+void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v) {
+  pc_film_queue_add(q, layer, x, y, v);
+  if (strategy_layers > 0 && s + t - 1 <= strategy_layers) {
+    int l = pc_film_strategy_layer(q->film, s, t);
+    if (l >= 0) pc_film_queue_add(q, l, x, y, v);
+  }
+}
+
 /* Weight of strategy (s,t) given the sums of the strategies on the light side (sl) and on the
  * eye side (se) of its connection, each relative to its pdf. */
 static float weight_of(const pc_mis_counts *n, int s, int t, float sl, float se) {
@@ -57,6 +65,18 @@ float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path
 
 bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
                 pc_connection *out) {
+  return pc_connect_unoccluded(c, n, lv, ev, weighted, out) && pc_connect_visible(c, lv, ev);
+}
+
+bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev) {
+  c->rays++;
+  /* A vertex on the environment is at infinity in direction -lv->wo from the eye vertex. */
+  if (lv->kind == PC_VTX_ENV) return pc_scene_escapes(c->scene, ev->p, ev->ng, v3_neg(lv->wo));
+  return pc_scene_visible(c->scene, lv->p, lv->ng, ev->p, ev->ng);
+}
+
+bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,
+                           bool weighted, pc_connection *out) {
   if (lv->delta || ev->delta) return false;
   const pc_scene *s = c->scene;
   bool env = lv->kind == PC_VTX_ENV;
@@ -95,11 +115,12 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
     }
   } else {
     const pc_material *m = &s->materials[lv->material];
-    fl = v3_scale(pc_bsdf_eval(m, s->textures, &lv->sh, lv->wo, w, PC_IMPORTANCE), v3_absdot(w, lv->sh.sh.n));
+    fl = v3_scale(pc_bsdf_eval_pdfs(m, s->textures, &lv->sh, lv->wo, w, PC_IMPORTANCE, &pdf_l_fwd, &pdf_l_rev),
+                  v3_absdot(w, lv->sh.sh.n));
     if (v3_is_zero(fl)) return false;
     cos_l = v3_absdot(w, lv->ng);
-    pdf_l_fwd = pc_bsdf_pdf(m, s->textures, &lv->sh, lv->wo, w) * lv->q;
-    pdf_l_rev = pc_bsdf_pdf(m, s->textures, &lv->sh, w, lv->wo) * lv->q;
+    pdf_l_fwd *= lv->q;
+    pdf_l_rev *= lv->q;
   }
 
   /* Eye end: the camera (t=1: We * cos = its direction pdf) or a radiance-transport BSDF. */
@@ -114,11 +135,12 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
     cos_e = 0.f; /* the pinhole cannot be hit */
   } else {
     const pc_material *m = &s->materials[ev->material];
-    fe = v3_scale(pc_bsdf_eval(m, s->textures, &ev->sh, ev->wo, we, PC_RADIANCE), v3_absdot(w, ev->sh.sh.n));
+    fe = v3_scale(pc_bsdf_eval_pdfs(m, s->textures, &ev->sh, ev->wo, we, PC_RADIANCE, &pdf_e_fwd, &pdf_e_rev),
+                  v3_absdot(w, ev->sh.sh.n));
     if (v3_is_zero(fe)) return false;
     cos_e = v3_absdot(w, ev->ng);
-    pdf_e_fwd = pc_bsdf_pdf(m, s->textures, &ev->sh, ev->wo, we) * ev->q;
-    pdf_e_rev = pc_bsdf_pdf(m, s->textures, &ev->sh, we, ev->wo) * ev->q;
+    pdf_e_fwd *= ev->q;
+    pdf_e_rev *= ev->q;
   }
 
   vec3 f = v3_scale(v3_mul(v3_mul(lv->beta, fl), v3_mul(fe, ev->beta)), 1.f / d2);
@@ -133,8 +155,6 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
     weight = weight_of(n, sl, tl, sum_l, sum_e);
     if (weight == 0.f) return false;
   }
-  c->rays++;
-  if (env ? !pc_scene_escapes(s, ev->p, ev->ng, we) : !pc_scene_visible(s, lv->p, lv->ng, ev->p, ev->ng)) return false;
   out->f = f;
   out->weight = weight;
   return true;

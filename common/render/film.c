@@ -117,6 +117,21 @@ void pc_film_beauty(const pc_film *f, float *out) {
   }
 }
 
+void pc_film_queue_flush(pc_film_queue *q) {
+  enum { AHEAD = 8 };
+  pc_film *f = q->film;
+  for (int k = 0; k < q->n; k++) {
+    if (k + AHEAD < q->n) {
+      const pc_film_queued *a = &q->q[k + AHEAD];
+      __builtin_prefetch(f->layers[a->layer].sum + 3 * (size_t)a->pixel, 1);
+    }
+    const pc_film_queued *e = &q->q[k];
+    double *p = f->layers[e->layer].sum + 3 * (size_t)e->pixel;
+    p[0] += e->v[0]; p[1] += e->v[1]; p[2] += e->v[2];
+  }
+  q->n = 0;
+}
+
 /* Calls fn(user, j, variance of the mean, mean) for every value j of the beauty, in double
  * precision; false when the film cannot tell (see pc_film_variance). */
 static bool each_variance(const pc_film *f, void (*fn)(void *, size_t, double, double), void *user) {

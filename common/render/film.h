@@ -89,4 +89,33 @@ static inline void pc_film_add_sample(pc_film *f, int i, int x, int y, vec3 c) {
   p[0] += c.x; p[1] += c.y; p[2] += c.z;
 }
 
+/* Adds to a film at scattered pixels (light-tracing splats) through a short queue: each add into
+ * a large film misses the cache, and stalled among the path tracing the misses are paid one by
+ * one; the queue replays them in a tight loop that prefetches a few entries ahead, so the misses
+ * overlap. The adds reach the film in the order they were made: the sums are bit-identical to
+ * adding directly. Flush before reading the film. */
+#define PC_FILM_QUEUE 2048
+typedef struct pc_film_queued {
+  uint32_t layer;
+  uint32_t pixel; /* y*w + x */
+  float v[3];
+} pc_film_queued;
+
+typedef struct pc_film_queue {
+  pc_film *film;
+  int n;
+  pc_film_queued q[PC_FILM_QUEUE];
+} pc_film_queue;
+
+void pc_film_queue_flush(pc_film_queue *q);
+
+static inline void pc_film_queue_add(pc_film_queue *q, int i, int x, int y, vec3 c) {
+  if (!v3_is_finite(c)) { q->film->dropped_nonfinite++; return; }
+  pc_film_queued *e = &q->q[q->n++];
+  e->layer = (uint32_t)i;
+  e->pixel = (uint32_t)y * (uint32_t)q->film->w + (uint32_t)x;
+  e->v[0] = c.x; e->v[1] = c.y; e->v[2] = c.z;
+  if (q->n == PC_FILM_QUEUE) pc_film_queue_flush(q);
+}
+
 #endif

@@ -26,7 +26,7 @@ typedef struct pc_tctx {
   pc_mis_counts counts; /* MIS sample counts of the method */
   bool weighted;        /* false: every strategy weight 1 (debug, per-strategy tests) */
   pc_film *film;        /* the iteration's eye-side film (shared; pixels are disjoint) */
-  pc_film *splat;       /* this thread's light-splat film */
+  pc_film_queue *splat; /* queue into this thread's light-splat film (flushed after each work item) */
   uint64_t rays;
   pc_path_vertex *light_path, *eye_path; /* sub-path buffers, PC_MAX_SEGMENTS + 2 vertices each */
   double t_paths, t_lt, t_connect;       /* thread-seconds per phase, for pc_render_stats */

@@ -20,18 +20,21 @@ void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl) {
     bool weighted = c->weighted && (!lt_method || lv[i].depth == 1);
     pc_connection k;
     if (!pc_connect(c, &c->counts, &lv[i], &eye, weighted, &k)) continue;
-    pc_film_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
+    pc_film_queue_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
                          v3_scale(k.f, k.weight));
   }
 }
 
 void pc_lt_light_path(pc_tctx *c, uint64_t index) {
-  double t0 = pc_seconds();
+  bool timed = pc_timed(index);
+  double t0 = pc_stamp(timed);
   int nl = pc_light_subpath(c, &c->counts, index, c->light_path);
-  double t1 = pc_seconds();
+  double t1 = pc_stamp(timed);
   pc_lt_splat(c, c->light_path, nl);
-  c->t_paths += t1 - t0;
-  c->t_lt += pc_seconds() - t1;
+  if (timed) {
+    c->t_paths += PC_TIMED_EVERY * (t1 - t0);
+    c->t_lt += PC_TIMED_EVERY * (pc_seconds() - t1);
+  }
 }
 
 void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le) {
@@ -42,9 +45,11 @@ void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, 
 }
 
 void pc_lt_pixel(pc_tctx *c, int x, int y) {
-  double t0 = pc_seconds();
-  pc_rng rng = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_EYE, (uint64_t)y * (uint64_t)c->set->width + (uint64_t)x);
+  uint64_t j = (uint64_t)y * (uint64_t)c->set->width + (uint64_t)x;
+  bool timed = pc_timed(j);
+  double t0 = pc_stamp(timed);
+  pc_rng rng = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_EYE, j);
   pc_pixel_target h = {x, y};
   pc_eye_subpath(c, &c->counts, &rng, x, y, 2, c->eye_path, pc_emitter_hit, &h);
-  c->t_paths += pc_seconds() - t0;
+  if (timed) c->t_paths += PC_TIMED_EVERY * (pc_seconds() - t0);
 }

@@ -5,6 +5,8 @@
  * vertices drawn from p_conn, adding (1/K) sum w f / (p M p_conn). The weights use the
  * method's counts (render.c): inner strategies count 1 (upper-bound weights, eqs. 16-17), or
  * M with --mis standard. Connection draws use the pixel's PC_STREAM_CONNECT stream. */
+#include <float.h>
+
 #include "bidir.h"
 #include "pcbpt.h"
 
@@ -14,6 +16,60 @@ static void add_inner(pc_tctx *c, int x, int y, const pc_path_vertex *lv, const 
   if (pc_connect(c, &c->counts, lv, ev, c->weighted, &k))
     pc_film_add_strategy(c->film, c->set->strategy_layers, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
                          v3_scale(k.f, k.weight * scale));
+}
+
+/* A resampling candidate's unoccluded connection, kept for the shadow ray of the selected. */
+typedef struct candidates {
+  pc_tctx *c;
+  const pc_path_vertex *ev;
+  const pc_irec_lookup *L;
+  int v[PC_IREC_MAX_CANDIDATES];
+  pc_connection k[PC_IREC_MAX_CANDIDATES];
+} candidates;
+
+/* Target of the resampling: the luminance of the weighted contribution without visibility,
+ * times the share of the interpolated records that see the light vertex (their PMF is > 0
+ * there), floored at RESAMPLE_UNSEEN: > 0 wherever the contribution is non-zero, so the
+ * resampled estimate stays unbiased. Measured on ajar-door at 128x128 (inner relMSE after 64
+ * iterations, K = 1, 4 candidates; plain cache 0.237, exact PMF 0.131): the unoccluded
+ * contribution alone 0.231 (geometry is not what the cache blurs; visibility is), times an
+ * unseen floor of 0.01 / 0.05 / 0.1 / 0.2: 0.239 / 0.188 / 0.181 / 0.185 (too low a floor
+ * starves light vertices the records miss, as a uniform mix that is too small does). */
+#define RESAMPLE_UNSEEN 0.1
+static float candidate_target(void *user, int slot, int v) {
+  candidates *cs = user;
+  pc_tctx *c = cs->c;
+  const pc_path_vertex *lv = &c->pcbpt->lv[v];
+  cs->v[slot] = v;
+  if (lv->depth + cs->ev->depth - 1 > c->max_segments) return 0.f;
+  pc_connection *k = &cs->k[slot];
+  if (!pc_connect_unoccluded(c, &c->counts, lv, cs->ev, c->weighted, k)) return 0.f;
+  float h = v3_luminance(k->f) * k->weight;
+  /* The records know visibility, blurred; the candidate's own h knows geometry, sharply. */
+  h *= (float)(RESAMPLE_UNSEEN + (1.0 - RESAMPLE_UNSEEN) * pc_irec_interp_seen(cs->L, v));
+  return h > 0.f ? h : FLT_MIN; /* non-zero contribution whose luminance underflowed */
+}
+
+/* K connections resampled from `candidates` draws of p_conn by their unoccluded contribution
+ * (pc_irec_resample): the shadow rays go to the connections that matter most at this eye
+ * vertex, which the records only know up to their interpolation blur. The MIS weights are the
+ * strategies' (they do not involve p_conn), so only this estimate of the sum over the stored
+ * vertices changes; it stays unbiased for any p_conn > 0. */
+static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev, const pc_irec_lookup *L,
+                            double xi) {
+  const pc_render_settings *set = c->set;
+  candidates cs = {.c = c, .ev = ev, .L = L};
+  int slot[PC_IREC_MAX_CANDIDATES];
+  double factor[PC_IREC_MAX_CANDIDATES];
+  int n = pc_irec_resample(L, set->pcbpt_candidates, set->pcbpt_k, xi, crng, candidate_target, &cs, slot, factor);
+  for (int k = 0; k < n; k++) {
+    const pc_connection *con = &cs.k[slot[k]];
+    const pc_path_vertex *lv = &c->pcbpt->lv[cs.v[slot[k]]];
+    if (!pc_connect_visible(c, lv, ev)) continue;
+    float scale = (float)(factor[k] / ((double)n * c->pcbpt->m));
+    pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
+                         v3_scale(con->f, con->weight * scale));
+  }
 }
 
 static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev) {
@@ -36,6 +92,10 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   /* The draws' component choices are stratified: each draw alone follows p_conn (so every
    * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */
   double xi = (double)pc_rng_f(crng);
+  if (set->pcbpt_candidates > 1) {
+    resample_stored(c, x, y, crng, ev, &L, xi);
+    return;
+  }
   for (int k = 0; k < set->pcbpt_k; k++) {
     int v;
     double pconn;
@@ -45,28 +105,21 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   }
 }
 
-/* Reading the clock around every phase of every pixel costs a few per cent: one pixel in
- * TIMED_EVERY is timed and counts that many times (the stats only split the render time by the
- * phases' proportions). A prime, so the timed pixels do not line up in columns. */
-#define TIMED_EVERY 17
-
-static inline double stamp(bool timed) { return timed ? pc_seconds() : 0.0; }
-
 void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
   const pc_render_settings *set = c->set;
   const pc_mis_counts *n = &c->counts;
   uint64_t j = (uint64_t)y * (uint64_t)set->width + (uint64_t)x;
-  bool timed = j % TIMED_EVERY == 0;
-  double t0 = stamp(timed);
+  bool timed = pc_timed(j);
+  double t0 = pc_stamp(timed);
   int nl = j < c->n_light ? pc_light_subpath(c, n, j, c->light_path) : 0;
-  double t1 = stamp(timed);
+  double t1 = pc_stamp(timed);
   if (nl > 0) pc_lt_splat(c, c->light_path, nl);
-  double t2 = stamp(timed);
+  double t2 = pc_stamp(timed);
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, j);
   pc_rng crng = pc_rng_make(set->seed, c->iteration, PC_STREAM_CONNECT, j);
   pc_pixel_target h = {x, y};
   int ne = pc_eye_subpath(c, n, &rng, x, y, c->max_segments + 1, c->eye_path, pc_emitter_hit, &h);
-  double t3 = stamp(timed);
+  double t3 = pc_stamp(timed);
   for (int t = 2; t <= ne && t <= c->max_segments; t++) {
     const pc_path_vertex *ev = &c->eye_path[t - 1];
     if (ev->delta) continue;
@@ -74,8 +127,8 @@ void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
     connect_stored(c, x, y, &crng, ev);
   }
   if (timed) {
-    c->t_paths += TIMED_EVERY * ((t1 - t0) + (t3 - t2));
-    c->t_lt += TIMED_EVERY * (t2 - t1);
-    c->t_connect += TIMED_EVERY * (pc_seconds() - t3);
+    c->t_paths += PC_TIMED_EVERY * ((t1 - t0) + (t3 - t2));
+    c->t_lt += PC_TIMED_EVERY * (t2 - t1);
+    c->t_connect += PC_TIMED_EVERY * (pc_seconds() - t3);
   }
 }

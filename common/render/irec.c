@@ -401,6 +401,13 @@ double pc_irec_interp_pmf(const pc_irec_lookup *L, int i) {
   return p;
 }
 
+double pc_irec_interp_seen(const pc_irec_lookup *L, int i) {
+  double w = 0.0;
+  for (int j = 0; j < L->n; j++)
+    if (L->pmf[j][i] > 0.f) w += L->w[j];
+  return w;
+}
+
 double pc_irec_interp_cmf(const pc_irec_lookup *L, int i) {
   double c = 0.0;
   for (int j = 0; j < L->n; j++) c += L->w[j] * (double)L->cmf[j][i];
@@ -455,4 +462,32 @@ int pc_irec_sample_mix(const pc_irec_lookup *L, double xi_mix, pc_rng *rng, int 
   }
   *p_conn = pc_irec_pconn(L, *v);
   return 1;
+}
+
+int pc_irec_resample(const pc_irec_lookup *L, int ncand, int nsel, double xi_mix, pc_rng *rng, pc_irec_target_fn target,
+                     void *user, int *sel_slot, double *sel_factor) {
+  if (ncand < 1 || ncand > PC_IREC_MAX_CANDIDATES || nsel < 1) return 0;
+  double h[PC_IREC_MAX_CANDIDATES], cum[PC_IREC_MAX_CANDIDATES], wsum = 0.0;
+  for (int j = 0; j < ncand; j++) {
+    int v;
+    double p;
+    if (!pc_irec_sample_mix(L, ((double)j + xi_mix) / ncand, rng, &v, &p)) return 0;
+    float t = target(user, j, v);
+    h[j] = t > 0.f && isfinite(t) ? (double)t : 0.0;
+    wsum += h[j] / p;
+    cum[j] = wsum;
+  }
+  if (!(wsum > 0.0) || !isfinite(wsum)) return 0;
+  double mean = wsum / ncand, xi = (double)pc_rng_u32(rng) * 0x1p-32;
+  for (int k = 0; k < nsel; k++) {
+    /* The first candidate whose running weight passes the stratified target: never one of
+     * weight 0, since it leaves the running sum unchanged. */
+    double at = ((double)k + xi) / nsel * wsum;
+    int j = 0;
+    while (j < ncand - 1 && !(cum[j] > at)) j++;
+    while (!(h[j] > 0.0)) j--; /* rounding at the top end: step back to the last positive one */
+    sel_slot[k] = j;
+    sel_factor[k] = mean / h[j];
+  }
+  return nsel;
 }

@@ -123,10 +123,31 @@ int pc_irec_sample_mix(const pc_irec_lookup *L, double xi_mix, pc_rng *rng, int 
  * pc_irec_sample can return. */
 double pc_irec_pconn(const pc_irec_lookup *L, int v);
 
+/* Resampled importance sampling over p_conn (Talbot et al. 2005, "Importance resampling for
+ * global illumination"): draws ncand candidates from p_conn (their uniform-or-interpolated
+ * choices stratified by xi_mix as in pc_irec_sample_mix), asks target(user, slot, v) for each
+ * candidate's target value h >= 0 (slot 0..ncand-1; the caller keeps what it computed there),
+ * and selects nsel of them with probability proportional to h / p_conn, the selections
+ * stratified over one uniform number. For every selection it returns the slot and the factor
+ *   W / h(selected),  W = (1/ncand) sum_j h_j / p_conn(v_j),
+ * so that contribution(selected) * factor is an unbiased estimate of the sum of the
+ * contributions over all V light vertices, provided h > 0 wherever the contribution is
+ * non-zero. (Unbiased because each candidate follows p_conn: E[sum_j (h_j / sum h) c_j W / h_j]
+ * = E[(1/N) sum_j c_j / p_j]; independence of the candidates is not needed.) Returns nsel, or 0
+ * when p_conn is undefined or every candidate's target is 0 (the estimate is then 0).
+ * 1 <= ncand <= PC_IREC_MAX_CANDIDATES, nsel >= 1. */
+#define PC_IREC_MAX_CANDIDATES 64
+typedef float (*pc_irec_target_fn)(void *user, int slot, int v);
+int pc_irec_resample(const pc_irec_lookup *L, int ncand, int nsel, double xi_mix, pc_rng *rng, pc_irec_target_fn target,
+                     void *user, int *sel_slot, double *sel_factor);
+
 /* The interpolated component alone (n > 0): its PMF and CMF at index i, and inversion of its
  * CMF by binary search: the smallest i with cmf(i) > xi * cmf(V-1). Exposed for tests. */
 double pc_irec_interp_pmf(const pc_irec_lookup *L, int i);
 double pc_irec_interp_cmf(const pc_irec_lookup *L, int i);
 int pc_irec_interp_sample(const pc_irec_lookup *L, double xi);
+/* The summed weight (in [0, 1]) of the interpolated records whose PMF is > 0 at i: the
+ * records' blurred estimate of whether light vertex i is visible from here (0 when n == 0). */
+double pc_irec_interp_seen(const pc_irec_lookup *L, int i);
 
 #endif

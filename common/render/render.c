@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "bidir.h"
+#include "irec.h"
 #include "pcbpt.h"
 #include "thread_pool.h"
 
@@ -25,6 +26,7 @@ struct pc_renderer {
   pc_pool *pool;
   pc_film scratch;     /* the iteration being rendered */
   pc_film *splat;      /* one per thread */
+  pc_film_queue *splatq; /* one per thread, into splat */
   pc_tctx *tctx;       /* one per thread */
   atomic_bool *cancel;
   int tiles_x, tiles_y;
@@ -48,6 +50,7 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->strategy_layers = 0;
   s->pcbpt_m = 100;
   s->pcbpt_k = 1;
+  s->pcbpt_candidates = 1;
   s->cache_fraction = 0.004f;
   s->knn = 6;
   /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
@@ -81,6 +84,11 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (s->strategy_layers < 0 || s->strategy_layers > 8) return pc_errf(e, PC_EINVAL, "strategy-layers %d out of range 0..8", s->strategy_layers);
   if (s->pcbpt_m < 1 || s->pcbpt_m > 100000) return pc_errf(e, PC_EINVAL, "pcbpt-m %d out of range 1..100000", s->pcbpt_m);
   if (s->pcbpt_k < 1 || s->pcbpt_k > 1000000) return pc_errf(e, PC_EINVAL, "pcbpt-k %d out of range 1..1000000", s->pcbpt_k);
+  if (s->pcbpt_candidates < 1 || s->pcbpt_candidates > PC_IREC_MAX_CANDIDATES)
+    return pc_errf(e, PC_EINVAL, "pcbpt-candidates %d out of range 1..%d", s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
+  if (s->pcbpt_candidates > 1 && s->pcbpt_k > PC_IREC_MAX_CANDIDATES)
+    return pc_errf(e, PC_EINVAL, "pcbpt-k %d with resampling (pcbpt-candidates %d) out of range 1..%d", s->pcbpt_k,
+                   s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
@@ -127,8 +135,9 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
     r->tctx = calloc((size_t)threads, sizeof(pc_tctx));
+    r->splatq = calloc((size_t)threads, sizeof(pc_film_queue));
     r->verts = calloc((size_t)threads * 2 * (PC_MAX_SEGMENTS + 2), sizeof(pc_path_vertex));
-    if (!r->splat || !r->tctx || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+    if (!r->splat || !r->tctx || !r->splatq || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
   for (int i = 0; rc == PC_OK && i < threads; i++) {
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
@@ -153,7 +162,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->tctx[i].set = &r->set;
     r->tctx[i].max_segments = max_seg;
     r->tctx[i].film = &r->scratch;
-    r->tctx[i].splat = &r->splat[i];
+    r->splatq[i].film = &r->splat[i];
+    r->tctx[i].splat = &r->splatq[i];
     r->tctx[i].thread = i;
   }
   if (settings->method == PC_METHOD_CBDPT || settings->method == PC_METHOD_PCBPT) {
@@ -180,6 +190,7 @@ void pc_renderer_destroy(pc_renderer *r) {
     for (int i = 0; i < n; i++) pc_film_free(&r->splat[i]);
   free(r->splat);
   free(r->tctx);
+  free(r->splatq);
   free(r->verts);
   pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
@@ -209,6 +220,7 @@ static void eye_tile(void *arg, int thread, int item) {
                                                                          : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
     for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
+  pc_film_queue_flush(c->splat);
   atomic_fetch_add_explicit(&r->items_done, 1, memory_order_relaxed);
 }
 
@@ -218,6 +230,7 @@ static void light_chunk(void *arg, int thread, int item) {
   uint64_t a = r->light_first + (uint64_t)item * LIGHT_CHUNK;
   uint64_t b = a + LIGHT_CHUNK < r->n_light ? a + LIGHT_CHUNK : r->n_light;
   for (uint64_t i = a; i < b; i++) pc_lt_light_path(&r->tctx[thread], i);
+  pc_film_queue_flush(r->tctx[thread].splat);
   atomic_fetch_add_explicit(&r->items_done, 1, memory_order_relaxed);
 }
 

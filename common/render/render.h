@@ -28,6 +28,7 @@ typedef struct pc_render_settings {
   /* PCBPT */
   int pcbpt_m;             /* stored light paths per iteration (default 100) */
   int pcbpt_k;             /* connections per eye vertex */
+  int pcbpt_candidates;    /* candidates drawn from p_conn and resampled per eye vertex (1: none) */
   float cache_fraction;    /* importance-record eye paths as a fraction of W*H (0.004) */
   int knn;                 /* records interpolated per lookup (6) */
   float uniform_mix;       /* weight of the uniform PMF blended into p_conn */

@@ -1,6 +1,8 @@
 /* render_flags.c: parsing of the render flags (see render_flags.h). */
 #include "render_flags.h"
 
+#include "irec.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +21,8 @@ const char pc_render_flags_help[] =
     "  --strategy-layers D   also write one layer per (s,t) up to path length D\n"
     "  --pcbpt-m M           PCBPT stored light paths per iteration (default 100)\n"
     "  --pcbpt-k K           PCBPT connections per eye vertex (default 1)\n"
+    "  --pcbpt-candidates N  PCBPT candidates drawn from p_conn per eye vertex, K of them\n"
+    "                        resampled by their unoccluded contribution (1: no resampling)\n"
     "  --cache-fraction F    PCBPT importance-record paths as a fraction of W*H (0.004)\n"
     "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
     "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.5)\n"
@@ -36,7 +40,8 @@ void pc_render_request_default(pc_render_request *r) {
 int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc_err *e) {
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
-                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise", NULL};
+                                      "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
+                                      "--pcbpt-candidates", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -137,6 +142,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     break;
   case 17:
     if (!pc_parse_f64(v, 1e-9, 1e6, &r->halt_noise)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a relMSE > 0", flag, v);
+    break;
+  case 18:
+    if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
+    s->pcbpt_candidates = (int)ll;
     break;
   }
   return 1;

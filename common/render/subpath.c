@@ -49,13 +49,14 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
       cos_out = v3_absdot(prev->ng, da);
       if (!delta) {
         const pc_material *pm = &s->materials[prev->material];
-        float pf = pc_bsdf_pdf(pm, s->textures, &prev->sh, prev->wo, da) * prev->q;
+        float pf, pr;
+        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pf, &pr);
         /* The offset origin turns the edge by about eps / distance. A lobe narrower than that
          * (a near-specular rough surface, e.g. roughdielectric alpha 1e-4) would find its own
          * sample impossible along the edge and lose the path: it keeps the sampled pdfs. */
-        if (pf >= 0.5f * pdf_fwd) {
-          pdf_fwd = pf;
-          pdf_rev = pc_bsdf_pdf(pm, s->textures, &prev->sh, da, prev->wo) * prev->q;
+        if (pf * prev->q >= 0.5f * pdf_fwd) {
+          pdf_fwd = pf * prev->q;
+          pdf_rev = pr * prev->q;
         }
         if (!(pdf_fwd > 0.f)) break;
       }

@@ -1,6 +1,6 @@
 /* test_furnace.c: the white furnace (scenes/furnace: a closed sphere emitting Le inward with
  * diffuse albedo a) has the exact radiance Le * sum_{k<d} a^k everywhere for maxDepth d.
- * Every method (PCBPT with cached and exact PMF and both MIS modes) must reproduce it for
+ * Every method (PCBPT with cached and exact PMF, both MIS modes, and resampled connections) must reproduce it for
  * d = 1..5 and infinite: the image mean
  * of each independent iteration is one sample, the tolerance is 4 standard errors measured
  * from those samples (and the estimate must be within 1.5% in any case). */
@@ -21,6 +21,7 @@ typedef struct variant {
   pc_pmf_mode pmf;
   pc_mis_mode mis;
   int iterations;
+  int candidates; /* PCBPT resampling candidates (1: none) */
 } variant;
 
 static void check(variant v) {
@@ -42,6 +43,7 @@ static void check(variant v) {
     req.set.pcbpt_m = 20;
     req.set.pcbpt_k = 2;
     req.set.cache_fraction = 0.05f;
+    req.set.pcbpt_candidates = v.candidates;
     pc_scene scene = {0};
     assert_int_equal(stat_load("furnace", &req, &scene), 0);
     assert_true(scene.nlights == 1 && scene.lights[0].type == PC_LIGHT_AREA);
@@ -57,9 +59,9 @@ static void check(variant v) {
     assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, v.iterations, -1, RES, &st), 0);
     double mean = stat_mean(&st, 0), se = stat_se(&st, 0);
     double err = fabs(mean - exact);
-    printf("furnace %-5s pmf %-6s mis %-11s maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
+    printf("furnace %-5s pmf %-6s mis %-11s cand %d maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
            pc_method_name(v.method), v.pmf == PC_PMF_EXACT ? "exact" : "cached",
-           v.mis == PC_MIS_STANDARD ? "standard" : "upper-bound", depths[k], mean, exact, err, se, 100 * err / exact);
+           v.mis == PC_MIS_STANDARD ? "standard" : "upper-bound", v.candidates, depths[k], mean, exact, err, se, 100 * err / exact);
     assert_true(err <= fmax(4 * se, 1e-5 * exact));
     assert_true(err <= 0.015 * exact);
     stat_free(&st);
@@ -69,30 +71,31 @@ static void check(variant v) {
 
 static void test_furnace_pt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS});
+  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
 }
 
 static void test_furnace_lt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS});
+  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
 }
 
 static void test_furnace_bdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS});
+  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
 }
 
 static void test_furnace_cbdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16});
+  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1});
 }
 
 static void test_furnace_pcbpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1});
 }
 
 int main(void) {

@@ -12,6 +12,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "chi2.h"
 #include "irec.h"
 
 typedef struct light_vertex {
@@ -123,13 +124,13 @@ static void test_record_rows(void **state) {
 }
 
 /* At random eye points the interpolated PMF sums to 1, p_conn sums to 1 and is > 0 for every
- * light vertex when u > 0. */
+ * light vertex when u > 0, and the seen share is the weight of the records that see v. */
 static void test_interpolated_pmf(void **state) {
   (void)state;
   scene sc = make_scene(120, 300, 2);
   pc_irec_store *s = build(&sc, NULL);
   pc_rng r = pc_rng_make(2, 0, PC_STREAM_MISC, 7);
-  int interpolated = 0, multi = 0;
+  int interpolated = 0, multi = 0, partly = 0;
   for (int q = 0; q < 500; q++) {
     pc_irec_site z = {rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL, false};
     pc_irec_lookup L;
@@ -144,6 +145,20 @@ static void test_interpolated_pmf(void **state) {
       for (int v = 0; v < sc.V; v++) sp += pc_irec_interp_pmf(&L, v);
       assert_true(fabs(sp - 1.0) < 1e-5);
       assert_true(fabs(pc_irec_interp_cmf(&L, sc.V - 1) - 1.0) < 1e-6);
+      /* The seen share is the weight of the records with a PMF > 0 at v, by its definition
+       * written out: 0 exactly where the interpolated PMF is 0, 1 where every record sees v. */
+      for (int v = 0; v < sc.V; v++) {
+        double seen = pc_irec_interp_seen(&L, v), want = 0.0;
+        bool all = true;
+        for (int j = 0; j < L.n; j++) {
+          if (L.pmf[j][v] > 0.f) want += L.w[j];
+          else all = false;
+        }
+        assert_true(fabs(seen - want) < 1e-12 && seen <= 1.0 + 1e-12);
+        assert_true((seen == 0.0) == (pc_irec_interp_pmf(&L, v) == 0.0));
+        if (all) assert_true(fabs(seen - 1.0) < 1e-12);
+        partly += seen > 0.0 && seen < 1.0 - 1e-9;
+      }
     }
     for (int v = 0; v < sc.V; v++) {
       double pc = pc_irec_pconn(&L, v);
@@ -154,6 +169,7 @@ static void test_interpolated_pmf(void **state) {
   }
   assert_true(interpolated > 400);
   assert_true(multi > 300);
+  assert_true(partly > 0); /* the scene has light vertices some records see and others do not */
   pc_irec_destroy(s);
   free_scene(&sc);
 }
@@ -429,12 +445,103 @@ static void test_lookup_is_pure(void **state) {
   free_scene(&b);
 }
 
+
+/* Resampling: a synthetic p_conn (one PMF with a zero entry, mixed with the uniform PMF), a
+ * target h that disagrees with the contribution c (c = h * g with g in [0, 2], one vertex with
+ * h = c = 0) and ncand = 3 candidates with stratified component choices. The exact law of a
+ * selection is enumerated independently of the code under test: for each interval of the
+ * stratification number xi the candidates are independent with known component PMFs, and a
+ * candidate tuple selects slot j with probability (h_j / p_j) / sum. Checked: the selected
+ * vertices (the K selections together) follow it (chi-square), the estimate c(v) * factor averages sum_v c(v) (within 5
+ * measured standard errors), and a vertex with h = 0 is never selected. */
+#define RS_V 6
+#define RS_N 3
+static const float rs_h[RS_V] = {0.2f, 1.5f, 0.f, 0.7f, 3.f, 0.05f};
+static const float rs_g[RS_V] = {1.9f, 0.3f, 0.f, 1.f, 0.f, 2.f}; /* c = h * g: zero where occluded */
+
+static float rs_target(void *user, int slot, int v) {
+  int *seen = user;
+  seen[slot] = v;
+  return rs_h[v];
+}
+
+static void test_resample(void **state) {
+  (void)state;
+  const float pmf[RS_V] = {0.4f, 0.f, 0.1f, 0.25f, 0.05f, 0.2f};
+  float cmf[RS_V];
+  double run = 0.0;
+  for (int v = 0; v < RS_V; v++) cmf[v] = (float)(run += pmf[v]);
+  pc_irec_lookup L = {.V = RS_V, .u = 0.3f, .n = 1, .w = {1.0}, .pmf = {pmf}, .cmf = {cmf}};
+  /* Candidate j is uniform iff (j + xi) / N < u, i.e. xi < uN - j: the patterns change at
+   * those breakpoints. */
+  double expect[RS_V] = {0}, sum_c = 0.0;
+  for (int v = 0; v < RS_V; v++) sum_c += rs_h[v] * rs_g[v];
+  double lo = 0.0;
+  for (int piece = 0; piece <= RS_N; piece++) {
+    double hi = 1.0;
+    for (int j = 0; j < RS_N; j++) {
+      double b = (double)L.u * RS_N - j;
+      if (b > lo && b < hi) hi = b;
+    }
+    if (!(hi > lo)) break;
+    double mid = 0.5 * (lo + hi), q[RS_N][RS_V];
+    for (int j = 0; j < RS_N; j++)
+      for (int v = 0; v < RS_V; v++) q[j][v] = ((double)j + mid) / RS_N < L.u ? 1.0 / RS_V : pmf[v];
+    for (int t = 0; t < RS_V * RS_V * RS_V; t++) {
+      int vs[RS_N] = {t % RS_V, t / RS_V % RS_V, t / (RS_V * RS_V)};
+      double prob = hi - lo, w[RS_N], wsum = 0.0;
+      for (int j = 0; j < RS_N; j++) {
+        prob *= q[j][vs[j]];
+        w[j] = rs_h[vs[j]] / pc_irec_pconn(&L, vs[j]);
+        wsum += w[j];
+      }
+      if (prob == 0.0 || wsum == 0.0) continue;
+      for (int j = 0; j < RS_N; j++) expect[vs[j]] += prob * w[j] / wsum;
+    }
+    lo = hi;
+  }
+  assert_true(expect[2] == 0.0);
+  enum { TRIALS = 300000, NSEL = 2 };
+  double count[NSEL][RS_V] = {{0}}, est = 0.0, est2 = 0.0;
+  pc_rng rng = pc_rng_make(5, 0, PC_STREAM_MISC, 0);
+  for (int i = 0; i < TRIALS; i++) {
+    int seen[RS_N], slot[NSEL];
+    double factor[NSEL], x = 0.0;
+    int n = pc_irec_resample(&L, RS_N, NSEL, (double)pc_rng_f(&rng), &rng, rs_target, seen, slot, factor);
+    for (int k = 0; k < n; k++) {
+      int v = seen[slot[k]];
+      assert_true(rs_h[v] > 0.f);
+      count[k][v] += 1.0;
+      x += rs_h[v] * rs_g[v] * factor[k] / n;
+    }
+    est += x;
+    est2 += x * x;
+  }
+  /* The selections are stratified over one number: each alone is not distributed by the law,
+   * their union is (the estimate averages them). */
+  pc_chi2_cell cells[RS_V];
+  for (int v = 0; v < RS_V; v++) cells[v] = (pc_chi2_cell){count[0][v] + count[1][v], expect[v] * NSEL * TRIALS};
+  double stat;
+  int dof;
+  assert_true(pc_chi2_test(cells, RS_V, &stat, &dof) > 0.001);
+  double mean = est / TRIALS, se = sqrt((est2 / TRIALS - mean * mean) / TRIALS);
+  assert_true(fabs(mean - sum_c) < 5.0 * se);
+  /* Nothing to select when every candidate's target is 0, or p_conn is undefined. */
+  int seen[RS_N], slot[1];
+  double factor[1];
+  const float zero_pmf[RS_V] = {0.f, 0.f, 1.f, 0.f, 0.f, 0.f}, zero_cmf[RS_V] = {0.f, 0.f, 1.f, 1.f, 1.f, 1.f};
+  pc_irec_lookup Z = {.V = RS_V, .u = 0.f, .n = 1, .w = {1.0}, .pmf = {zero_pmf}, .cmf = {zero_cmf}};
+  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, seen, slot, factor), 0);
+  Z.n = 0;
+  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, seen, slot, factor), 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
       cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_lazy_equals_materialised),
       cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
-      cmocka_unit_test(test_fallbacks),
+      cmocka_unit_test(test_fallbacks),         cmocka_unit_test(test_resample),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
