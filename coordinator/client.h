@@ -28,5 +28,7 @@ int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const ui
  * with pcbpt__envelope__free_unpacked. */
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e);
 int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *bytes, pc_err *e);
+/* The same for a study job's snapshot k >= 1 (0: the image). */
+int pc_client_fetch_snapshot(pc_client *cl, uint64_t job, uint32_t snapshot, const char *out, uint64_t *bytes, pc_err *e);
 
 #endif

@@ -152,7 +152,8 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g}", j->halt_noise);
+    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u}", j->halt_noise,
+           j->worker_seconds, j->snapshots, j->ranges_rerun);
     return;
   }
   char est[32] = "-";
@@ -295,13 +296,21 @@ int pc_cmd_cancel(int argc, char **argv) {
 int pc_cmd_fetch(int argc, char **argv) {
   common_opts o;
   uint64_t job;
-  /* --partial: a job that is not done has at most a periodic, partial image */
+  /* --partial: a job that is not done has at most a periodic, partial image;
+   * --snapshot K: a study job's K-th kept snapshot (docs/farm-study.md) */
   bool partial = false;
+  long long snapshot = 0;
   char *rest[64];
   int nrest = 0;
   for (int i = 0; i < argc && nrest < 64; i++)
     if (strcmp(argv[i], "--partial") == 0) partial = true;
-    else rest[nrest++] = argv[i];
+    else if (strcmp(argv[i], "--snapshot") == 0) {
+      if (i + 1 >= argc || !pc_parse_i64(argv[i + 1], 1, 1000000, &snapshot)) {
+        fprintf(stderr, "pcbpt-coord fetch: --snapshot: expected a snapshot number >= 1\n");
+        return 2;
+      }
+      i++;
+    } else rest[nrest++] = argv[i];
   int rc = one_job_args("fetch", nrest, rest, &o, &job);
   if (rc) return rc;
   if (!o.out) { fprintf(stderr, "pcbpt-coord fetch: --out F.exr is required\n"); return 2; }
@@ -313,7 +322,10 @@ int pc_cmd_fetch(int argc, char **argv) {
   if (in->status_reply->n_jobs != 1) {
     fprintf(stderr, "pcbpt-coord fetch: no job %llu\n", (unsigned long long)job);
     rc = 1;
-  } else if (strcmp(in->status_reply->jobs[0]->state, "done") != 0 && !partial) {
+  } else if (snapshot > in->status_reply->jobs[0]->snapshots) {
+    fprintf(stderr, "pcbpt-coord fetch: job %llu has %u snapshots\n", (unsigned long long)job, in->status_reply->jobs[0]->snapshots);
+    rc = 1;
+  } else if (!snapshot && strcmp(in->status_reply->jobs[0]->state, "done") != 0 && !partial) {
     const Pcbpt__JobStatus *st = in->status_reply->jobs[0];
     fprintf(stderr, "pcbpt-coord fetch: job %llu is %s (%llu iterations): %s\n", (unsigned long long)job, st->state,
             (unsigned long long)st->iterations_done,
@@ -322,7 +334,8 @@ int pc_cmd_fetch(int argc, char **argv) {
   }
   pcbpt__envelope__free_unpacked(in, NULL);
   uint64_t got = 0;
-  if (!rc && (rc = pc_client_fetch(&cl, job, o.out, &got, &e)) != 0) fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg);
+  if (!rc && (rc = pc_client_fetch_snapshot(&cl, job, (uint32_t)snapshot, o.out, &got, &e)) != 0)
+    fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg);
   pc_client_close(&cl);
   if (rc) return 1;
   if (o.json) printf("{\"job\": %llu, \"out\": \"%s\", \"bytes\": %llu}\n", (unsigned long long)job, o.out, (unsigned long long)got);
