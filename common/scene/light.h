@@ -48,6 +48,10 @@ typedef struct pc_light_point {
 
 /* Chooses a light proportionally to power; returns its index and sets *pdf. */
 int pc_light_choose(const struct pc_scene *s, float u, float *pdf);
+/* In a cumulative table cdf[0..n] (cdf[0] = 0): the smallest i with cdf[i+1] > u, so
+ * zero-width entries are never chosen; u at or past the total (float rounding) falls back to
+ * the last entry of non-zero width. */
+int pc_cdf_find(const float *cdf, int n, float u);
 float pc_light_choose_pdf(const struct pc_scene *s, int light);
 
 /* Uniform point on the light by area. */

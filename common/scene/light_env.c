@@ -109,18 +109,6 @@ vec3 pc_env_le(const pc_light *l, vec3 d) {
   return v3(fmaxf(r.x, 0.f), fmaxf(r.y, 0.f), fmaxf(r.z, 0.f));
 }
 
-/* Smallest i in [0, n) with cdf[i+1] > u, skipping zero-width entries. */
-static int find(const float *cdf, int n, float u) {
-  int lo = 0, hi = n - 1;
-  while (lo < hi) {
-    int mid = (lo + hi) / 2;
-    if (cdf[mid + 1] > u) hi = mid;
-    else lo = mid + 1;
-  }
-  while (lo > 0 && cdf[lo + 1] == cdf[lo]) lo--;
-  return lo;
-}
-
 vec3 pc_env_sample(const pc_light *l, float u1, float u2, float *pdf) {
   const pc_image *img = &l->env_img;
   if (img->w == 0) {
@@ -129,11 +117,11 @@ vec3 pc_env_sample(const pc_light *l, float u1, float u2, float *pdf) {
     return v3(r * cosf(phi), r * sinf(phi), z);
   }
   int w = img->w, h = img->h;
-  int y = find(l->env_row_cdf, h, u1);
+  int y = pc_cdf_find(l->env_row_cdf, h, u1);
   float r0 = l->env_row_cdf[y], r1 = l->env_row_cdf[y + 1];
   float fy = r1 > r0 ? fminf(fmaxf((u1 - r0) / (r1 - r0), 0.f), 1.f) : 0.5f;
   const float *col = l->env_col_cdf + (size_t)y * ((size_t)w + 1);
-  int x = find(col, w, u2);
+  int x = pc_cdf_find(col, w, u2);
   float c0 = col[x], c1 = col[x + 1];
   float fx = c1 > c0 ? fminf(fmaxf((u2 - c0) / (c1 - c0), 0.f), 1.f) : 0.5f;
   float phi = 2.f * PC_PI * ((float)x + fx) / (float)w, theta = PC_PI * ((float)y + fy) / (float)h;
