@@ -251,15 +251,15 @@ vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
   return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
 }
 
-bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
-  vec3 o = v3_is_zero(ng) ? p : pc_offset_origin(s, p, ng, d);
+/* Whether nothing blocks the segment o + t d, t in [0, tfar). */
+static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRay r;
   r.org_x = o.x; r.org_y = o.y; r.org_z = o.z;
   r.dir_x = d.x; r.dir_y = d.y; r.dir_z = d.z;
   r.tnear = 0.f;
-  r.tfar = INFINITY;
+  r.tfar = tfar;
   r.time = 0.f;
   r.mask = 0xffffffffu;
   r.id = 0;
@@ -268,22 +268,13 @@ bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
   return r.tfar >= 0.f;
 }
 
+bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
+  return unoccluded(s, v3_is_zero(ng) ? p : pc_offset_origin(s, p, ng, d), d, INFINITY);
+}
+
 bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
   vec3 ab = v3_sub(b, a);
   vec3 o = v3_is_zero(na) ? a : pc_offset_origin(s, a, na, ab);
   vec3 t = v3_is_zero(nb) ? b : pc_offset_origin(s, b, nb, v3_neg(ab));
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  struct RTCRay r;
-  r.org_x = o.x; r.org_y = o.y; r.org_z = o.z;
-  vec3 d = v3_sub(t, o);
-  r.dir_x = d.x; r.dir_y = d.y; r.dir_z = d.z;
-  r.tnear = 0.f;
-  r.tfar = 1.f - 1e-4f;
-  r.time = 0.f;
-  r.mask = 0xffffffffu;
-  r.id = 0;
-  r.flags = 0;
-  rtcOccluded1((RTCScene)s->rtc_scene, &ctx, &r);
-  return r.tfar >= 0.f;
+  return unoccluded(s, o, v3_sub(t, o), 1.f - 1e-4f);
 }
