@@ -6,7 +6,8 @@
 # workers busy and iterations per worker-second) and keeps the folder (report.html). Takes
 # about 2 x RUNS x 2 x SECONDS of wall time plus overheads. Usage:
 #   tests/bench/farm_study.sh REF.exr [SECONDS] [RUNS] [SIZE] [OUT]
-# (defaults: 60 3 128 a new /tmp/pcbpt-farm-study-XXXXXX); REF must be SIZExSIZE, e.g.
+# (defaults: 60 3 128 a new /tmp/pcbpt-farm-study-XXXXXX); env WORKERS (default 1,2) and
+# STUDY_FLAGS (e.g. "--pcbpt-k 2") go to the study; REF must be SIZExSIZE, e.g.
 # ref-ajar-door.exr of the long reference renders (128x128).
 set -euo pipefail
 top=$(cd "$(dirname "$0")/../.." && pwd)
@@ -34,7 +35,7 @@ done
 for _ in $(seq 100); do [ "$("$B/pcbpt-coord" workers "${H[@]}" | grep -c ' w[ab] ')" -ge 2 ] && break; sleep 0.1; done
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
 "$B/pcbpt-coord" study "$top/scenes/ajar-door/scene.xml" --methods bdpt,pcbpt --seconds "$seconds" --runs "$runs" \
-  --workers 1,2 --layer inner --reference "$ref" --width "$size" --height "$size" "${H[@]}" --out "$T/out" \
+  --workers "${WORKERS:-1,2}" --layer inner --reference "$ref" ${STUDY_FLAGS:-} --width "$size" --height "$size" "${H[@]}" --out "$T/out" \
   | grep -v '^  ajar-door'
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "kept $T (report: $T/out/report.html)"
