@@ -35,14 +35,19 @@ typedef struct job_ctx {
   pc_scene_defines defines;
 } job_ctx;
 
-static void ctx_free(job_ctx *c, pc_wrender *w) {
-  if (!c->loaded) return;
+/* The job's renderer (withdrawn from the loop's progress reads first) and films. */
+static void ctx_drop_films(job_ctx *c, pc_wrender *w) {
   uv_mutex_lock(&w->mu);
   w->rend = NULL;
   uv_mutex_unlock(&w->mu);
   pc_renderer_destroy(c->rend);
   pc_film_free(&c->work);
   pc_film_free(&c->pending);
+}
+
+static void ctx_free(job_ctx *c, pc_wrender *w) {
+  if (!c->loaded) return;
+  ctx_drop_films(c, w);
   pc_scene_free(&c->scene);
   c->loaded = false;
 }
@@ -79,13 +84,7 @@ static int ctx_films(job_ctx *c, pc_wrender *w, const pc_render_settings *set, p
 static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
                     pc_err *e) {
   if (same_scene(c, set, path, root)) {
-    /* a new renderer and films over the built scene */
-    uv_mutex_lock(&w->mu);
-    w->rend = NULL;
-    uv_mutex_unlock(&w->mu);
-    pc_renderer_destroy(c->rend);
-    pc_film_free(&c->work);
-    pc_film_free(&c->pending);
+    ctx_drop_films(c, w); /* a new renderer and films over the built scene */
     return ctx_films(c, w, set, e);
   }
   ctx_free(c, w);
