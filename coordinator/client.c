@@ -164,6 +164,10 @@ int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const ui
 }
 
 int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *bytes, pc_err *e) {
+  return pc_client_fetch_snapshot(cl, job, 0, out, bytes, e);
+}
+
+int pc_client_fetch_snapshot(pc_client *cl, uint64_t job, uint32_t snapshot, const char *out, uint64_t *bytes, pc_err *e) {
   char tmp[4096];
   snprintf(tmp, sizeof tmp, "%s.part.%ld", out, (long)getpid());
   FILE *f = fopen(tmp, "wb");
@@ -171,6 +175,7 @@ int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *byte
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
   Pcbpt__FetchRequest fr = PCBPT__FETCH_REQUEST__INIT;
   fr.job_id = job;
+  fr.snapshot = snapshot;
   env.msg_case = PCBPT__ENVELOPE__MSG_FETCH_REQUEST;
   env.fetch_request = &fr;
   uint64_t got = 0, total = 1;
@@ -189,6 +194,19 @@ int pc_client_fetch(pc_client *cl, uint64_t job, const char *out, uint64_t *byte
   if (!rc && rename(tmp, out) != 0) rc = pc_errf(e, PC_EIO, "%s: cannot rename into place: %s", out, strerror(errno));
   if (rc) unlink(tmp);
   *bytes = got;
+  return rc;
+}
+
+int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = (Pcbpt__Submit *)sub;
+  int rc = pc_client_send(cl, &env, e);
+  if (!rc) rc = pc_client_recv(cl, 60, &in, e);
+  if (rc) return rc;
+  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "unexpected reply to submit");
+  else *job = in->submit_reply->job_id;
+  pcbpt__envelope__free_unpacked(in, NULL);
   return rc;
 }
 

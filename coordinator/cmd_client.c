@@ -10,7 +10,7 @@
 
 #include "bundle.h"
 #include "client.h"
-#include "pilot.h"
+#include "pilot_farm.h"
 #include "render_flags.h"
 #include "cli_scene.h"
 #include "scene.h"
@@ -57,17 +57,9 @@ static int connect_or_say(const char *verb, const common_opts *o, pc_client *cl)
 
 static int parse_job_id(const char *s, uint64_t *id) { return pc_parse_u64(s, 1, UINT64_MAX, id) ? 0 : -1; }
 
-typedef struct farm_pilot {
-  pc_client *cl;
-  const uint8_t *hash;
-  const char *name;
-  int priority;
-} farm_pilot;
-
 /* Submits one job of the uploaded bundle. */
-static int submit_one(const farm_pilot *fp, const pc_render_settings *set, const char *name, uint64_t spp, double seconds,
-                      double halt_noise, const char *auto_report, uint64_t *job, pc_err *e) {
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
+static int submit_one(pc_client *cl, const uint8_t *hash, const pc_render_settings *set, const char *name, uint64_t spp,
+                      double seconds, double halt_noise, int priority, const char *auto_report, uint64_t *job, pc_err *e) {
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(set, &ps, &psb);
@@ -75,56 +67,13 @@ static int submit_one(const farm_pilot *fp, const pc_render_settings *set, const
   ps.auto_report = (char *)auto_report;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)name;
-  sub.bundle_hash.data = (uint8_t *)fp->hash;
+  sub.bundle_hash.data = (uint8_t *)hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
   sub.halt_iterations = spp;
   sub.halt_seconds = seconds;
-  sub.priority = fp->priority;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  Pcbpt__Envelope *in = NULL;
-  int rc = pc_client_send(fp->cl, &env, e);
-  if (!rc) rc = pc_client_recv(fp->cl, 60, &in, e);
-  if (!rc && in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "unexpected reply to submit");
-  if (!rc) *job = in->submit_reply->job_id;
-  if (in) pcbpt__envelope__free_unpacked(in, NULL);
-  return rc;
-}
-
-/* pc_pilot_render_fn on a farm: one short job per candidate, waited for. A farm job cannot be
- * bound by "at least N iterations and at least T seconds": it gets T (at least 1 s, for the
- * scheduling round trips) when the job is time-bound, else N iterations. */
-static int farm_pilot_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                             pc_pilot_candidate *c, pc_err *e) {
-  const farm_pilot *fp = user;
-  char name[200];
-  snprintf(name, sizeof name, "%.120s [auto pilot: %s]", fp->name, c->label);
-  uint64_t job = 0;
-  int rc = submit_one(fp, set, name, seconds > 0 ? 0 : min_iterations, seconds > 0 ? (seconds > 1 ? seconds : 1) : 0, 0, "",
-                      &job, e);
-  while (!rc) {
-    Pcbpt__Envelope *in = NULL;
-    if ((rc = pc_client_status(fp->cl, job, &in, e)) != 0) break;
-    if (in->status_reply->n_jobs != 1) {
-      pcbpt__envelope__free_unpacked(in, NULL);
-      return pc_errf(e, PC_EIO, "auto pilot: job %llu vanished", (unsigned long long)job);
-    }
-    const Pcbpt__JobStatus *j = in->status_reply->jobs[0];
-    bool done = strcmp(j->state, "done") == 0;
-    if (done || strcmp(j->state, "failed") == 0 || strcmp(j->state, "cancelled") == 0) {
-      if (!done) rc = pc_errf(e, PC_EIO, "auto pilot: job %llu (%s) %s: %s", (unsigned long long)job, c->label, j->state, j->error);
-      c->iterations = j->iterations_done;
-      c->seconds = j->elapsed;
-      c->relmse = j->relmse_estimate;
-      pcbpt__envelope__free_unpacked(in, NULL);
-      break;
-    }
-    pcbpt__envelope__free_unpacked(in, NULL);
-    struct timespec ts = {0, 50000000};
-    nanosleep(&ts, NULL);
-  }
-  return rc;
+  sub.priority = priority;
+  return pc_client_submit(cl, &sub, job, e);
 }
 
 int pc_cmd_submit(int argc, char **argv) {
@@ -168,7 +117,7 @@ int pc_cmd_submit(int argc, char **argv) {
   rc = pc_client_send_bundle(&cl, blob, n, hash, &e);
   free(blob);
   const char *base = strrchr(scene_path, '/');
-  farm_pilot fp = {.cl = &cl, .hash = hash, .name = o.name ? o.name : base ? base + 1 : scene_path, .priority = (int)o.priority};
+  pc_pilot_farm fp = {.cl = &cl, .hash = hash, .name = o.name ? o.name : base ? base + 1 : scene_path, .priority = (int)o.priority};
   char report[1024] = "";
   if (!rc && req.method_auto) {
     /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
@@ -177,7 +126,7 @@ int pc_cmd_submit(int argc, char **argv) {
     double slice;
     uint64_t min_it;
     pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
-    rc = pc_pilot_run(&pilot, &req.set, slice, min_it, farm_pilot_render, &fp, &e);
+    rc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_farm_render, &fp, &e);
     if (!rc) {
       uint64_t seed = req.set.seed;
       req.set = pilot.c[pilot.best].set;
@@ -188,7 +137,7 @@ int pc_cmd_submit(int argc, char **argv) {
     }
   }
   uint64_t job = 0;
-  if (!rc) rc = submit_one(&fp, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, report, &job, &e);
+  if (!rc) rc = submit_one(&cl, hash, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, fp.priority, report, &job, &e);
   pc_client_close(&cl);
   if (rc) {
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
@@ -224,7 +173,8 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g, \"auto\": ", j->halt_noise);
+    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
+           j->halt_noise, j->worker_seconds, j->snapshots, j->ranges_rerun);
     if (*j->auto_report) json_str(j->auto_report);
     else printf("null");
     printf("}");
@@ -371,13 +321,21 @@ int pc_cmd_cancel(int argc, char **argv) {
 int pc_cmd_fetch(int argc, char **argv) {
   common_opts o;
   uint64_t job;
-  /* --partial: a job that is not done has at most a periodic, partial image */
+  /* --partial: a job that is not done has at most a periodic, partial image;
+   * --snapshot K: a study job's K-th kept snapshot (docs/farm-study.md) */
   bool partial = false;
+  long long snapshot = 0;
   char *rest[64];
   int nrest = 0;
   for (int i = 0; i < argc && nrest < 64; i++)
     if (strcmp(argv[i], "--partial") == 0) partial = true;
-    else rest[nrest++] = argv[i];
+    else if (strcmp(argv[i], "--snapshot") == 0) {
+      if (i + 1 >= argc || !pc_parse_i64(argv[i + 1], 1, 1000000, &snapshot)) {
+        fprintf(stderr, "pcbpt-coord fetch: --snapshot: expected a snapshot number >= 1\n");
+        return 2;
+      }
+      i++;
+    } else rest[nrest++] = argv[i];
   int rc = one_job_args("fetch", nrest, rest, &o, &job);
   if (rc) return rc;
   if (!o.out) { fprintf(stderr, "pcbpt-coord fetch: --out F.exr is required\n"); return 2; }
@@ -389,7 +347,10 @@ int pc_cmd_fetch(int argc, char **argv) {
   if (in->status_reply->n_jobs != 1) {
     fprintf(stderr, "pcbpt-coord fetch: no job %llu\n", (unsigned long long)job);
     rc = 1;
-  } else if (strcmp(in->status_reply->jobs[0]->state, "done") != 0 && !partial) {
+  } else if (snapshot > in->status_reply->jobs[0]->snapshots) {
+    fprintf(stderr, "pcbpt-coord fetch: job %llu has %u snapshots\n", (unsigned long long)job, in->status_reply->jobs[0]->snapshots);
+    rc = 1;
+  } else if (!snapshot && strcmp(in->status_reply->jobs[0]->state, "done") != 0 && !partial) {
     const Pcbpt__JobStatus *st = in->status_reply->jobs[0];
     fprintf(stderr, "pcbpt-coord fetch: job %llu is %s (%llu iterations): %s\n", (unsigned long long)job, st->state,
             (unsigned long long)st->iterations_done,
@@ -398,7 +359,8 @@ int pc_cmd_fetch(int argc, char **argv) {
   }
   pcbpt__envelope__free_unpacked(in, NULL);
   uint64_t got = 0;
-  if (!rc && (rc = pc_client_fetch(&cl, job, o.out, &got, &e)) != 0) fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg);
+  if (!rc && (rc = pc_client_fetch_snapshot(&cl, job, (uint32_t)snapshot, o.out, &got, &e)) != 0)
+    fprintf(stderr, "pcbpt-coord fetch: %s\n", e.msg);
   pc_client_close(&cl);
   if (rc) return 1;
   if (o.json) printf("{\"job\": %llu, \"out\": \"%s\", \"bytes\": %llu}\n", (unsigned long long)job, o.out, (unsigned long long)got);

@@ -143,14 +143,7 @@ static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob
   sub.settings = &ps;
   sub.halt_iterations = req->spp;
   sub.halt_seconds = req->seconds;
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 60, &in, e)) != 0) return rc;
-  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "embedded farm: unexpected reply to submit");
-  else *job = in->submit_reply->job_id;
-  pcbpt__envelope__free_unpacked(in, NULL);
-  return rc;
+  return pc_client_submit(cl, &sub, job, e);
 }
 
 /* Asks the coordinator to finish the job with what is rendered (Ctrl-C). */

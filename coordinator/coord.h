@@ -14,6 +14,7 @@
 #include "bundle.h"
 #include "film.h"
 #include "render.h"
+#include "pcbpt.pb-c.h"
 #include "wire_conn.h"
 
 typedef enum { PC_JOB_QUEUED, PC_JOB_RUNNING, PC_JOB_STOPPING, PC_JOB_DONE, PC_JOB_FAILED, PC_JOB_CANCELLED } pc_job_state;
@@ -58,6 +59,16 @@ typedef struct pc_job {
   char auto_report[1024];    /* Settings.auto_report (--method auto's choice), control chars replaced */
   uint64_t noise_check_at;   /* iterations merged before --halt-noise looks again */
   int priority;
+  /* equal-time studies (docs/farm-study.md; from the settings, so a restart keeps them) */
+  uint64_t study_group;      /* 0: none; else interleaved with the group's other jobs */
+  uint32_t group_workers;    /* at most this many workers on the group at once (0: any) */
+  double halt_worker_seconds;/* 0: none; else halt at this many merged worker-seconds */
+  uint32_t snapshots;        /* merged films kept at log-spaced worker-seconds (0: none) */
+  uint32_t snaps_taken;      /* ... written so far (jobs/<id>/snap.<k>.exr, k = 1..) */
+  uint32_t snaps_queued;     /* snapshot times passed (and queued for) so far */
+  uint32_t snaps_queued_n;   /* snapshot files queued so far */
+  double film_seconds;       /* worker-seconds of the uploads in the film (ops only) */
+  uint32_t ranges_rerun;     /* ranges taken back from a vanished or silent worker */
   pc_job_state state;
   uint64_t next_iter, done, ckpt_gen;
   int64_t light_per_iter;    /* light-layer count per iteration, fixed by the first upload */
@@ -106,6 +117,10 @@ struct pc_peer {
                                 here (0: none yet): bounds the range sizes its claim earns and
                                 sets its ranges' progress deadlines */
   uint64_t mrate_job;
+  struct { uint64_t job, iterations; double seconds, mrate; } served[8]; /* per job of its
+                                latest ones: the iterations and worker-seconds it rendered (a
+                                study group's jobs rotate over it, its ranges there start
+                                small) and its measured rate there (kept across switches) */
   uint64_t hb_range, hb_done; /* its last heartbeat: iterations of that range rendered ... */
   double hb_frac;            /* ... and of the iteration in progress ... */
   double hb_time;            /* ... at this time */
@@ -171,6 +186,12 @@ int pc_store_update_range(pc_coord *c, const pc_range *r, bool open, pc_err *e);
 int pc_store_load(pc_coord *c, pc_err *e);
 
 /* job.c: job lifecycle: films, checkpoints, images, halting. */
+#define PC_JOB_MAX_SNAPSHOTS 1000
+#define PC_JOB_SNAPSHOT_FIRST (1.0 / 64) /* the first snapshot's share of the budget */
+/* Worker-seconds at which study job j keeps its snapshot k (0-based): with K snapshots,
+ * budget * PC_JOB_SNAPSHOT_FIRST^((K - k) / K), so with the image at the budget the K + 1
+ * points are evenly spaced in log time. */
+double pc_job_snapshot_time(const pc_job *j, int k);
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
 /* The data dir could not be written for j (a checkpoint, with op, or a range): j pauses and
@@ -186,7 +207,7 @@ void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf,
                   uint64_t first, uint64_t count, bool final, const pc_render_stats *stats);
 void pc_job_free(pc_job *j);
 /* Takes what the coordinator keeps from a job's stored settings besides the render settings:
- * --halt-noise and --method auto's report. */
+ * --halt-noise, --method auto's report and the study fields (Settings 20-24). */
 void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s);
 
 /* sched.c: handing out ranges and taking them back. */
@@ -200,6 +221,8 @@ void pc_sched_check_progress(pc_coord *c, pc_job *j);
 /* Tells the workers told NoWork that there is work to ask for. */
 void pc_sched_nudge(pc_coord *c);
 pc_range *pc_sched_find_range(pc_job *j, uint64_t id);
+/* p's upload of `iterations` of job `job` carried `seconds` of its render time (sched.c). */
+void pc_sched_served(pc_peer *p, uint64_t job, uint64_t iterations, double seconds);
 
 /* serve.c helpers used by the others. */
 void pc_peer_send_ack(pc_peer *p, uint64_t range_id, uint64_t acked_end, const char *refused);

@@ -10,6 +10,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,6 +31,8 @@ struct pc_op {
   pc_coord *c;
   pc_job *j;
   bool is_merge;
+  uint32_t snap_k;           /* a study snapshot: write the film as snap.<snap>.exr */
+  double wall;               /* snapshot: the job's render time when it was queued */
   /* merge */
   pc_peer *peer;
   uint64_t range_id, first, count, raw;
@@ -57,12 +60,18 @@ void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out
 }
 
 static void op_start(pc_job *j);
+static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, pc_err *e);
 
-static void queue_op(pc_job *j, pc_op *op) {
+/* Appends op to j's queue; op_after starts the next op of the queue. */
+static void append_op(pc_job *j, pc_op *op) {
   op->next = NULL;
   if (j->ops_tail) j->ops_tail->next = op;
   else j->ops = op;
   j->ops_tail = op;
+}
+
+static void queue_op(pc_job *j, pc_op *op) {
+  append_op(j, op);
   if (!j->busy) op_start(j);
 }
 
@@ -109,6 +118,53 @@ static void check_noise(pc_coord *c, pc_job *j, uint64_t iterations) {
   pc_job_halt(c, j);
 }
 
+/* Study jobs: the merged film is kept at log-spaced worker-seconds (pc_job_snapshot_time; the
+ * job's image is the point at the budget), and the job halts once its budget of
+ * worker-seconds is merged. */
+static void check_study(pc_coord *c, pc_job *j) {
+  if (!(j->halt_worker_seconds > 0) || j->state != PC_JOB_RUNNING) return;
+  double ws = j->stats_merged.t_total;
+  int k = -1; /* the last snapshot time passed */
+  for (int i = 0; i < (int)j->snapshots; i++)
+    if (ws >= pc_job_snapshot_time(j, i)) k = i;
+  /* one snapshot for several times passed at once, as the one-machine study did */
+  if (k >= 0 && (uint32_t)k >= j->snaps_queued) {
+    pc_op *op = calloc(1, sizeof *op);
+    if (op) {
+      op->c = c;
+      op->j = j;
+      op->snap_k = ++j->snaps_queued_n;
+      op->wall = j->elapsed;
+      j->snaps_queued = (uint32_t)k + 1;
+      append_op(j, op); /* (called from op_after, which starts it) */
+    } else {
+      pc_wire_log("job %llu: out of memory for a snapshot", (unsigned long long)j->id);
+    }
+  }
+  if (ws >= j->halt_worker_seconds) {
+    pc_wire_log("job %llu: %.2f worker-seconds merged (budget %.2f): halting", (unsigned long long)j->id, ws,
+                j->halt_worker_seconds);
+    pc_job_halt(c, j);
+  }
+}
+
+double pc_job_snapshot_time(const pc_job *j, int k) {
+  int n = (int)j->snapshots;
+  if (n < 1) return j->halt_worker_seconds;
+  return j->halt_worker_seconds * pow(PC_JOB_SNAPSHOT_FIRST, (double)(n - k) / n);
+}
+
+void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
+  j->halt_noise = s->halt_noise;
+  snprintf(j->auto_report, sizeof j->auto_report, "%s", s->auto_report ? s->auto_report : "");
+  for (char *q = j->auto_report; *q; q++) /* it reaches logs, JSON and image headers */
+    if ((unsigned char)*q < 0x20 || *q == 0x7f || *q == '"' || *q == '\\') *q = '?';
+  j->study_group = s->study_group;
+  j->group_workers = s->group_workers;
+  j->halt_worker_seconds = s->halt_worker_seconds;
+  j->snapshots = s->snapshots <= PC_JOB_MAX_SNAPSHOTS ? s->snapshots : PC_JOB_MAX_SNAPSHOTS;
+}
+
 static void merge_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
@@ -120,6 +176,7 @@ static void merge_work(uv_work_t *w) {
   }
   op->rc = pc_wire_film_add_z(op->buf, op->len, &j->film, judge_counts, op, &op->err);
   if (!op->rc) film_estimate(&j->film, &op->relmse_est, &op->est_iterations);
+  if (!op->rc) j->film_seconds += op->stats.t_total;
 }
 
 /* The checkpoint streams into its file as it is compressed (no serialized copy of the film). */
@@ -159,20 +216,40 @@ static void ckpt_work(uv_work_t *w) {
    * the checkpoint only commits the acks, and a film file would never be read */
   if (!op->c->volatile_store) op->rc = write_ckpt_file(op, j, dir);
   if (op->rc || !op->write_exr) return;
-  /* the same header as a standalone `render` writes, plus the job id */
-  char img[600], idbuf[32], seed[32], version[64];
+  char img[600];
   snprintf(img, sizeof img, "%s/image.exr", dir);
+  /* the image is written like the checkpoint: a failure is the data dir's (retried) */
+  if (write_image(j, img, &op->stats, j->elapsed, &op->err) != 0) op->rc = PC_EIO;
+}
+
+/* A study snapshot of the merged film (pc_job_snapshot_due). Its worker-seconds are those of
+ * the uploads in the film now, which an op queued meanwhile may have added to. */
+static void snap_work(uv_work_t *w) {
+  pc_op *op = w->data;
+  pc_job *j = op->j;
+  char leaf[40], path[600];
+  snprintf(leaf, sizeof leaf, "snap.%u.exr", op->snap_k);
+  pc_job_path(op->c, j, leaf, path, sizeof path);
+  pc_render_stats st = j->stats_merged;
+  st.t_total = j->film_seconds;
+  op->rc = write_image(j, path, &st, op->wall, &op->err);
+}
+
+/* The same header as a standalone `render` writes, plus the job id and, for studies, the
+ * worker-seconds behind the film. */
+static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, pc_err *e) {
+  char idbuf[32], seed[32], version[64];
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
   snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
-  const pc_render_stats *st = &op->stats;
   pc_exr_attr attrs[] = {
     {.name = "pcbpt.job", .type = PC_ATTR_STRING, .s = idbuf},
     {.name = "pcbpt.method", .type = PC_ATTR_STRING, .s = pc_method_name(j->set.method)},
     {.name = "pcbpt.iterations", .type = PC_ATTR_DOUBLE, .d = (double)j->film.layers[PC_LAYER_PT].count},
     {.name = "pcbpt.seed", .type = PC_ATTR_STRING, .s = seed},
     {.name = "pcbpt.max_depth", .type = PC_ATTR_DOUBLE, .d = j->set.max_depth},
-    {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = j->elapsed},
+    {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = wall},
+    {.name = "pcbpt.worker_seconds", .type = PC_ATTR_DOUBLE, .d = st->t_total},
     {.name = "pcbpt.rays", .type = PC_ATTR_DOUBLE, .d = (double)st->rays},
     {.name = "pcbpt.time_paths", .type = PC_ATTR_DOUBLE, .d = st->t_paths},
     {.name = "pcbpt.time_lt", .type = PC_ATTR_DOUBLE, .d = st->t_lt},
@@ -185,8 +262,7 @@ static void ckpt_work(uv_work_t *w) {
     {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report}, /* last: only when set */
   };
   int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - (j->auto_report[0] ? 0 : 1);
-  /* the image is written like the checkpoint: a failure is the data dir's (retried) */
-  if (pc_film_write_exr(&j->film, img, attrs, nattrs, &op->err) != 0) op->rc = PC_EIO;
+  return pc_film_write_exr(&j->film, img, attrs, nattrs, e);
 }
 
 static void free_range_list_closed(pc_job *j) {
@@ -325,7 +401,10 @@ static void op_after(uv_work_t *w, int status) {
   pc_job *j = op->j;
   j->busy = false;
   if (status != 0 && !op->rc) op->rc = pc_errf(&op->err, PC_EIO, "background work cancelled: %s", uv_strerror(status));
-  if (op->is_merge) {
+  if (op->snap_k) {
+    if (op->rc) pc_wire_log("job %llu: snapshot %u not kept: %s", (unsigned long long)j->id, op->snap_k, op->err.msg);
+    else if (op->snap_k > j->snaps_taken) j->snaps_taken = op->snap_k;
+  } else if (op->is_merge) {
     pc_range *r = pc_sched_find_range(j, op->range_id);
     if (r) r->merging = false;
     if (op->rc) {
@@ -352,6 +431,8 @@ static void op_after(uv_work_t *w, int status) {
       j->relmse_est = op->relmse_est;
       j->dirty = true;
       check_noise(c, j, op->est_iterations);
+      pc_sched_served(op->peer, j->id, op->count, op->stats.t_total);
+      check_study(c, j);
       pc_pending_ack *a = calloc(1, sizeof *a);
       if (a) {
         a->peer = op->peer;
@@ -413,7 +494,7 @@ static void op_start(pc_job *j) {
   j->busy = true;
   op->work.data = op;
   if (op->is_merge) op->light_per_iter = j->light_per_iter;
-  int r = uv_queue_work(op->c->loop, &op->work, op->is_merge ? merge_work : ckpt_work, op_after);
+  int r = uv_queue_work(op->c->loop, &op->work, op->snap_k ? snap_work : op->is_merge ? merge_work : ckpt_work, op_after);
   if (r) {
     op->rc = pc_errf(&op->err, PC_EIO, "uv_queue_work: %s", uv_strerror(r));
     op_after(&op->work, 0);
@@ -560,6 +641,10 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   }
   uint64_t n;
   film_estimate(&j->film, &j->relmse_est, &n);
+  /* the checkpoint's film holds the committed uploads: their worker-seconds are stored */
+  j->film_seconds = j->stats_merged.t_total;
+  for (int k = 0; k < (int)j->snapshots; k++)
+    if (j->stats_merged.t_total >= pc_job_snapshot_time(j, k)) j->snaps_queued = (uint32_t)k + 1;
   j->film_ready = true;
   if (j->state == PC_JOB_QUEUED) {
     j->state = PC_JOB_RUNNING;
@@ -640,9 +725,3 @@ void pc_job_free(pc_job *j) {
   free(j);
 }
 
-void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
-  j->halt_noise = s->halt_noise;
-  snprintf(j->auto_report, sizeof j->auto_report, "%s", s->auto_report ? s->auto_report : "");
-  for (char *q = j->auto_report; *q; q++) /* it reaches logs, JSON and image headers */
-    if ((unsigned char)*q < 0x20 || *q == 0x7f || *q == '"' || *q == '\\') *q = '?';
-}

@@ -22,7 +22,7 @@ static const verb verbs[] = {
     {"workers", pc_cmd_workers, "list the connected workers"},
     {"wait", pc_cmd_wait, "wait for a job (exit 0 when done)"},
     {"cancel", pc_cmd_cancel, "cancel a job"},
-    {"fetch", pc_cmd_fetch, "download a job's image"},
+    {"fetch", pc_cmd_fetch, "download a job's image (--snapshot K: a study job's K-th snapshot)"},
 };
 
 static void usage(FILE *f) {

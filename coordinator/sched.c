@@ -4,7 +4,11 @@
  * asking worker's measured throughput and, for iteration-bounded jobs, shrinking towards the
  * end with what is left and what the other workers still have to render (range_size.h), so
  * that the workers finish together and late joiners get work at once. Jobs are served by
- * priority, then submission. Workers told there is no work are nudged when some comes. */
+ * priority, then submission; the jobs of a study group (docs/farm-study.md) take turns: a
+ * request goes to the group's job with the least worker time had or in hand, and among jobs
+ * about even, to the one this worker has served least, so the methods of a study share the
+ * workers and rotate over them. Workers told there is no work are nudged when some comes. */
+#include <math.h>
 #include <stdlib.h>
 
 #include "coord.h"
@@ -89,17 +93,74 @@ static const pc_job *job_of(const pc_coord *c, const pc_peer *q) {
   return NULL;
 }
 
+/* p's entry for job (created, the oldest job's going, when create). */
+static int served_slot(const pc_peer *p, uint64_t job, bool create) {
+  int slot = 0;
+  for (int i = 0; i < 8; i++) {
+    if (p->served[i].job == job) return i;
+    if (p->served[i].job < p->served[slot].job) slot = i;
+  }
+  return create ? slot : -1;
+}
+
+static double served_by(const pc_peer *p, uint64_t job) {
+  int i = served_slot(p, job, false);
+  return i >= 0 ? p->served[i].seconds : 0;
+}
+
+void pc_sched_served(pc_peer *p, uint64_t job, uint64_t iterations, double seconds) {
+  int i = served_slot(p, job, false);
+  if (i < 0) {
+    i = served_slot(p, job, true);
+    p->served[i].job = job;
+    p->served[i].iterations = 0;
+    p->served[i].seconds = p->served[i].mrate = 0;
+  }
+  p->served[i].iterations += iterations;
+  p->served[i].seconds += seconds;
+}
+
 /* The rate a worker's ranges on j are sized by: what it claims, trusted up to 4x what its
  * uploads on j brought (so a false claim earns no more than a few seconds of real work); a
  * worker not measured on j yet gets a probe. */
 static double trusted_rate(const pc_peer *q, const pc_job *j) {
-  if (q->mrate_job != j->id || !(q->mrate > 0)) return 0;
+  double mrate = q->mrate_job == j->id ? q->mrate : 0;
+  if (q->mrate_job != j->id) {
+    /* measured on j before it went to another job (a study group's jobs take turns) */
+    int i = served_slot(q, j->id, false);
+    mrate = i >= 0 ? q->served[i].mrate : 0;
+  }
+  if (!(mrate > 0)) return 0;
   double claimed = q->rate_job == j->id ? q->rate : 0;
-  return claimed > 0 && claimed < 4 * q->mrate ? claimed : claimed > 0 ? 4 * q->mrate : q->mrate;
+  return claimed > 0 && claimed < 4 * mrate ? claimed : claimed > 0 ? 4 * mrate : mrate;
+}
+
+static double attained(const pc_coord *c, const pc_job *j, double now);
+
+/* A study job's range ends by its next snapshot time (or its budget), shared among the
+ * group's workers, so the early snapshots, a fraction of a second of worker time apart, each
+ * find an upload there. */
+static double study_range_seconds(const pc_coord *c, const pc_job *j, double now) {
+  double got = attained(c, j, now), next = j->halt_worker_seconds;
+  for (int k = 0; k < (int)j->snapshots; k++) {
+    double t = pc_job_snapshot_time(j, k);
+    if (t > got) { next = t; break; }
+  }
+  double s = (next - got) / (j->group_workers ? j->group_workers : 1);
+  return s < PC_RANGE_MIN_SECONDS ? PC_RANGE_MIN_SECONDS : s > c->range_seconds ? c->range_seconds : s;
 }
 
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
   pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds};
+  if (j->halt_worker_seconds > 0) {
+    in.range_seconds = study_range_seconds(c, j, now);
+    /* a study's worker-seconds are counted per upload: a range sized on a one-iteration probe
+     * (often several times too fast) would overrun the early snapshots and the interleaving,
+     * so a worker's ranges of a study job grow from the probe by at most doubling */
+    int i = served_slot(p, j->id, false);
+    uint64_t cap = 2 * (i >= 0 ? p->served[i].iterations : 0) + 1, n = pc_range_size(&in);
+    return n < cap ? n : cap;
+  }
   if (j->halt_iterations) {
     in.bounded = true;
     in.unassigned = j->halt_iterations - j->next_iter;
@@ -127,6 +188,9 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
     pc_range *g = claim_orphan(c, j, r, &e);
     if (!g && e.code == PC_ENOMEM) { pc_job_fail(c, j, e.msg); return false; }
     if (!g) { pc_job_storage_trouble(c, j, NULL, e.msg); return false; }
+    j->ranges_rerun++;
+    pc_wire_log("job %llu: range %llu re-run from iteration %llu (its worker went away or fell silent)",
+                (unsigned long long)j->id, (unsigned long long)g->id, (unsigned long long)g->first);
     send_assign(c, p, j, g);
     return true;
   }
@@ -155,6 +219,62 @@ static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
   return true;
 }
 
+static bool runnable(const pc_job *j) { return (j->state == PC_JOB_QUEUED || j->state == PC_JOB_RUNNING) && !j->finishing; }
+
+/* Worker-seconds study job j has had or has in hand: merged, plus what is left of each open
+ * range a worker holds at that worker's measured rate (a range's worth while unmeasured). */
+static double attained(const pc_coord *c, const pc_job *j, double now) {
+  double s = j->stats_merged.t_total;
+  for (const pc_range *r = j->ranges; r; r = r->next) {
+    if (!r->owner || r->final) continue;
+    double rate = r->owner->mrate_job == j->id ? r->owner->mrate : 0;
+    s += rate > 0 ? fmin(unrendered(r, now) / rate, 2 * c->range_seconds) : c->range_seconds;
+  }
+  return s;
+}
+
+/* Workers other than p holding an unfinished range of the group. */
+static int group_busy(const pc_coord *c, uint64_t group, const pc_peer *p) {
+  int n = 0;
+  for (const pc_peer *q = c->peers; q; q = q->next) {
+    if (q == p || q->closed) continue;
+    bool holds = false;
+    for (const pc_job *j = c->jobs; j && !holds; j = j->next)
+      if (j->study_group == group && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING))
+        for (const pc_range *r = j->ranges; r && !holds; r = r->next) holds = r->owner == q && !r->final && r->merged < r->count;
+    n += holds;
+  }
+  return n;
+}
+
+/* Hands p a range of study group g: the runnable job with the least attained worker time;
+ * among those within half a range of it, the one p served least. */
+static bool try_group(pc_coord *c, pc_peer *p, const pc_job *first, int top, bool pri_only) {
+  uint64_t g = first->study_group;
+  if (first->group_workers && group_busy(c, g, p) >= (int)first->group_workers) return false;
+  double now = pc_coord_now();
+  pc_job *tried[64];
+  int ntried = 0;
+  for (;;) {
+    double least = INFINITY;
+    pc_job *best = NULL;
+    for (pc_job *j = c->jobs; j; j = j->next)
+      if (j->study_group == g && runnable(j) && (!pri_only || j->priority == top)) least = fmin(least, attained(c, j, now));
+    double best_served = INFINITY;
+    for (pc_job *j = c->jobs; j; j = j->next) {
+      if (j->study_group != g || !runnable(j) || (pri_only && j->priority != top)) continue;
+      bool done = false;
+      for (int i = 0; i < ntried; i++) done = done || tried[i] == j;
+      if (done || attained(c, j, now) > least + 0.5 * c->range_seconds) continue;
+      double sv = served_by(p, j->id);
+      if (sv < best_served) { best_served = sv; best = j; }
+    }
+    if (!best || ntried == 64) return false;
+    if (try_job(c, p, best)) return true;
+    tried[ntried++] = best;
+  }
+}
+
 void pc_sched_request(pc_coord *c, pc_peer *p) {
   /* highest priority first (pass 0), then any runnable job; each in submission order */
   for (int pri_pass = 0; pri_pass < 2; pri_pass++) {
@@ -162,8 +282,16 @@ void pc_sched_request(pc_coord *c, pc_peer *p) {
     for (pc_job *j = c->jobs; j; j = j->next)
       if ((j->state == PC_JOB_QUEUED || j->state == PC_JOB_RUNNING) && j->priority > top) top = j->priority;
     for (pc_job *j = c->jobs; j; j = j->next) {
-      if ((j->state != PC_JOB_QUEUED && j->state != PC_JOB_RUNNING) || j->finishing) continue;
+      if (!runnable(j)) continue;
       if (pri_pass == 0 && j->priority != top) continue;
+      if (j->study_group) {
+        /* the group's turn is taken at its first job in submission order */
+        bool first = true;
+        for (pc_job *k = c->jobs; k != j && first; k = k->next)
+          first = !(k->study_group == j->study_group && runnable(k) && (pri_pass || k->priority == top));
+        if (first && try_group(c, p, j, top, pri_pass == 0)) return;
+        continue;
+      }
       if (try_job(c, p, j)) return;
     }
   }
@@ -204,7 +332,11 @@ void pc_sched_peer_gone(pc_coord *c, pc_peer *p) {
 void pc_sched_progress(pc_job *j, pc_range *r, pc_peer *p, uint64_t count) {
   double now = pc_coord_now(), dt = now - r->measured_at;
   if (p->mrate_job != j->id) {
-    p->mrate = 0;
+    /* kept per job, so a worker coming back to a job is not probed again */
+    int i = served_slot(p, p->mrate_job, false);
+    if (i >= 0) p->served[i].mrate = p->mrate;
+    i = served_slot(p, j->id, false);
+    p->mrate = i >= 0 ? p->served[i].mrate : 0;
     p->mrate_job = j->id;
   }
   if (count && r->measured_at > 0 && dt > 0) {

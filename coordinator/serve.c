@@ -335,7 +335,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
       const Pcbpt__RenderStats *s = u->stats;
       /* informational only, but never let a peer put NaN or nonsense into a header */
       bool ok = s->t_paths >= 0 && s->t_paths < 1e9 && s->t_lt >= 0 && s->t_lt < 1e9 && s->t_pmf >= 0 && s->t_pmf < 1e9 &&
-                s->t_connect >= 0 && s->t_connect < 1e9;
+                s->t_connect >= 0 && s->t_connect < 1e9 && s->t_total >= 0 && s->t_total < 1e9;
       if (ok) {
         p->up_stats.rays = s->rays;
         p->up_stats.t_paths = s->t_paths;
@@ -343,6 +343,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
         p->up_stats.t_pmf = s->t_pmf;
         p->up_stats.t_connect = s->t_connect;
         p->up_stats.pmf_bytes = s->pmf_bytes;
+        p->up_stats.t_total = s->t_total;
       }
     }
   } else if (u->job_id != p->up_job || u->range_id != p->up_range || u->first != p->up_first ||
@@ -435,6 +436,10 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     upload_reset(p);
     return;
   }
+  /* worker-seconds halt study jobs: a delta cannot have taken longer than the time since the
+   * range was handed out or last uploaded (plus the time the upload took to come) */
+  double since = pc_coord_now() - r->measured_at;
+  if (r->measured_at > 0 && p->up_stats.t_total > since + 1) p->up_stats.t_total = since + 1;
   pc_sched_progress(j, r, p, p->up_count);
   /* the bytes stay accounted in c->buffered, and now in c->merging, until the merge frees them */
   uint8_t *buf = p->up_buf;
@@ -510,8 +515,13 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   if (access(path, R_OK) != 0) pc_errf(&e, PC_EINVAL, "submit: scene bundle %.16s... was not uploaded", hex);
   else if (pc_wire_settings_from_proto(s->settings, &j->set, &e) != 0) {}
   else if (j->set.width < 1 || j->set.height < 1) pc_errf(&e, PC_EINVAL, "submit: film size missing");
-  else if (s->halt_iterations == 0 && !(s->halt_seconds > 0) && !(s->settings->halt_noise > 0))
+  else if (s->halt_iterations == 0 && !(s->halt_seconds > 0) && !(s->settings->halt_noise > 0) &&
+           !(s->settings->halt_worker_seconds > 0))
     pc_errf(&e, PC_EINVAL, "submit: needs --spp, --time or --halt-noise");
+  else if (!(s->settings->halt_worker_seconds >= 0 && s->settings->halt_worker_seconds < 1e9))
+    pc_errf(&e, PC_EINVAL, "submit: bad worker-seconds budget");
+  else if (s->settings->snapshots > PC_JOB_MAX_SNAPSHOTS || (s->settings->snapshots && !(s->settings->halt_worker_seconds > 0)))
+    pc_errf(&e, PC_EINVAL, "submit: snapshots need a worker-seconds budget and are at most %d", PC_JOB_MAX_SNAPSHOTS);
   else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
   else if (!(s->settings->halt_noise >= 0 && s->settings->halt_noise <= 1e6)) pc_errf(&e, PC_EINVAL, "submit: bad --halt-noise");
   if (e.code) {
@@ -583,6 +593,9 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_noise = j->halt_noise;
     s->relmse_estimate = j->relmse_est;
     s->auto_report = j->auto_report;
+    s->worker_seconds = j->stats_merged.t_total;
+    s->snapshots = j->snaps_taken;
+    s->ranges_rerun = j->ranges_rerun;
     s->elapsed = j->elapsed;
     for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
@@ -629,11 +642,17 @@ done:
   free(js); free(jp); free(ws); free(wp); free(images);
 }
 
-static void on_fetch(pc_peer *p, uint64_t id) {
+static void on_fetch(pc_peer *p, uint64_t id, uint32_t snapshot) {
   pc_job *j = pc_coord_job(p->coord, id);
-  char path[600];
+  char path[600], leaf[40];
   if (!j) { send_error(p, "fetch: no such job"); return; }
-  pc_job_path(p->coord, j, "image.exr", path, sizeof path);
+  if (snapshot > j->snaps_taken) {
+    snprintf(leaf, sizeof leaf, "fetch: job %llu has %u snapshots", (unsigned long long)j->id, j->snaps_taken);
+    send_error(p, leaf);
+    return;
+  }
+  if (snapshot) snprintf(leaf, sizeof leaf, "snap.%u.exr", snapshot);
+  pc_job_path(p->coord, j, snapshot ? leaf : "image.exr", path, sizeof path);
   if (stream_file(p, path, false, NULL) != 0) {
     char why[120];
     snprintf(why, sizeof why, "fetch: job %llu is %s and has no image%s", (unsigned long long)j->id, pc_job_state_name(j->state),
@@ -692,7 +711,7 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
       send_status(p, j->id);
       return;
     }
-    case PCBPT__ENVELOPE__MSG_FETCH_REQUEST: on_fetch(p, env->fetch_request->job_id); return;
+    case PCBPT__ENVELOPE__MSG_FETCH_REQUEST: on_fetch(p, env->fetch_request->job_id, env->fetch_request->snapshot); return;
     default: break;
     }
   }

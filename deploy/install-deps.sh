@@ -5,8 +5,9 @@ pkgs=(
   build-essential cmake pkg-config git clang
   libembree-dev libopenexr-dev libuv1-dev libprotobuf-c-dev protobuf-c-compiler
   libexpat1-dev zlib1g-dev libsqlite3-dev libzstd-dev libsodium-dev libcmocka-dev
-  libpng-dev libjpeg-dev libcairo2-dev libclang-rt-14-dev
+  libpng-dev libjpeg-dev libcairo2-dev libclang-rt-14-dev libstb-dev
   slurm-wlm munge systemd iproute2 iptables libnetfilter-queue-dev
+  chromium-headless-shell
 )
 missing=()
 for p in "${pkgs[@]}"; do

@@ -1,6 +1,8 @@
-/* render.c: the worker's render thread: loads and builds the job's scene once per job, then
- * renders the assigned range in batches of about half a second into a scratch film, adds each
- * finished batch to the pending film, and compresses that into an upload when the loop asks.
+/* render.c: the worker's render thread: loads and builds the job's scene once per job (kept
+ * for the next job of the same scene bundle, -D values and film size: a study's interleaved
+ * jobs differ in method and seed only, and switch often), then renders the assigned range in
+ * batches of about half a second into a scratch film, adds each finished batch to the pending
+ * film, and compresses that into an upload when the loop asks.
  * Cancel is polled by the renderer between work items, so it takes effect well within a
  * second. */
 #include <stdio.h>
@@ -27,24 +29,71 @@ typedef struct job_ctx {
   pc_film work;     /* one batch */
   pc_film pending;  /* batches not yet taken for upload */
   bool pending_dirty;
+  /* what the built scene depends on */
+  char path[1200], root[1200];
+  int width, height;
+  pc_scene_defines defines;
 } job_ctx;
 
-static void ctx_free(job_ctx *c, pc_wrender *w) {
-  if (!c->loaded) return;
+/* The job's renderer (withdrawn from the loop's progress reads first) and films. */
+static void ctx_drop_films(job_ctx *c, pc_wrender *w) {
   uv_mutex_lock(&w->mu);
   w->rend = NULL;
   uv_mutex_unlock(&w->mu);
   pc_renderer_destroy(c->rend);
   pc_film_free(&c->work);
   pc_film_free(&c->pending);
+}
+
+static void ctx_free(job_ctx *c, pc_wrender *w) {
+  if (!c->loaded) return;
+  ctx_drop_films(c, w);
   pc_scene_free(&c->scene);
   c->loaded = false;
 }
 
+static bool same_scene(const job_ctx *c, const pc_render_settings *set, const char *path, const char *root) {
+  return c->loaded && strcmp(c->path, path) == 0 && strcmp(c->root, root) == 0 && c->width == set->width &&
+         c->height == set->height && c->defines.n == set->defines.n && c->defines.used == set->defines.used &&
+         memcmp(c->defines.buf, set->defines.buf, (size_t)set->defines.used) == 0;
+}
+
+/* The renderer and films for the job's settings (method, seed, depth, layers ...); the scene
+ * must be built. On failure the whole context is freed. */
+static int ctx_films(job_ctx *c, pc_wrender *w, const pc_render_settings *set, pc_err *e) {
+  int rc = pc_renderer_create(&c->scene, set, w->threads, &c->rend, e);
+  if (!rc && (rc = pc_film_init(&c->work, set->width, set->height, set->strategy_layers, e)) != 0)
+    pc_renderer_destroy(c->rend);
+  if (!rc && (rc = pc_film_init(&c->pending, set->width, set->height, set->strategy_layers, e)) != 0) {
+    pc_film_free(&c->work);
+    pc_renderer_destroy(c->rend);
+  }
+  if (rc) {
+    pc_scene_free(&c->scene);
+    c->loaded = false;
+    return rc;
+  }
+  c->loaded = true;
+  c->pending_dirty = false;
+  uv_mutex_lock(&w->mu);
+  w->rend = c->rend;
+  uv_mutex_unlock(&w->mu);
+  return 0;
+}
+
 static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
                     pc_err *e) {
+  if (same_scene(c, set, path, root)) {
+    ctx_drop_films(c, w); /* a new renderer and films over the built scene */
+    return ctx_films(c, w, set, e);
+  }
   ctx_free(c, w);
   memset(&c->scene, 0, sizeof c->scene);
+  snprintf(c->path, sizeof c->path, "%s", path);
+  snprintf(c->root, sizeof c->root, "%s", root);
+  c->width = set->width;
+  c->height = set->height;
+  c->defines = set->defines;
   /* The client checked the scene and showed its warnings; the worker loads the same files with
    * the same -D values and needs no warnings. */
   pc_scene_load_opts o = {.root = root, .defines = &set->defines};
@@ -58,20 +107,11 @@ static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, co
     pc_render_request_apply_scene(&req, &c->scene);
     rc = pc_scene_build(&c->scene, e);
   }
-  if (!rc) rc = pc_renderer_create(&c->scene, set, w->threads, &c->rend, e);
-  if (!rc) {
-    rc = pc_film_init(&c->work, set->width, set->height, set->strategy_layers, e);
-    if (!rc && (rc = pc_film_init(&c->pending, set->width, set->height, set->strategy_layers, e)) != 0)
-      pc_film_free(&c->work);
-    if (rc) pc_renderer_destroy(c->rend);
+  if (rc) {
+    pc_scene_free(&c->scene);
+    return rc;
   }
-  if (rc) { pc_scene_free(&c->scene); return rc; }
-  c->loaded = true;
-  c->pending_dirty = false;
-  uv_mutex_lock(&w->mu);
-  w->rend = c->rend;
-  uv_mutex_unlock(&w->mu);
-  return 0;
+  return ctx_films(c, w, set, e);
 }
 
 /* The loop asked for an upload: compresses what is pending (outside the lock: a 4K film takes

@@ -30,5 +30,6 @@ int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e
   if (n >= 3 && m[0] == 0xff && m[1] == 0xd8 && m[2] == 0xff)
     return pc_jpeg_read(path, srgb_to_linear, out, e);
   if (n >= 4 && memcmp(m, exr_magic, 4) == 0) return pc_exr_read_beauty(path, out, e);
-  return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG or OpenEXR file", path);
+  if ((n >= 7 && memcmp(m, "#?RADIA", 7) == 0) || (n >= 6 && memcmp(m, "#?RGBE", 6) == 0)) return pc_rgbe_read(path, out, e);
+  return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG, OpenEXR or Radiance RGBE file", path);
 }

@@ -17,8 +17,8 @@ typedef struct pc_image {
 
 void pc_image_free(pc_image *img);
 
-/* Reads a PNG, JPEG or EXR (chosen by content, not extension). 8-bit formats are converted
- * from sRGB to linear when `srgb_to_linear`; EXR is linear. For EXR the beauty R,G,B channels
+/* Reads a PNG, JPEG, EXR or Radiance RGBE .hdr (chosen by content, not extension). 8-bit formats
+ * are converted from sRGB to linear when `srgb_to_linear`; EXR and RGBE are linear. For EXR the beauty R,G,B channels
  * are read. */
 int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
 

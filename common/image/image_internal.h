@@ -11,6 +11,8 @@
 
 int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
 int pc_jpeg_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+/* Radiance RGBE (.hdr, "#?RADIANCE" or "#?RGBE"): linear. */
+int pc_rgbe_read(const char *path, pc_image *out, pc_err *e);
 /* The beauty R,G,B, or the first RGB triplet when the file has no plain R,G,B. */
 int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e);
 

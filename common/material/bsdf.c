@@ -8,10 +8,15 @@
 
 void pc_material_prepare(pc_material *m) {
   if (m->type == PC_MAT_PLASTIC || m->type == PC_MAT_ROUGHPLASTIC) pc_plastic_prepare(m);
+  if (m->type == PC_MAT_WARD) m->spec_sampling_weight = pc_spec_weight(m);
 }
 
 bool pc_bsdf_is_delta(const pc_material *m) {
-  return m->type == PC_MAT_CONDUCTOR || m->type == PC_MAT_DIELECTRIC;
+  return m->type == PC_MAT_CONDUCTOR || m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
+}
+
+static bool is_dielectric(const pc_material *m) {
+  return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
 }
 
 /* Both the geometric and the shading normal must agree on reflection vs transmission, else
@@ -21,10 +26,10 @@ static bool sides_agree(float so, float si, float go, float gi) {
   return (s > 0.f && g > 0.f) || (s < 0.f && g < 0.f);
 }
 
-/* Mitsuba's twosided wrapper turns the frame over when wo is behind it; the dielectric has its
- * own notion of both sides. */
+/* Mitsuba's twosided wrapper turns the frame over when wo is behind it; the dielectrics have
+ * their own notion of both sides. */
 static bool flips(const pc_material *m, float so) {
-  return m->twosided && m->type != PC_MAT_DIELECTRIC && so < 0.f;
+  return m->twosided && !is_dielectric(m) && so < 0.f;
 }
 
 /* |wo.ns||wi.ng| / (|wo.ng||wi.ns|): makes importance transport the adjoint of radiance
@@ -39,8 +44,11 @@ static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHCONDUCTOR: return pc_roughconductor_eval(c, wo, wi);
   case PC_MAT_PLASTIC: return pc_plastic_eval(c, wo, wi);
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_eval(c, wo, wi);
+  case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_eval(c, wo, wi);
+  case PC_MAT_WARD: return pc_ward_eval(c, wo, wi);
   case PC_MAT_CONDUCTOR:
-  case PC_MAT_DIELECTRIC: break;
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_THINDIELECTRIC: break;
   }
   return v3s(0.f);
 }
@@ -51,8 +59,11 @@ static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHCONDUCTOR: return pc_roughconductor_pdf(c, wo, wi);
   case PC_MAT_PLASTIC: return pc_plastic_pdf(c, wo, wi);
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_pdf(c, wo, wi);
+  case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_pdf(c, wo, wi);
+  case PC_MAT_WARD: return pc_ward_pdf(c, wo, wi);
   case PC_MAT_CONDUCTOR:
-  case PC_MAT_DIELECTRIC: break;
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_THINDIELECTRIC: break;
   }
   return 0.f;
 }
@@ -65,6 +76,9 @@ static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float
   case PC_MAT_PLASTIC: return pc_plastic_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_DIELECTRIC: return pc_dielectric_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_THINDIELECTRIC: return pc_thindielectric_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_WARD: return pc_ward_sample(c, wo, u0, u1, u2, s);
   }
   return false;
 }
@@ -201,8 +215,13 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
               v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)));
     break;
   case PC_MAT_DIELECTRIC:
+  case PC_MAT_ROUGHDIELECTRIC:
+  case PC_MAT_THINDIELECTRIC:
     q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)),
               v3_maxc(pc_slot_eval(&m->transmittance, texs, uv)));
+    break;
+  case PC_MAT_WARD: /* the two lobes add */
+    q = v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
     break;
   }
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;

@@ -1,5 +1,5 @@
 /* bsdf_conductor.c: Mitsuba's `conductor` (smooth mirror, delta lobe) and `roughconductor`
- * (GGX, visible-normal sampling). Shadowing is Mitsuba 0.6's separable Smith form
+ * (beckmann or GGX, microfacet.h). Shadowing is Mitsuba 0.6's separable Smith form
  * G = G1(wo, m) G1(wi, m); Fresnel is the exact conductor formula per RGB channel, times
  * specularReflectance. */
 #include "bsdf_lobes.h"
@@ -23,29 +23,30 @@ bool pc_conductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, floa
 vec3 pc_roughconductor_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
   const pc_material *m = c->m;
-  float alpha = pc_ggx_alpha(m->alpha);
+  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   vec3 h = v3_norm(v3_add(wo, wi));
-  float d = pc_ggx_d(alpha, h);
+  float d = pc_mf_d(&mf, h);
   if (d == 0.f) return v3s(0.f);
-  float g = pc_ggx_g1(alpha, wo, h) * pc_ggx_g1(alpha, wi, h);
+  float g = pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h);
   vec3 fr = pc_fresnel_conductor(v3_dot(wo, h), m->eta, m->k);
   return v3_scale(v3_mul(pc_tex(c, &m->specular), fr), d * g / (4.f * wo.z * wi.z));
 }
 
 float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
-  float alpha = pc_ggx_alpha(c->m->alpha);
+  pc_microfacet mf = pc_mf_make(c->m->distribution, c->m->alpha);
   vec3 h = v3_norm(v3_add(wo, wi));
   float dot = v3_dot(wo, h);
   if (!(dot > 0.f)) return 0.f;
   /* Jacobian of the reflection map h -> wi. */
-  return pc_ggx_pdf_visible(alpha, wo, h) / (4.f * dot);
+  return pc_mf_pdf(&mf, wo, h) / (4.f * dot);
 }
 
 bool pc_roughconductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   (void)u0;
   if (!(wo.z > 0.f)) return false;
-  vec3 h = pc_ggx_sample_visible(pc_ggx_alpha(c->m->alpha), wo, u1, u2);
+  pc_microfacet mf = pc_mf_make(c->m->distribution, c->m->alpha);
+  vec3 h = pc_mf_sample(&mf, wo, u1, u2);
   s->wi = v3_sub(v3_scale(h, 2.f * v3_dot(wo, h)), wo);
   s->is_delta = false;
   return s->wi.z > 0.f;

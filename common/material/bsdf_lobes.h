@@ -4,8 +4,9 @@
  * correction and the final finiteness guard.
  *
  * Lobe functions see local unit directions; opaque lobes return zeros unless both are above
- * the surface. eval and pdf cover non-delta lobes only, in radiance transport (every non-delta
- * lobe here is a reflection, so it is reciprocal and the same in both modes). */
+ * the surface. eval and pdf cover non-delta lobes only; reflection lobes are reciprocal and the
+ * same in both modes, refraction (roughdielectric) differs by the eta^2 of radiance transport
+ * (c->mode). */
 #ifndef PC_BSDF_LOBES_H
 #define PC_BSDF_LOBES_H
 
@@ -33,6 +34,20 @@ static inline vec3 pc_tex(const pc_lobe_ctx *c, const pc_tex_slot *s) {
   return pc_slot_eval(s, c->texs, c->uv);
 }
 
+/* The interface's relative index int/ext (1, an invisible interface, if it is not a number). */
+static inline float pc_rel_eta(const pc_material *m) {
+  float eta = m->int_ior / m->ext_ior;
+  return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
+}
+
+/* Mitsuba's specularSamplingWeight of plastic and ward: luminance of the average specular vs
+ * diffuse reflectance. A textured slot contributes its `value`, which the scene loader sets to
+ * the texture's average. */
+static inline float pc_spec_weight(const pc_material *m) {
+  float s = v3_luminance(m->specular.value), d = v3_luminance(m->reflectance.value);
+  return (s + d > 0.f && isfinite(s + d)) ? s / (s + d) : 0.5f;
+}
+
 /* Cosine-weighted hemisphere (Shirley-Chiu concentric map, as Mitsuba). */
 vec3 pc_sample_cosine_hemisphere(float u1, float u2);
 
@@ -54,5 +69,13 @@ bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, f
 void pc_plastic_prepare(pc_material *m);
 
 bool pc_dielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+bool pc_thindielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_ward_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_ward_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_ward_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
 #endif

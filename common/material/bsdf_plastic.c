@@ -1,5 +1,5 @@
 /* bsdf_plastic.c: Mitsuba's `plastic` (delta specular coating over a diffuse base with internal
- * scattering) and `roughplastic` (GGX coating; the diffuse base is attenuated by the rough
+ * scattering) and `roughplastic` (beckmann or GGX coating; the diffuse base is attenuated by the rough
  * interface's transmittance, tabulated here in pc_plastic_prepare instead of Mitsuba's shipped
  * data files). Lobe selection follows Mitsuba: the Fresnel (or rough) reflectance toward wo,
  * reweighted by spec_sampling_weight. */
@@ -8,11 +8,6 @@
 #include "bsdf_lobes.h"
 #include "fresnel.h"
 #include "microfacet.h"
-
-static float rel_eta(const pc_material *m) {
-  float eta = m->int_ior / m->ext_ior;
-  return (eta > 0.f && isfinite(eta)) ? eta : 1.f;
-}
 
 /* Mitsuba's reallocation of the specular-lobe probability. */
 static float spec_prob(const pc_material *m, float refl) {
@@ -33,20 +28,20 @@ static vec3 base_albedo(const pc_lobe_ctx *c, float fdr) {
 
 vec3 pc_plastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
-  float eta = rel_eta(c->m);
+  float eta = pc_rel_eta(c->m);
   float fi = pc_fresnel_dielectric(wo.z, eta, NULL), fo = pc_fresnel_dielectric(wi.z, eta, NULL);
   return v3_scale(base_albedo(c, c->m->fdr_int), (1.f - fi) * (1.f - fo) * PC_INV_PI / (eta * eta));
 }
 
 float pc_plastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
-  float ps = spec_prob(c->m, pc_fresnel_dielectric(wo.z, rel_eta(c->m), NULL));
+  float ps = spec_prob(c->m, pc_fresnel_dielectric(wo.z, pc_rel_eta(c->m), NULL));
   return (1.f - ps) * wi.z * PC_INV_PI;
 }
 
 bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   if (!(wo.z > 0.f)) return false;
-  float eta = rel_eta(c->m);
+  float eta = pc_rel_eta(c->m);
   float fi = pc_fresnel_dielectric(wo.z, eta, NULL);
   float ps = spec_prob(c->m, fi);
   if (u0 < ps) {
@@ -81,11 +76,12 @@ static float trans_in(const pc_material *m, float cos_theta) {
 vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
   const pc_material *m = c->m;
-  float eta = rel_eta(m), alpha = pc_ggx_alpha(m->alpha);
+  float eta = pc_rel_eta(m);
+  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   vec3 h = v3_norm(v3_add(wo, wi));
-  float spec = 0.f, d = pc_ggx_d(alpha, h);
+  float spec = 0.f, d = pc_mf_d(&mf, h);
   if (d > 0.f) {
-    float g = pc_ggx_g1(alpha, wo, h) * pc_ggx_g1(alpha, wi, h);
+    float g = pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h);
     spec = pc_fresnel_dielectric(v3_dot(wo, h), eta, NULL) * d * g / (4.f * wo.z * wi.z);
   }
   float diff = trans_in(m, wo.z) * trans_in(m, wi.z) * PC_INV_PI / (eta * eta);
@@ -99,7 +95,8 @@ float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   float ps = spec_prob(m, 1.f - trans_in(m, wo.z));
   vec3 h = v3_norm(v3_add(wo, wi));
   float dot = v3_dot(wo, h), spec = 0.f;
-  if (dot > 0.f) spec = pc_ggx_pdf_visible(pc_ggx_alpha(m->alpha), wo, h) / (4.f * dot);
+  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  if (dot > 0.f) spec = pc_mf_pdf(&mf, wo, h) / (4.f * dot);
   return ps * spec + (1.f - ps) * wi.z * PC_INV_PI;
 }
 
@@ -107,7 +104,8 @@ bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, f
   if (!(wo.z > 0.f)) return false;
   const pc_material *m = c->m;
   if (u0 < spec_prob(m, 1.f - trans_in(m, wo.z))) {
-    vec3 h = pc_ggx_sample_visible(pc_ggx_alpha(m->alpha), wo, u1, u2);
+    pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+    vec3 h = pc_mf_sample(&mf, wo, u1, u2);
     s->wi = v3_sub(v3_scale(h, 2.f * v3_dot(wo, h)), wo);
   } else {
     s->wi = pc_sample_cosine_hemisphere(u1, u2);
@@ -116,43 +114,44 @@ bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, f
   return s->wi.z > 0.f;
 }
 
-/* Transmittance of a rough dielectric interface (GGX, separable Smith) for light arriving at
+/* Transmittance of a rough dielectric interface (the material's distribution, separable Smith) for light arriving at
  * cos theta = mu, defined as Mitsuba's precomputed tables define it: the integral of the
  * roughdielectric transmission lobe, E[(1 - F(wo.m)) G1(wt, m)] over visible normals m with wt
  * the refracted direction. Energy lost to masking therefore counts as neither reflected nor
- * transmitted. Deterministic midpoint rule on the sampler's unit square. */
+ * transmitted. Deterministic midpoint rule on the sampler's unit square, each normal weighted
+ * by the visible-normal density over the sampler's (1 for GGX). */
 #define PC_RT_GRID 24
-static float rough_transmittance(float alpha, float eta, float mu) {
+static float rough_transmittance(const pc_microfacet *mf, float eta, float mu) {
   mu = fminf(fmaxf(mu, 1e-4f), 1.f);
   vec3 wo = v3(sqrtf(fmaxf(0.f, 1.f - mu * mu)), 0.f, mu);
   double sum = 0;
   for (int i = 0; i < PC_RT_GRID; i++)
     for (int j = 0; j < PC_RT_GRID; j++) {
-      vec3 h = pc_ggx_sample_visible(alpha, wo, (i + 0.5f) / PC_RT_GRID, (j + 0.5f) / PC_RT_GRID);
+      vec3 h = pc_mf_sample(mf, wo, (i + 0.5f) / PC_RT_GRID, (j + 0.5f) / PC_RT_GRID);
+      float pdf = pc_mf_pdf(mf, wo, h);
+      if (!(pdf > 0.f)) continue;
+      float weight = mf->type == PC_MF_GGX ? 1.f : pc_mf_visible(mf, wo, h) / pdf;
       float dot = v3_dot(wo, h), cos_t;
       float fr = pc_fresnel_dielectric(dot, eta, &cos_t);
       if (fr >= 1.f) continue;
       float scale = cos_t < 0.f ? 1.f / eta : eta;
       vec3 wt = v3_sub(v3_scale(h, dot * scale + cos_t), v3_scale(wo, scale));
-      if (wt.z < 0.f) sum += (1.f - fr) * pc_ggx_g1(alpha, wt, h);
+      if (wt.z < 0.f) sum += weight * (1.f - fr) * pc_mf_g1(mf, wt, h);
     }
   return (float)(sum / (PC_RT_GRID * PC_RT_GRID));
 }
 
 void pc_plastic_prepare(pc_material *m) {
-  float eta = rel_eta(m);
+  float eta = pc_rel_eta(m);
   m->fdr_int = pc_fresnel_diffuse_reflectance(1.f / eta);
-  /* Mitsuba: luminance of the average specular vs diffuse reflectance. A textured slot
-   * contributes its `value`, which the scene loader sets to the texture's average. */
-  float s = v3_luminance(m->specular.value), d = v3_luminance(m->reflectance.value);
-  m->spec_sampling_weight = (s + d > 0.f && isfinite(s + d)) ? s / (s + d) : 0.5f;
+  m->spec_sampling_weight = pc_spec_weight(m);
   if (m->type != PC_MAT_ROUGHPLASTIC) return;
-  float alpha = pc_ggx_alpha(m->alpha);
+  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)
-    m->rough_trans_in[i] = rough_transmittance(alpha, eta, table_cos(i));
+    m->rough_trans_in[i] = rough_transmittance(&mf, eta, table_cos(i));
   /* Cosine-weighted average from inside: mean of T(sqrt(x)) for x uniform in [0, 1]. */
   double avg = 0;
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)
-    avg += rough_transmittance(alpha, 1.f / eta, sqrtf((i + 0.5f) / PC_PLASTIC_TABLE));
+    avg += rough_transmittance(&mf, 1.f / eta, sqrtf((i + 0.5f) / PC_PLASTIC_TABLE));
   m->rough_trans_avg_int = (float)(avg / PC_PLASTIC_TABLE);
 }

@@ -1,25 +1,38 @@
-/* microfacet.c: GGX distribution, Smith masking and visible-normal sampling. */
+/* microfacet.c: Beckmann and GGX distributions, Smith masking and normal sampling. */
 #include "microfacet.h"
 
-float pc_ggx_d(float alpha, vec3 m) {
+float pc_mf_d(const pc_microfacet *d, vec3 m) {
   if (!(m.z > 0.f)) return 0.f;
-  float a2 = alpha * alpha, c2 = m.z * m.z;
-  float root = c2 + (m.x * m.x + m.y * m.y) / a2;
-  float d = 1.f / (PC_PI * a2 * root * root);
+  float a2 = d->alpha * d->alpha, c2 = m.z * m.z, s2 = m.x * m.x + m.y * m.y;
+  float r;
+  if (d->type == PC_MF_BECKMANN) {
+    r = expf(-s2 / (a2 * c2)) / (PC_PI * a2 * c2 * c2);
+  } else {
+    float root = c2 + s2 / a2;
+    r = 1.f / (PC_PI * a2 * root * root);
+  }
   /* Mitsuba flushes negligible values to zero; it also removes overflow. */
-  return (isfinite(d) && d * m.z >= 1e-20f) ? d : 0.f;
+  return (isfinite(r) && r * m.z >= 1e-20f) ? r : 0.f;
 }
 
-float pc_ggx_g1(float alpha, vec3 v, vec3 m) {
+float pc_mf_g1(const pc_microfacet *d, vec3 v, vec3 m) {
   if (!(v3_dot(v, m) * v.z > 0.f)) return 0.f;
   float sin2 = v.x * v.x + v.y * v.y;
   if (sin2 == 0.f) return 1.f;
-  float at2 = alpha * alpha * sin2 / (v.z * v.z); /* (alpha tan theta)^2 */
-  float g = 2.f / (1.f + sqrtf(1.f + at2));
+  float tan_theta = sqrtf(sin2) / fabsf(v.z);
+  float g;
+  if (d->type == PC_MF_BECKMANN) {
+    float a = 1.f / (d->alpha * tan_theta);
+    if (a >= 1.6f) return 1.f;
+    g = (3.535f * a + 2.181f * a * a) / (1.f + 2.276f * a + 2.577f * a * a);
+  } else {
+    float root = d->alpha * tan_theta;
+    g = 2.f / (1.f + sqrtf(1.f + root * root));
+  }
   return isfinite(g) ? g : 0.f;
 }
 
-vec3 pc_ggx_sample_visible(float alpha, vec3 v, float u1, float u2) {
+static vec3 ggx_sample_visible(float alpha, vec3 v, float u1, float u2) {
   /* Stretch to the hemisphere configuration of unit roughness. */
   vec3 vh = v3_norm(v3(alpha * v.x, alpha * v.y, v.z));
   float len2 = vh.x * vh.x + vh.y * vh.y;
@@ -35,9 +48,23 @@ vec3 pc_ggx_sample_visible(float alpha, vec3 v, float u1, float u2) {
   return v3_norm(v3(alpha * nh.x, alpha * nh.y, fmaxf(0.f, nh.z)));
 }
 
-float pc_ggx_pdf_visible(float alpha, vec3 v, vec3 m) {
+vec3 pc_mf_sample(const pc_microfacet *d, vec3 v, float u1, float u2) {
+  if (d->type == PC_MF_GGX) return ggx_sample_visible(d->alpha, v, u1, u2);
+  /* Beckmann: tan^2 theta = -alpha^2 log(1 - u1), phi uniform (Mitsuba's sampleAll). */
+  float tan2 = -d->alpha * d->alpha * logf(fmaxf(1.f - u1, 1e-30f));
+  float c = 1.f / sqrtf(1.f + tan2), s = sqrtf(fmaxf(0.f, 1.f - c * c));
+  float phi = 2.f * PC_PI * u2;
+  return v3(s * cosf(phi), s * sinf(phi), c);
+}
+
+float pc_mf_visible(const pc_microfacet *d, vec3 v, vec3 m) {
   if (!(v.z > 0.f)) return 0.f;
   float dot = v3_dot(v, m);
   if (!(dot > 0.f)) return 0.f;
-  return pc_ggx_g1(alpha, v, m) * dot * pc_ggx_d(alpha, m) / v.z;
+  return pc_mf_g1(d, v, m) * dot * pc_mf_d(d, m) / v.z;
+}
+
+float pc_mf_pdf(const pc_microfacet *d, vec3 v, vec3 m) {
+  if (d->type == PC_MF_GGX) return pc_mf_visible(d, v, m);
+  return pc_mf_d(d, m) * fmaxf(m.z, 0.f);
 }

@@ -1,26 +1,37 @@
-/* microfacet.h: the isotropic GGX microfacet distribution in a local frame (normal = +z):
- * D, Smith's masking G1 (Mitsuba 0.6's form, with its back-facing check) and Heitz's 2018
- * sampling of the distribution of visible normals. */
+/* microfacet.h: the isotropic microfacet distributions of Mitsuba 0.6 (beckmann, its default,
+ * and ggx) in a local frame (normal = +z): D, Smith's masking G1 (Mitsuba's forms, with its
+ * back-facing check: the exact one for GGX, Walter's rational approximation for Beckmann), and
+ * sampling of microfacet normals with its density: GGX samples the distribution of visible
+ * normals (Heitz 2018), Beckmann samples D(m) cos(theta_m) (Mitsuba's sampleVisible=false
+ * path; the choice changes noise, not the image). */
 #ifndef PC_MICROFACET_H
 #define PC_MICROFACET_H
 
 #include "vecmath.h"
 
-/* Mitsuba clamps roughness to this so that D stays finite. */
-#define PC_GGX_MIN_ALPHA 1e-4f
+typedef enum { PC_MF_GGX = 0, PC_MF_BECKMANN = 1 } pc_mf_type;
 
-static inline float pc_ggx_alpha(float alpha) {
-  return alpha > PC_GGX_MIN_ALPHA ? alpha : PC_GGX_MIN_ALPHA;
+/* Mitsuba clamps roughness to this so that D stays finite. */
+#define PC_MF_MIN_ALPHA 1e-4f
+
+typedef struct pc_microfacet {
+  pc_mf_type type;
+  float alpha; /* clamped to PC_MF_MIN_ALPHA */
+} pc_microfacet;
+
+static inline pc_microfacet pc_mf_make(pc_mf_type type, float alpha) {
+  return (pc_microfacet){type, alpha > PC_MF_MIN_ALPHA ? alpha : PC_MF_MIN_ALPHA};
 }
 
 /* Normal distribution D(m); 0 for m below the horizon. */
-float pc_ggx_d(float alpha, vec3 m);
+float pc_mf_d(const pc_microfacet *d, vec3 m);
 /* Smith masking of direction v for microfacet normal m; 0 when v sees m's back. */
-float pc_ggx_g1(float alpha, vec3 v, vec3 m);
-/* A microfacet normal distributed as the normals visible from v (v.z > 0):
- * D_v(m) = G1(v, m) max(0, v.m) D(m) / v.z. */
-vec3 pc_ggx_sample_visible(float alpha, vec3 v, float u1, float u2);
-/* Density of pc_ggx_sample_visible with respect to the solid angle of m. */
-float pc_ggx_pdf_visible(float alpha, vec3 v, vec3 m);
+float pc_mf_g1(const pc_microfacet *d, vec3 v, vec3 m);
+/* A microfacet normal for the direction v (v.z > 0), distributed with density pc_mf_pdf. */
+vec3 pc_mf_sample(const pc_microfacet *d, vec3 v, float u1, float u2);
+/* Density of pc_mf_sample(v) with respect to the solid angle of m. */
+float pc_mf_pdf(const pc_microfacet *d, vec3 v, vec3 m);
+/* The distribution of normals visible from v: G1(v, m) max(0, v.m) D(m) / v.z. */
+float pc_mf_visible(const pc_microfacet *d, vec3 v, vec3 m);
 
 #endif

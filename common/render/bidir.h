@@ -30,9 +30,14 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
 float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light);
 
 /* A light vertex for next-event estimation (s=1) and for the start of light sub-paths: a point
- * on a light chosen by power, uniform by area, from four uniform numbers. */
+ * on a light chosen by power, uniform by area, from four uniform numbers; for the environment a
+ * PC_VTX_ENV vertex, its direction sampled by pc_env_sample. */
 void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0, float u1, float u2, float u3,
                             pc_path_vertex *out);
+
+/* Area density of the first surface vertex of an environment light path, per unit of its
+ * cosine: the uniform density on the disk of radius env_radius. */
+float pc_env_disk_pdf(const pc_scene *s);
 
 typedef struct pc_connection {
   vec3 f;          /* unweighted contribution (path throughput / pdf) */

@@ -48,9 +48,16 @@ void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_pa
 float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light) {
   const pc_light *l = &s->lights[light];
   /* The light side would have sampled v as x_0 (choice by power, point by area) and emitted
-   * toward v's predecessor with the cosine-weighted direction pdf. */
-  float p_area = pc_light_choose_pdf(s, light) / l->area;
-  float pdf_emit = fmaxf(0.f, v3_dot(v->ng, v->wo)) * PC_INV_PI;
+   * toward v's predecessor with the cosine-weighted direction pdf; for the environment, v's
+   * direction by pc_env_sample and v's predecessor from the disk. */
+  float p_area, pdf_emit;
+  if (v->kind == PC_VTX_ENV) {
+    p_area = pc_light_choose_pdf(s, light) * pc_env_pdf(l, v3_neg(v->wo));
+    pdf_emit = pc_env_disk_pdf(s);
+  } else {
+    p_area = pc_light_choose_pdf(s, light) / l->area;
+    pdf_emit = fmaxf(0.f, v3_dot(v->ng, v->wo)) * PC_INV_PI;
+  }
   int t = v->depth;
   float se = pc_mis_side(n, v, p_area, pdf_emit, pc_mis_count(n, 1, t - 1));
   return weight_of(n, 0, t, 0.f, se);
@@ -63,6 +70,8 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
 
 bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev) {
   c->rays++;
+  /* A vertex on the environment is at infinity in direction -lv->wo from the eye vertex. */
+  if (lv->kind == PC_VTX_ENV) return pc_scene_escapes(c->scene, ev->p, ev->ng, v3_neg(lv->wo));
   return pc_scene_visible(c->scene, lv->p, lv->ng, ev->p, ev->ng);
 }
 
@@ -70,17 +79,29 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
                            bool weighted, pc_connection *out) {
   if (lv->delta || ev->delta) return false;
   const pc_scene *s = c->scene;
-  vec3 d = v3_sub(ev->p, lv->p);
-  float d2 = v3_len2(d);
-  if (!(d2 > 0.f)) return false;
-  vec3 w = v3_scale(d, 1.f / sqrtf(d2)); /* light vertex -> eye vertex */
+  bool env = lv->kind == PC_VTX_ENV;
+  vec3 w; /* light vertex -> eye vertex */
+  float d2;
+  if (env) {
+    w = lv->wo; /* at infinity: solid-angle measure, d2 = 1 (path_vertex.h) */
+    d2 = 1.f;
+  } else {
+    vec3 d = v3_sub(ev->p, lv->p);
+    d2 = v3_len2(d);
+    if (!(d2 > 0.f)) return false;
+    w = v3_scale(d, 1.f / sqrtf(d2));
+  }
   vec3 we = v3_neg(w);
 
   /* Light end: emission or importance-transport BSDF, times the cosine; pdfs of continuing the
    * light sub-path toward ev (fwd) and of the reverse (toward lv's predecessor, given w). */
   vec3 fl;
   float cos_l, pdf_l_fwd, pdf_l_rev = 0.f;
-  if (lv->kind == PC_VTX_LIGHT) {
+  if (env) {
+    fl = v3s(1.f);
+    cos_l = 1.f;
+    pdf_l_fwd = pc_env_disk_pdf(s);
+  } else if (lv->kind == PC_VTX_LIGHT) {
     const pc_light *l = &s->lights[lv->light];
     if (l->type == PC_LIGHT_POINT) {
       fl = v3s(1.f);

@@ -23,6 +23,60 @@ static float nee_pdf(const pc_scene *s, int li, vec3 from, vec3 p, vec3 n) {
   return pc_light_choose_pdf(s, li) * (1.f / l->area) * d2 / cosl;
 }
 
+/* Next-event estimation at hit h (s=1): one light sample, MIS-weighted against BSDF sampling
+ * (whose pdf includes the continuation q); the weighted contribution before the path's
+ * throughput, zero when there is none. */
+static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading *sh, const pc_hit *h, vec3 wo, float q) {
+  const pc_scene *s = c->scene;
+  const pc_render_settings *set = c->set;
+  float pick;
+  int li = pc_light_choose(s, pc_rng_f(rng), &pick);
+  const pc_light *l = &s->lights[li];
+  float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
+  vec3 wi, le, f;
+  float pl; /* solid-angle pdf of wi; 0 for a point light (delta) */
+  float geo = 1.f; /* point light: 1 / d^2 */
+  bool visible;
+  if (l->type == PC_LIGHT_ENV) {
+    wi = pc_env_sample(l, u1, u2, &pl);
+    pl *= pick;
+    if (!(pl > 0.f)) return v3s(0.f);
+    le = pc_env_le(l, wi);
+    f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
+    if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
+    c->rays++;
+    visible = pc_scene_escapes(s, h->p, h->ng, wi);
+  } else {
+    pc_light_point lp;
+    pc_light_sample_point(s, l, u0, u1, u2, &lp);
+    vec3 to = v3_sub(lp.p, h->p);
+    float d2 = v3_len2(to);
+    if (!(d2 > 0.f)) return v3s(0.f);
+    wi = v3_scale(to, 1.f / sqrtf(d2));
+    le = pc_light_le(l, lp.n, v3_neg(wi));
+    if (l->type == PC_LIGHT_POINT) {
+      pl = 0.f;
+      geo = 1.f / (d2 * pick);
+    } else {
+      float cosl = v3_absdot(lp.n, wi);
+      pl = pick * lp.pdf_area * d2 / cosl;
+    }
+    f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
+    if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
+    c->rays++;
+    visible = pc_scene_visible(s, h->p, h->ng, lp.p, lp.n);
+  }
+  if (!visible) return v3s(0.f);
+  float cosi = v3_absdot(wi, sh->sh.n), w = 1.f;
+  if (pl > 0.f) {
+    float pb = pc_bsdf_pdf(m, s->textures, sh, wo, wi) * q;
+    float a = pc_mis_term(set, pl), b = pc_mis_term(set, pb);
+    w = a / (a + b);
+    geo = 1.f / pl;
+  }
+  return v3_scale(v3_mul(f, le), cosi * geo * w);
+}
+
 void pc_pt_pixel(pc_tctx *c, int x, int y) {
   const pc_scene *s = c->scene;
   const pc_render_settings *set = c->set;
@@ -37,7 +91,21 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
   for (int depth = 1; depth <= c->max_segments; depth++) {
     pc_hit h;
     c->rays++;
-    if (!pc_scene_intersect(s, o, d, INFINITY, &h)) break;
+    if (!pc_scene_intersect(s, o, d, INFINITY, &h)) {
+      /* The environment: NEE would have sampled this direction with pick * pdf. */
+      if (s->env_light >= 0) {
+        const pc_light *l = &s->lights[s->env_light];
+        vec3 dn = v3_norm(d);
+        vec3 le = pc_env_le(l, dn);
+        float w = 1.f;
+        if (!prev_delta) {
+          float a = pc_mis_term(set, prev_pdf), b = pc_mis_term(set, pc_light_choose_pdf(s, s->env_light) * pc_env_pdf(l, dn));
+          w = a / (a + b);
+        }
+        if (!v3_is_zero(le)) add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
+      }
+      break;
+    }
     const pc_shape *shape = &s->shapes[h.shape];
     vec3 wo = v3_neg(d);
     if (shape->light >= 0) {
@@ -58,40 +126,8 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
     float q = pc_bsdf_continuation(m, s->textures, &sh);
 
     if (!pc_bsdf_is_delta(m)) {
-      float pick;
-      int li = pc_light_choose(s, pc_rng_f(&rng), &pick);
-      const pc_light *l = &s->lights[li];
-      pc_light_point lp;
-      float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng);
-      pc_light_sample_point(s, l, u0, u1, u2, &lp);
-      vec3 to = v3_sub(lp.p, h.p);
-      float d2 = v3_len2(to);
-      if (d2 > 0.f) {
-        vec3 wi = v3_scale(to, 1.f / sqrtf(d2));
-        vec3 le = pc_light_le(l, lp.n, v3_neg(wi));
-        if (!v3_is_zero(le)) {
-          vec3 f = pc_bsdf_eval(m, s->textures, &sh, wo, wi, PC_RADIANCE);
-          if (!v3_is_zero(f)) {
-            c->rays++;
-            if (pc_scene_visible(s, h.p, h.ng, lp.p, lp.n)) {
-              float cosi = v3_absdot(wi, sh.sh.n);
-              vec3 contrib;
-              float w = 1.f;
-              if (l->type == PC_LIGHT_POINT) {
-                contrib = v3_scale(v3_mul(f, le), cosi / (d2 * pick));
-              } else {
-                float cosl = v3_absdot(lp.n, wi);
-                float pl = pick * lp.pdf_area * d2 / cosl;
-                float pb = pc_bsdf_pdf(m, s->textures, &sh, wo, wi) * q;
-                float a = pc_mis_term(set, pl), b = pc_mis_term(set, pb);
-                w = a / (a + b);
-                contrib = v3_scale(v3_mul(f, le), cosi / pl);
-              }
-              add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_scale(v3_mul(beta, contrib), w));
-            }
-          }
-        }
-      }
+      vec3 v = nee(c, &rng, m, &sh, &h, wo, q);
+      if (!v3_is_zero(v)) add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_mul(beta, v));
     }
 
     if (!(q > 0.f) || pc_rng_f(&rng) >= q) break;

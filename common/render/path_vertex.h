@@ -17,7 +17,14 @@
  * lobes cancel between strategies (Veach); a strategy connecting at a delta vertex has pdf 0,
  * so sampling through a delta lobe zeroes mis_near and drops the previous mis_near from mis_far.
  * The camera (pinhole) and point lights cannot be hit: they pass cos_out = 0, which zeroes the
- * terms of the strategies that would need to hit them. */
+ * terms of the strategies that would need to hit them.
+ *
+ * The environment is a vertex at infinity (PC_VTX_ENV; pbrt-v3's treatment of infinite lights
+ * in BDPT): its pdfs from both sides are per unit solid angle of its direction, never converted
+ * to area (d2 = 1 and no cosine at it); the surface vertex a light path from it reaches first has
+ * the area pdf of the disk the path started on, times that vertex's cosine. So an environment
+ * vertex extends and connects with d2 = 1, cos 1 at its end, and pdf_fwd = 1 / (pi R^2) for the
+ * disk of radius R (scene.h env_radius). */
 #ifndef PC_PATH_VERTEX_H
 #define PC_PATH_VERTEX_H
 
@@ -26,7 +33,7 @@
 #include "bsdf.h"
 #include "vecmath.h"
 
-typedef enum { PC_VTX_CAMERA, PC_VTX_LIGHT, PC_VTX_SURFACE } pc_vertex_kind;
+typedef enum { PC_VTX_CAMERA, PC_VTX_LIGHT, PC_VTX_SURFACE, PC_VTX_ENV } pc_vertex_kind;
 
 /* Per-iteration sample counts of the strategy classes, and the heuristic. */
 typedef struct pc_mis_counts {
@@ -40,11 +47,12 @@ typedef struct pc_path_vertex {
   vec3 p;
   vec3 ng;         /* geometric normal (zero for the camera and point lights) */
   pc_shading sh;   /* surfaces */
-  vec3 wo;         /* unit direction toward the previous vertex of the sub-path (surfaces) */
+  vec3 wo;         /* unit direction toward the previous vertex of the sub-path (surfaces);
+                      PC_VTX_ENV: the direction its light travels into the scene */
   vec3 beta;       /* sub-path contribution / pdf up to this vertex, excluding its own scattering;
                       light vertex: Le (or intensity) / (choice pdf * area pdf) */
   int material;    /* surfaces */
-  int light;       /* PC_VTX_LIGHT: index of the light */
+  int light;       /* PC_VTX_LIGHT, PC_VTX_ENV: index of the light */
   int depth;       /* s or t of a connection ending here */
   float q;         /* Russian-roulette continuation probability (surfaces) */
   bool delta;      /* every lobe is a Dirac delta: never a connection endpoint */

@@ -114,6 +114,7 @@ static int gather_paths(pc_pcbpt *p, pc_pool *pool, int n, pc_pool_fn fn, pc_pat
   if (!reserve_vertices(out, cap, 0, total)) return pc_errf(e, PC_ENOMEM, "PCBPT: out of memory for %d path vertices", total);
   for (int j = 0; j < n; j++) {
     const pc_pcbpt_slot *sl = &p->slots[j];
+    if (sl->count == 0) continue; /* its thread's buffer may never have been allocated */
     memcpy(*out + *count, p->tbuf[sl->thread].v + sl->offset, (size_t)sl->count * sizeof **out);
     *count += sl->count;
   }

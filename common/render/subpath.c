@@ -24,23 +24,40 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     vec3 o = v3_is_zero(prev->ng) ? prev->p : pc_offset_origin(s, prev->p, prev->ng, dir);
     pc_hit h;
     c->rays++;
-    if (!pc_scene_intersect(s, o, dir, INFINITY, &h)) break;
-    /* The ray left from an offset origin: the MIS pdfs and the vertex's wo use the direction
-     * between the stored vertices, as every connection to them does. */
-    vec3 e = v3_sub(h.p, prev->p);
-    float d2 = v3_len2(e);
-    if (!(d2 > 0.f)) break;
-    vec3 da = v3_scale(e, 1.f / sqrtf(d2));
-    float cos_in = v3_absdot(h.ng, da);
+    bool escaped = !pc_scene_intersect(s, o, dir, INFINITY, &h);
+    /* An eye ray that leaves the scene reaches the environment, a vertex at infinity. */
+    if (escaped && (light_side || !hit || s->env_light < 0)) break;
+    vec3 da;
+    float d2, cos_in;
+    if (escaped || prev->kind == PC_VTX_ENV) {
+      /* Solid-angle measure at the environment's end of the edge (path_vertex.h). */
+      da = v3_norm(dir);
+      d2 = 1.f;
+      cos_in = escaped ? 1.f : v3_absdot(h.ng, da);
+    } else {
+      /* The ray left from an offset origin: the MIS pdfs and the vertex's wo use the direction
+       * between the stored vertices, as every connection to them does. */
+      vec3 e = v3_sub(h.p, prev->p);
+      d2 = v3_len2(e);
+      if (!(d2 > 0.f)) break;
+      da = v3_scale(e, 1.f / sqrtf(d2));
+      cos_in = v3_absdot(h.ng, da);
+    }
     /* A grazing hit has no usable area pdf (its reverse strategies would divide by ~0). */
     if (!(cos_in > 1e-6f)) break;
     if (prev->kind == PC_VTX_SURFACE) {
       cos_out = v3_absdot(prev->ng, da);
       if (!delta) {
         const pc_material *pm = &s->materials[prev->material];
-        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pdf_fwd, &pdf_rev);
-        pdf_fwd *= prev->q;
-        pdf_rev *= prev->q;
+        float pf, pr;
+        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pf, &pr);
+        /* The offset origin turns the edge by about eps / distance. A lobe narrower than that
+         * (a near-specular rough surface, e.g. roughdielectric alpha 1e-4) would find its own
+         * sample impossible along the edge and lose the path: it keeps the sampled pdfs. */
+        if (pf * prev->q >= 0.5f * pdf_fwd) {
+          pdf_fwd = pf * prev->q;
+          pdf_rev = pr * prev->q;
+        }
         if (!(pdf_fwd > 0.f)) break;
       }
     } else if (prev->kind == PC_VTX_LIGHT && cos_out > 0.f) {
@@ -48,9 +65,19 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
       pdf_fwd = cos_out * PC_INV_PI;
       if (!(pdf_fwd > 0.f)) break;
     }
+    pc_path_vertex *cur = &v[nv];
+    if (escaped) {
+      /* Reported but not kept: the environment is no connection endpoint. */
+      const pc_light *l = &s->lights[s->env_light];
+      *cur = (pc_path_vertex){.kind = PC_VTX_ENV, .p = prev->p, .wo = v3_neg(da), .beta = beta, .material = -1,
+                              .light = s->env_light, .depth = nv + 1, .q = 1.f};
+      pc_mis_extend(mc, prev, light_side, cur, pdf_fwd, pdf_rev, delta, cos_out, cos_in, d2);
+      vec3 le = pc_env_le(l, da);
+      if (!v3_is_zero(le)) hit(c, user, cur, cur->light, le);
+      break;
+    }
     const pc_shape *shape = &s->shapes[h.shape];
     const pc_material *m = &s->materials[shape->material];
-    pc_path_vertex *cur = &v[nv];
     cur->kind = PC_VTX_SURFACE;
     cur->p = h.p;
     cur->ng = h.ng;
@@ -87,11 +114,32 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
   return nv;
 }
 
+float pc_env_disk_pdf(const pc_scene *s) { return 1.f / (PC_PI * s->env_radius * s->env_radius); }
+
 void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0, float u1, float u2, float u3,
                             pc_path_vertex *out) {
   float pick;
   int li = pc_light_choose(s, u0, &pick);
   const pc_light *l = &s->lights[li];
+  out->material = -1;
+  out->light = li;
+  out->depth = 1;
+  out->q = 1.f;
+  out->delta = false;
+  out->mis_far = 0.f;
+  if (l->type == PC_LIGHT_ENV) {
+    /* A direction, at infinity: its density is per unit solid angle (path_vertex.h). */
+    float pdf;
+    vec3 d = pc_env_sample(l, u1, u2, &pdf);
+    float pa = pick * pdf;
+    out->kind = PC_VTX_ENV;
+    out->p = s->scene_center;
+    out->ng = v3s(0.f);
+    out->wo = v3_neg(d);
+    out->beta = pa > 0.f ? v3_scale(pc_env_le(l, d), 1.f / pa) : v3s(0.f);
+    out->mis_near = pa > 0.f ? pc_mis(n, 1.f / pa) : 0.f;
+    return;
+  }
   pc_light_point lp;
   pc_light_sample_point(s, l, u1, u2, u3, &lp);
   float pa = pick * lp.pdf_area; /* area pdf (point lights: the choice, the delta cancels) */
@@ -100,13 +148,24 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   out->ng = lp.n;
   out->wo = v3s(0.f);
   out->beta = v3_scale(l->type == PC_LIGHT_POINT ? l->intensity : l->radiance, 1.f / pa);
-  out->material = -1;
-  out->light = li;
-  out->depth = 1;
-  out->q = 1.f;
-  out->delta = false;
   out->mis_near = pc_mis(n, 1.f / pa);
-  out->mis_far = 0.f;
+}
+
+/* A light sub-path from the environment: the direction of v[0], from a uniform point of the
+ * disk of radius R perpendicular to it, centred on the bounding sphere's tangent plane behind
+ * the scene (pbrt-v3's infinite lights). */
+static int env_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, pc_path_vertex *v) {
+  const pc_scene *s = c->scene;
+  vec3 w = v[0].wo;
+  float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng);
+  if (v3_is_zero(v[0].beta) || c->max_segments < 2) return 1;
+  float r = sqrtf(u0) * s->env_radius, phi = 2.f * PC_PI * u1;
+  frame f = frame_from_normal(w);
+  vec3 disk = v3_add(v3_scale(f.s, r * cosf(phi)), v3_scale(f.t, r * sinf(phi)));
+  v[0].p = v3_add(v3_madd(s->scene_center, w, -s->env_radius), disk);
+  float pdf_pos = pc_env_disk_pdf(s);
+  vec3 beta = v3_scale(v[0].beta, 1.f / pdf_pos);
+  return walk(c, n, rng, v, 1, c->max_segments, true, w, beta, pdf_pos, 0.f, false, 1.f, NULL, NULL);
 }
 
 int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path_vertex *v) {
@@ -114,6 +173,7 @@ int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path
   pc_rng rng = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_LIGHT, index);
   float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng), u3 = pc_rng_f(&rng);
   pc_light_vertex_sample(s, n, u0, u1, u2, u3, &v[0]);
+  if (v[0].kind == PC_VTX_ENV) return env_subpath(c, n, &rng, v);
   const pc_light *l = &s->lights[v[0].light];
   float pdf_dir;
   u0 = pc_rng_f(&rng);

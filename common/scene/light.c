@@ -4,9 +4,7 @@
 
 #include "scene.h"
 
-static int cdf_find(const float *cdf, int n, float u) {
-  /* Smallest i with cdf[i+1] > u, so zero-width entries are never chosen; u at or past the
-   * total (float rounding) falls back to the last entry of non-zero width. */
+int pc_cdf_find(const float *cdf, int n, float u) {
   int lo = 0, hi = n - 1;
   while (lo < hi) {
     int mid = (lo + hi) / 2;
@@ -20,7 +18,7 @@ static int cdf_find(const float *cdf, int n, float u) {
 int pc_light_choose(const pc_scene *s, float u, float *pdf) {
   int n = s->nlights;
   float total = s->light_cdf[n];
-  int i = cdf_find(s->light_cdf, n, u * total);
+  int i = pc_cdf_find(s->light_cdf, n, u * total);
   *pdf = (s->light_cdf[i + 1] - s->light_cdf[i]) / total;
   return i;
 }
@@ -53,7 +51,7 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
     return;
   }
   float target = u0 * l->tri_cdf[l->ntris];
-  int t = cdf_find(l->tri_cdf, (int)l->ntris, target);
+  int t = pc_cdf_find(l->tri_cdf, (int)l->ntris, target);
   const pc_mesh *m = &sh->mesh;
   const uint32_t *ix = m->idx + 3 * (size_t)t;
   vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];

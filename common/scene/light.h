@@ -1,4 +1,5 @@
-/* light.h: emitters (area lights on any shape, point lights), the power-proportional choice
+/* light.h: emitters (area lights on any shape, point lights, and the environment: Mitsuba's
+ * `constant` and lat-long `envmap`, at most one per scene), the power-proportional choice
  * among them, and every sampling routine and pdf the integrators need: sampling a point toward
  * a receiver (next-event estimation), sampling an emitted ray (light sub-paths), and the pdfs
  * of both for MIS. Area lights emit on the front side of their surface only (Mitsuba). */
@@ -8,9 +9,11 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "error.h"
+#include "image.h"
 #include "vecmath.h"
 
-typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT } pc_light_type;
+typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT, PC_LIGHT_ENV } pc_light_type;
 
 typedef struct pc_light {
   pc_light_type type;
@@ -23,6 +26,14 @@ typedef struct pc_light {
   float *tri_cdf;     /* ntris+1 entries, area CDF over the shape's triangles */
   uint32_t ntris;
   float power;        /* luminance of emitted flux, for light selection */
+  /* env: radiance arriving from direction d (pointing away from the scene) is
+   * radiance * scale * image(lat-long of d in env_frame); no image for `constant`. */
+  pc_image env_img;
+  float env_scale;
+  frame env_frame;    /* the emitter's toWorld rotation: its local x, y, z axes in world space */
+  float *env_row_cdf; /* h+1: rows by luminance times sin(theta) (Mitsuba's envmap tables) */
+  float *env_col_cdf; /* h*(w+1): columns by luminance within each row */
+  float env_norm;     /* pdf of pixel (x,y) per unit solid angle times sin(theta): lum * row weight * norm */
   float sampling_weight; /* Mitsuba's samplingWeight: scales power in the choice (0 is read as 1) */
 } pc_light;
 
@@ -37,6 +48,10 @@ typedef struct pc_light_point {
 
 /* Chooses a light proportionally to power; returns its index and sets *pdf. */
 int pc_light_choose(const struct pc_scene *s, float u, float *pdf);
+/* In a cumulative table cdf[0..n] (cdf[0] = 0): the smallest i with cdf[i+1] > u, so
+ * zero-width entries are never chosen; u at or past the total (float rounding) falls back to
+ * the last entry of non-zero width. */
+int pc_cdf_find(const float *cdf, int n, float u);
 float pc_light_choose_pdf(const struct pc_scene *s, int light);
 
 /* Uniform point on the light by area. */
@@ -49,5 +64,16 @@ vec3 pc_light_le(const pc_light *l, vec3 n, vec3 w);
  * (point). pdf is solid-angle. */
 vec3 pc_light_sample_dir(const pc_light *l, vec3 n, float u0, float u1, float *pdf_dir);
 float pc_light_pdf_dir(const pc_light *l, vec3 n, vec3 w);
+
+/* The environment (light_env.c). Directions d point from the scene toward the environment;
+ * light arriving from d travels along -d. Builds the sampling tables (envmap) and the power
+ * for a scene of bounding radius `radius`; "what" names the emitter in messages. */
+int pc_env_prepare(pc_light *l, float radius, const char *what, pc_err *e);
+void pc_env_free(pc_light *l);
+vec3 pc_env_le(const pc_light *l, vec3 d);
+/* Samples d by the luminance of the environment (uniformly over the sphere for `constant`);
+ * pdf per unit solid angle. */
+vec3 pc_env_sample(const pc_light *l, float u1, float u2, float *pdf);
+float pc_env_pdf(const pc_light *l, vec3 d);
 
 #endif

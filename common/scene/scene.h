@@ -60,6 +60,9 @@ typedef struct pc_scene {
   float *light_cdf;           /* nlights+1, power-proportional selection */
   float scene_radius;         /* bounding sphere radius, for ray offsets */
   vec3 scene_center;
+  int env_light;              /* index of the environment emitter, -1 if none */
+  float env_radius;           /* light paths from the environment start on a disk of this radius
+                                 perpendicular to their direction, outside the bounding sphere */
 } pc_scene;
 
 /* Command-line $name parameters (Mitsuba's -D name=value), kept in one flat buffer so render
@@ -116,6 +119,9 @@ bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *h
 /* True if the open segment from a to b is unoccluded; the endpoints are offset off their
  * surfaces along their geometric normals (na or nb may be zero for points not on a surface). */
 bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb);
+/* True if the ray from p (offset off a surface with geometric normal ng, zero for none) along
+ * direction d leaves the scene: the environment is visible that way. */
+bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
 /* Ray origin offset off a surface, on the side of direction d. */
 vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
 

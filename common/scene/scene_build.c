@@ -22,6 +22,9 @@ static void on_embree_error(void *user, enum RTCError code, const char *str) {
 
 static int build_lights(pc_scene *s, pc_err *e) {
   if (s->nlights == 0) return pc_errf(e, PC_EINVAL, "%s: the scene has no emitter", s->path);
+  s->env_light = -1;
+  /* A little outside the bounding sphere, so the disk light paths start from misses nothing. */
+  s->env_radius = 1.01f * s->scene_radius;
   s->light_cdf = malloc(sizeof(float) * (size_t)(s->nlights + 1));
   if (!s->light_cdf) return pc_errf(e, PC_ENOMEM, "%s: out of memory for lights", s->path);
   s->light_cdf[0] = 0.f;
@@ -29,6 +32,14 @@ static int build_lights(pc_scene *s, pc_err *e) {
     pc_light *l = &s->lights[i];
     if (l->type == PC_LIGHT_POINT) {
       l->power = 4.f * PC_PI * v3_luminance(l->intensity);
+    } else if (l->type == PC_LIGHT_ENV) {
+      /* Mitsuba allows one environment emitter per scene; the loader refuses a second. */
+      if (s->env_light >= 0) return pc_errf(e, PC_EINVAL, "%s: more than one environment emitter", s->path);
+      s->env_light = i;
+      char what[64];
+      snprintf(what, sizeof what, "%s: environment emitter", s->path);
+      int rc = pc_env_prepare(l, s->env_radius, what, e);
+      if (rc != PC_OK) return rc;
     } else {
       if (l->shape < 0 || l->shape >= s->nshapes)
         return pc_errf(e, PC_EINVAL, "%s: area light %d has no shape", s->path, i);
@@ -132,14 +143,14 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
     }
     pc_material_prepare(m);
   }
-  int rc = build_lights(s, e);
-  if (rc != PC_OK) return rc;
   /* Embree calls the error function with this address for the device's lifetime; it lives in
    * the scene so it outlives every call. */
   embree_error *ee = calloc(1, sizeof *ee);
   if (!ee) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
   s->rtc_error = ee;
-  return build_embree(s, ee, e);
+  int rc = build_embree(s, ee, e);
+  /* After the geometry: the environment's light paths need the bounding sphere. */
+  return rc != PC_OK ? rc : build_lights(s, e);
 }
 
 void pc_scene_free(pc_scene *s) {
@@ -148,7 +159,10 @@ void pc_scene_free(pc_scene *s) {
   free(s->rtc_error);
   for (int i = 0; i < s->nshapes; i++) pc_mesh_free(&s->shapes[i].mesh);
   for (int i = 0; i < s->ntextures; i++) pc_texture_free(&s->textures[i]);
-  for (int i = 0; i < s->nlights; i++) free(s->lights[i].tri_cdf);
+  for (int i = 0; i < s->nlights; i++) {
+    free(s->lights[i].tri_cdf);
+    pc_env_free(&s->lights[i]);
+  }
   free(s->shapes);
   free(s->materials);
   free(s->textures);
@@ -237,22 +251,30 @@ vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
   return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
 }
 
-bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
-  vec3 ab = v3_sub(b, a);
-  vec3 o = v3_is_zero(na) ? a : pc_offset_origin(s, a, na, ab);
-  vec3 t = v3_is_zero(nb) ? b : pc_offset_origin(s, b, nb, v3_neg(ab));
+/* Whether nothing blocks the segment o + t d, t in [0, tfar). */
+static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   struct RTCRay r;
   r.org_x = o.x; r.org_y = o.y; r.org_z = o.z;
-  vec3 d = v3_sub(t, o);
   r.dir_x = d.x; r.dir_y = d.y; r.dir_z = d.z;
   r.tnear = 0.f;
-  r.tfar = 1.f - 1e-4f;
+  r.tfar = tfar;
   r.time = 0.f;
   r.mask = 0xffffffffu;
   r.id = 0;
   r.flags = 0;
   rtcOccluded1((RTCScene)s->rtc_scene, &ctx, &r);
   return r.tfar >= 0.f;
+}
+
+bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
+  return unoccluded(s, v3_is_zero(ng) ? p : pc_offset_origin(s, p, ng, d), d, INFINITY);
+}
+
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
+  vec3 ab = v3_sub(b, a);
+  vec3 o = v3_is_zero(na) ? a : pc_offset_origin(s, a, na, ab);
+  vec3 t = v3_is_zero(nb) ? b : pc_offset_origin(s, b, nb, v3_neg(ab));
+  return unoccluded(s, o, v3_sub(t, o), 1.f - 1e-4f);
 }

@@ -38,14 +38,9 @@ static int check_max1(pc_sx *c, const pc_param *p, const pc_tex_slot *s, const c
   return 0;
 }
 
-static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
-                       float a, float u, float v, const char *dist, bool dist_set, float *out) {
-  if (!dist_set)
-    return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: no 'distribution' given; Mitsuba's default is beckmann, which pcbpt does not model: "
-                   "write <string name=\"distribution\" value=\"ggx\"/>", c->file, n->line, what);
-  if (strcmp(dist, "ggx") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' unsupported (only ggx)", c->file, n->line, what, dist);
+/* alpha, or alphaU and alphaV (equal: pcbpt's rough models are isotropic), into m->alpha. */
+static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
+                           float a, float u, float v, pc_material *m) {
   if (au->set != av->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both alphaU and alphaV or neither", c->file, n->line, what);
   if (au->set) {
@@ -56,8 +51,19 @@ static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_para
   }
   if (!(a > 0.f && a <= 1.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);
-  *out = a;
+  m->alpha = a;
   return 0;
+}
+
+static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
+                       float a, float u, float v, const char *dist, pc_material *m) {
+  /* Mitsuba's default when no distribution is given is beckmann. */
+  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
+  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
+  else
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
+                   n->line, what, dist);
+  return check_roughness(c, n, what, alpha, au, av, a, u, v, m);
 }
 
 static int check_ior(pc_sx *c, const pc_xml_node *n, const char *what, const char *name, float v) {
@@ -81,7 +87,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if ((rc = params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
   } else if (strcmp(type, "conductor") == 0 || strcmp(type, "roughconductor") == 0) {
     bool rough = type[0] == 'r';
-    const char *material = "Cu", *dist = "";
+    const char *material = "Cu", *dist = "beckmann";
     float alpha = 0.1f, au = 0, av = 0, ext = 1.f;
     vec3 eta = v3s(0), k = v3s(0);
     pc_param p[] = {{"material", PC_P_STRING, &material, 0, 0}, {"eta", PC_P_COLOR, &eta, 0, 0},
@@ -91,7 +97,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
     m->type = rough ? PC_MAT_ROUGHCONDUCTOR : PC_MAT_CONDUCTOR;
     if ((rc = params_only(c, n, what, p, rough ? 9 : 5))) return rc;
-    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, p[5].set, &m->alpha))) return rc;
+    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, m))) return rc;
     if (p[1].set != p[2].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both eta and k or neither", c->file, n->line, what);
     if (p[1].set && p[0].set)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give a material name or eta and k, not both", c->file, n->line, what);
@@ -102,7 +108,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->k = v3_scale(k, 1.f / ext);
   } else if (strcmp(type, "plastic") == 0 || strcmp(type, "roughplastic") == 0) {
     bool rough = type[0] == 'r';
-    const char *dist = "";
+    const char *dist = "beckmann";
     float au = 0, av = 0;
     m->type = rough ? PC_MAT_ROUGHPLASTIC : PC_MAT_PLASTIC;
     m->int_ior = 1.49f;
@@ -117,19 +123,49 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if ((rc = params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
         (rc = check_ior(c, n, what, "intIOR", m->int_ior)) || (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
-    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, p[5].set, &m->alpha))) return rc;
-  } else if (strcmp(type, "dielectric") == 0) {
-    m->type = PC_MAT_DIELECTRIC;
+    if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, m))) return rc;
+  } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "roughdielectric") == 0 ||
+             strcmp(type, "thindielectric") == 0) {
+    bool rough = type[0] == 'r';
+    m->type = rough ? PC_MAT_ROUGHDIELECTRIC : (type[0] == 't' ? PC_MAT_THINDIELECTRIC : PC_MAT_DIELECTRIC);
     m->int_ior = 1.5046f;
     m->ext_ior = 1.000277f;
+    m->alpha = 0.1f;
+    const char *dist = "beckmann";
+    float au = 0, av = 0;
     pc_param p[] = {{"intIOR", PC_P_IOR, &m->int_ior, 0, 0}, {"extIOR", PC_P_IOR, &m->ext_ior, 0, 0},
                     {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
-                    {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
+                    {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0},
+                    {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
+                    {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
+    if ((rc = params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
         (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
+    if (rough && (rc = check_alpha(c, n, what, &p[5], &p[6], &p[7], m->alpha, au, av, dist, m))) return rc;
     if (m->int_ior == m->ext_ior)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: intIOR equals extIOR (an invisible interface)", c->file, n->line, what);
+  } else if (strcmp(type, "ward") == 0) {
+    const char *variant = "balanced";
+    float au = 0, av = 0;
+    m->type = PC_MAT_WARD;
+    m->reflectance = konst(0.5f);
+    m->specular = konst(0.2f);
+    m->alpha = 0.1f;
+    pc_param p[] = {{"variant", PC_P_STRING, &variant, 0, 0}, {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
+                    {"diffuseReflectance", PC_P_SLOT, &m->reflectance, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
+                    {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
+    if ((rc = params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
+      return rc;
+    if (strcmp(variant, "balanced") == 0) m->ward = PC_WARD_BALANCED;
+    else if (strcmp(variant, "ward") == 0) m->ward = PC_WARD_ORIGINAL;
+    else if (strcmp(variant, "ward-duer") == 0) m->ward = PC_WARD_DUER;
+    else
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: variant '%s' unknown (ward, ward-duer or balanced)", c->file, p[0].line,
+                     what, variant);
+    /* The lobes add: Mitsuba would scale both down to keep their sum at most 1. */
+    if (m->specular.tex < 0 && m->reflectance.tex < 0 && v3_maxc(v3_add(m->specular.value, m->reflectance.value)) > 1.f)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: specularReflectance + diffuseReflectance above 1 would create energy",
+                     c->file, n->line, what);
   } else if (strcmp(type, "twosided") == 0) {
     if ((rc = pc_sx_params(c, n, what, NULL, 0))) return rc;
     const pc_xml_node *inner = NULL;
@@ -160,7 +196,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
       }
     }
     if (m->twosided) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps another twosided BSDF", c->file, inner->line, what);
-    if (m->type == PC_MAT_DIELECTRIC)
+    if (m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cannot wrap a dielectric (it is two-sided already)", c->file, inner->line, what);
     m->twosided = true;
     return 0;

@@ -1,6 +1,7 @@
 /* scene_xml.c: pc_scene_load, the Mitsuba 0.6 XML scene reader (the subset of DESIGN.md §5):
  * the scene element, integrator, perspective sensor with hdrfilm, shapes (meshes in world
- * space, exact spheres) with their BSDFs and area emitters, and point emitters. Anything else
+ * space, exact spheres) with their BSDFs and area emitters, point emitters and the environment
+ * (constant, envmap). Anything else
  * is refused with "file:line: what". BSDFs and textures are in scene_materials_xml.c. */
 #include <errno.h>
 #include <limits.h>
@@ -406,33 +407,92 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
 }
 
+/* Mitsuba's `constant` and `envmap` (light.h, light_env.c). */
+static int env_emitter(pc_sx *c, const pc_xml_node *n, const char *type, pc_light *l) {
+  char what[PC_SX_WHAT_MAX];
+  snprintf(what, sizeof what, "emitter '%s'", type);
+  l->type = PC_LIGHT_ENV;
+  l->shape = -1;
+  l->radiance = v3s(1.f); /* Mitsuba's D65 default, white in RGB */
+  l->env_scale = 1.f;
+  int rc;
+  if (c->have_env)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: only one environment emitter per scene (as in Mitsuba)", c->file, n->line, what);
+  if (type[0] == 'c') {
+    pc_param p[] = {{"radiance", PC_P_COLOR, &l->radiance, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+    if ((rc = only_params(c, n, what, p, 2)) || (rc = positive_color(c, &p[0], l->radiance, what)) ||
+        (rc = sampling_weight(c, &p[1], l->sampling_weight, what)))
+      return rc;
+    l->env_frame = (frame){v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
+    c->have_env = true;
+    return 0;
+  }
+  const char *filename = NULL;
+  float gamma = 0.f;
+  bool cache = false;
+  mat4 xf = mat4_identity();
+  /* `cache` only decides whether Mitsuba writes a MIP-map file next to the image. */
+  pc_param p[] = {{"filename", PC_P_STRING, &filename, 0, 0}, {"scale", PC_P_FLOAT, &l->env_scale, 0, 0},
+                  {"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"gamma", PC_P_FLOAT, &gamma, 0, 0},
+                  {"cache", PC_P_BOOL, &cache, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+  if ((rc = only_params(c, n, what, p, 6)) || (rc = sampling_weight(c, &p[5], l->sampling_weight, what))) return rc;
+  if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
+  if (!(l->env_scale > 0.f) || !isfinite(l->env_scale))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'scale' must be positive and finite", c->file, p[1].line, what);
+  /* Mitsuba's gamma override: -1 sRGB, 1 linear; 0 (unset) detects it (8-bit files are sRGB). */
+  if (p[3].set && gamma != -1.f && gamma != 1.f)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: gamma %g not modelled by pcbpt (-1 for sRGB or 1 for linear)", c->file,
+                   p[3].line, what, (double)gamma);
+  if (!is_rigid(&xf))
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: toWorld must be a rotation (it scales or shears)", c->file, p[2].line, what);
+  l->env_frame = (frame){v3_norm(mat4_vector(&xf, v3(1, 0, 0))), v3_norm(mat4_vector(&xf, v3(0, 1, 0))),
+                         v3_norm(mat4_vector(&xf, v3(0, 0, 1)))};
+  char *path;
+  if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
+  rc = pc_image_read(path, gamma != 1.f, &l->env_img, c->e);
+  free(path);
+  if (rc) return pc_sx_wrap(c, n, what, rc);
+  c->have_env = true;
+  return 0;
+}
+
 static int emitter(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
   if (strcmp(type, "area") == 0)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area' must be nested in a <shape>", c->file, n->line);
-  if (strcmp(type, "point") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s': not modelled by pcbpt", c->file, n->line, type);
   pc_light l;
   memset(&l, 0, sizeof l);
-  l.type = PC_LIGHT_POINT;
-  l.intensity = v3s(1.f);
-  l.shape = -1;
-  mat4 xf = mat4_identity();
   l.sampling_weight = 1.f;
-  pc_param p[] = {{"position", PC_P_POINT, &l.position, 0, 0}, {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
-                  {"intensity", PC_P_COLOR, &l.intensity, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l.sampling_weight, 0, 0}};
-  if ((rc = only_params(c, n, "emitter 'point'", p, 4)) || (rc = sampling_weight(c, &p[3], l.sampling_weight, "emitter 'point'")))
-    return rc;
-  if (p[0].set && p[1].set)
-    return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'point': give position or toWorld, not both", c->file, n->line);
-  if (p[1].set) l.position = mat4_point(&xf, v3s(0));
-  if (!v3_is_finite(l.position))
-    return pc_errf(c->e, PC_ENUMERIC, "%s:%d: emitter 'point': position is not finite", c->file, n->line);
-  if ((rc = positive_color(c, &p[2], l.intensity, "emitter 'point'"))) return rc;
+  if (strcmp(type, "constant") == 0 || strcmp(type, "envmap") == 0) {
+    if ((rc = env_emitter(c, n, type, &l))) {
+      pc_env_free(&l);
+      return rc;
+    }
+  } else if (strcmp(type, "point") == 0) {
+    l.type = PC_LIGHT_POINT;
+    l.intensity = v3s(1.f);
+    l.shape = -1;
+    mat4 xf = mat4_identity();
+    pc_param p[] = {{"position", PC_P_POINT, &l.position, 0, 0}, {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
+                    {"intensity", PC_P_COLOR, &l.intensity, 0, 0}, {"samplingWeight", PC_P_FLOAT, &l.sampling_weight, 0, 0}};
+    if ((rc = only_params(c, n, "emitter 'point'", p, 4)) || (rc = sampling_weight(c, &p[3], l.sampling_weight, "emitter 'point'")))
+      return rc;
+    if (p[0].set && p[1].set)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'point': give position or toWorld, not both", c->file, n->line);
+    if (p[1].set) l.position = mat4_point(&xf, v3s(0));
+    if (!v3_is_finite(l.position))
+      return pc_errf(c->e, PC_ENUMERIC, "%s:%d: emitter 'point': position is not finite", c->file, n->line);
+    if ((rc = positive_color(c, &p[2], l.intensity, "emitter 'point'"))) return rc;
+  } else {
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s': not modelled by pcbpt", c->file, n->line, type);
+  }
   int idx;
-  if ((rc = add_light(c, n, &l, &idx))) return rc;
+  if ((rc = add_light(c, n, &l, &idx))) {
+    pc_env_free(&l);
+    return rc;
+  }
   const char *id = pc_xml_attr(n, "id");
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, idx, n->line) : 0;
 }

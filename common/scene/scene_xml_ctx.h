@@ -41,6 +41,7 @@ typedef struct pc_sx {
   char **pnames, **pvalues; /* <default> parameters */
   int nparams, cap_params;
   int default_material;     /* Mitsuba's diffuse 0.5 for shapes without a BSDF, -1 until needed */
+  bool have_env;            /* an environment emitter was declared (Mitsuba allows one) */
   int cap_shapes, cap_materials, cap_textures, cap_lights;
   unsigned long long file_bytes; /* sizes of the files noted so far, against opts->max_file_bytes */
 } pc_sx;

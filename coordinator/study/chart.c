@@ -110,7 +110,25 @@ static void draw_axes(cairo_t *cr, const frame *f, double fs) {
   cairo_stroke(cr);
 }
 
+/* The band between lo and hi, one polygon per stretch of points on the axes. */
+static void draw_band(cairo_t *cr, const frame *f, const pc_chart_series *s, const double rgb[3]) {
+  cairo_set_source_rgba(cr, rgb[0], rgb[1], rgb[2], 0.18);
+  for (int i = 0; i < s->n;) {
+    int j = i;
+    while (j < s->n && on_log_axis(s->x[j]) && on_log_axis(s->lo[j]) && on_log_axis(s->hi[j])) j++;
+    if (j - i >= 2) {
+      cairo_move_to(cr, map_x(f, s->x[i]), map_y(f, s->hi[i]));
+      for (int k = i + 1; k < j; k++) cairo_line_to(cr, map_x(f, s->x[k]), map_y(f, s->hi[k]));
+      for (int k = j - 1; k >= i; k--) cairo_line_to(cr, map_x(f, s->x[k]), map_y(f, s->lo[k]));
+      cairo_close_path(cr);
+      cairo_fill(cr);
+    }
+    i = j > i ? j : i + 1;
+  }
+}
+
 static void draw_series(cairo_t *cr, const frame *f, const pc_chart_series *s, const double rgb[3]) {
+  if (s->lo && s->hi) draw_band(cr, f, s, rgb);
   cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
   cairo_set_line_width(cr, 2);
   bool pen_down = false;
@@ -172,6 +190,8 @@ static void draw(cairo_t *cr, const pc_chart *c) {
       double x = c->series[s].x[i], y = c->series[s].y[i];
       if (!on_log_axis(x) || !on_log_axis(y)) continue;
       xlo = fmin(xlo, x), xhi = fmax(xhi, x), ylo = fmin(ylo, y), yhi = fmax(yhi, y);
+      if (c->series[s].lo && on_log_axis(c->series[s].lo[i])) ylo = fmin(ylo, c->series[s].lo[i]);
+      if (c->series[s].hi && on_log_axis(c->series[s].hi[i])) yhi = fmax(yhi, c->series[s].hi[i]);
     }
   frame f = {.x0 = fs * 6, .y0 = fs * 3.5, .x1 = c->width - fs * 1.5, .y1 = c->height - fs * 5};
   decades(xlo, xhi, &f.dx_lo, &f.dx_hi);
@@ -212,6 +232,8 @@ static int check_chart(const pc_chart *c, const char *path, pc_err *e) {
   for (int s = 0; s < c->nseries; s++)
     if (c->series[s].n < 0 || (c->series[s].n > 0 && (!c->series[s].x || !c->series[s].y)))
       return pc_errf(e, PC_EINVAL, "%s: series %d has no data", path, s);
+    else if (!c->series[s].lo != !c->series[s].hi)
+      return pc_errf(e, PC_EINVAL, "%s: series %d has half a band", path, s);
   return PC_OK;
 }
 

@@ -14,6 +14,9 @@ typedef struct pc_chart_series {
   const char *name; /* legend entry */
   const double *x, *y;
   int n;
+  const double *lo, *hi; /* optional (both or neither): a shaded band around y, e.g. the
+                            spread of several runs; points where either is off the axis are
+                            left out of it */
 } pc_chart_series;
 
 typedef struct pc_chart {

@@ -1,8 +1,9 @@
-/* study.h: the equal-time study behind `pcbpt-coord study` (DESIGN.md §6): each method renders
- * the same scene for the same render time, the film is compared with a reference at
- * logarithmically spaced snapshots (study_run.c), and the error curves are summarised as final
- * error ratios and time-to-error ratios (study_table.c) and written as CSV, JSON and charts
- * (study_files.c). */
+/* study.h: the equal-time study behind `pcbpt-coord study` (DESIGN.md §6, docs/farm-study.md):
+ * each method renders the same scene for the same render time as a farm job, the farm keeps
+ * its film at logarithmically spaced times and each is compared with a reference
+ * (study_measure.c); several runs give median curves and spreads (study_spread.c); the curves
+ * are summarised as final error ratios and time-to-error ratios (study_table.c) and written as
+ * CSV, JSON and charts (study_files.c). */
 #ifndef PC_STUDY_H
 #define PC_STUDY_H
 
@@ -14,9 +15,8 @@
 #include "metrics.h"
 #include "render.h"
 #include "scene.h"
-#include "tails.h"
 
-#define PC_STUDY_MAX_METHODS 5
+#define PC_STUDY_MAX_METHODS 6
 #define PC_STUDY_MAX_SNAPSHOTS 1000
 /* The first snapshot is taken after this fraction of the budget (log spacing up to 1). */
 #define PC_STUDY_FIRST_FRACTION (1.0 / 64)
@@ -42,7 +42,11 @@ static inline bool pc_study_ref_has(const pc_study_ref *r, int slot) {
 }
 
 typedef struct pc_study_snap {
-  double seconds;       /* render time when it was taken (metrics time excluded) */
+  double seconds;       /* render time when it was taken (metrics time excluded); on the
+                           farm: worker_seconds / the farm size, the time the farm would
+                           take rendering this method alone */
+  double worker_seconds;/* farm: summed render seconds of the workers' merged uploads */
+  double wall;          /* farm: the job's running time (its group's other jobs ran too) */
   uint64_t iterations;
   pc_metrics m[PC_STUDY_NLAYERS]; /* zero where the reference lacks the layer */
 } pc_study_snap;
@@ -50,30 +54,54 @@ typedef struct pc_study_snap {
 typedef struct pc_study_run {
   pc_method method;
   int threads;
+  int workers;          /* farm size of the run (0: the one-machine study) */
+  int run;              /* which of --runs (0-based) */
+  uint64_t seed;
+  uint32_t ranges_rerun;/* ranges re-run after a worker vanished or fell silent */
+  double group_wall;    /* seconds from submitting the run's jobs to the end of the last */
   int nsnaps;
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
-  pc_study_tails tails;   /* per-iteration errors and fireflies (tails.h) */
 } pc_study_run;
 
-/* Renders set->method for `seconds` of render time into film (initialised for the settings'
- * size, empty), one iteration at a time, taking up to max_snaps snapshots (with an estimated
- * reference, none before 2 iterations: one iteration cannot tell its error) at times
- * seconds * PC_STUDY_FIRST_FRACTION^((K-1-k)/(K-1)), each after whole iterations. When one
- * iteration passes several snapshot times only one snapshot is taken, so run->nsnaps may be
- * smaller than max_snaps; the last one is always at the end of the budget. */
-int pc_study_render(const pc_scene *scene, const pc_render_settings *set, int threads, double seconds,
-                    int max_snaps, const pc_study_ref *ref, pc_film *film, pc_study_run *run, pc_err *e);
 void pc_study_run_free(pc_study_run *run);
-/* Method auto (study_auto.c): the pilot (pc_pilot_run, in this process on `threads`) and then
- * the winner for the rest of `seconds`; the pilot's wall time counts as render time (every
- * snapshot is shifted by it) and its iterations are not in the film. run->method is
- * PC_METHOD_AUTO, run->auto_report says what the pilot chose. `set` gives everything but the
- * method. */
-int pc_study_render_auto(const pc_scene *scene, const pc_render_settings *set, int threads, double seconds,
-                         int max_snaps, const pc_study_ref *ref, pc_film *film, pc_study_run *run, pc_err *e);
+/* One point of a farm study's curve from an image the farm wrote (study_measure.c): errors
+ * against ref per layer (or the beauty's own estimate without one), its worker-seconds,
+ * render time and iterations from the header; seconds is worker-seconds / workers. With
+ * layer_empty, which standard layers hold nothing. */
+int pc_study_measure_exr(const pc_exr_file *x, const char *path, const pc_study_ref *ref, int workers,
+                         pc_study_snap *s, bool layer_empty[PC_STUDY_NLAYERS], pc_err *e);
+/* A numeric header attribute, NAN when absent. */
+double pc_study_exr_number(const pc_exr_file *x, const char *name);
+
+/* --runs (study_spread.c). */
+#define PC_STUDY_MAX_RUNS 100
+/* Median of the finite values of v (reordered in place), their min and max; NAN when none. */
+double pc_study_median(double *v, int n, double *lo, double *hi);
+/* The runs' min and max of a layer's relMSE around the median curve. */
+typedef struct pc_study_band {
+  int n;
+  double *t, *lo, *hi;
+} pc_study_band;
+/* out: one method's median curve over nruns runs, at npoints times log-spaced from
+ * t_end * PC_STUDY_FIRST_FRACTION to t_end (render time, or with `wall` the jobs' running
+ * time), each run log-log interpolated; times no run reached are left out. With band, each
+ * layer's min and max (free with pc_study_band_free). */
+int pc_study_median_run(const pc_study_run *runs, int nruns, int npoints, double t_end, bool wall, pc_study_run *out,
+                        pc_study_band band[PC_STUDY_NLAYERS], pc_err *e);
+void pc_study_band_free(pc_study_band band[PC_STUDY_NLAYERS]);
+/* One method's runs on one layer: final relMSE and time to target (median, min, max; the
+ * runs that reached it), and the per-run ratio of its time to first_runs' (paired by run). */
+typedef struct pc_study_spread {
+  int n, reached;
+  double final_med, final_lo, final_hi;
+  double time_med, time_lo, time_hi;
+  double ratio_med, ratio_lo, ratio_hi;
+} pc_study_spread;
+void pc_study_spread_cell(const pc_study_run *runs, int nruns, const pc_study_run *first_runs, int slot, double target,
+                          bool wall, pc_study_spread *c);
 
 /* How a method reached a target error. */
 typedef enum {
@@ -119,16 +147,21 @@ typedef struct pc_study_info {
   double seconds;
   int width, height, max_snaps;
   uint64_t seed;
+  int workers, runs;   /* the farm size the table and charts are about; seeds seed..seed+runs-1 */
+  const char *host;    /* NULL: the embedded farm */
 } pc_study_info;
 
-/* study.csv: method, snapshot, seconds, iterations, layer, relmse, rmse, l1. */
+/* study.csv: method, snapshot, seconds, iterations, layer, relmse, rmse, l1, then workers, run,
+ * worker_seconds, wall_seconds (farm studies; every run of every farm size). */
 int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, const pc_study_ref *ref, pc_err *e);
-/* study.json: settings, per-method snapshots and the table. */
+/* study.json: settings, per-run snapshots (every run of every farm size) and the table (of
+ * the median curves of the largest farm size). */
 int pc_study_write_json(const char *path, const pc_study_info *info, const pc_study_run *runs, int nruns,
                         const pc_study_ref *ref, const pc_study_table *t, pc_err *e);
 /* <dir>/study_<layer>.png and .svg: relMSE against render time, one line per method that
- * adds to the layer. */
+ * adds to the layer; bands (NULL, or per run NULL or PC_STUDY_NLAYERS bands) shade the spread
+ * of several runs around a median curve. */
 int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nruns, int slot,
-                         pc_err *e);
+                         const pc_study_band *const *bands, pc_err *e);
 
 #endif

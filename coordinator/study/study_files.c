@@ -45,15 +45,15 @@ int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, co
   out_file o;
   int rc = out_open(&o, path, e);
   if (rc != PC_OK) return rc;
-  fprintf(o.f, "method,snapshot,seconds,iterations,layer,relmse,rmse,l1\n");
+  fprintf(o.f, "method,snapshot,seconds,iterations,layer,relmse,rmse,l1,workers,run,worker_seconds,wall_seconds\n");
   for (int r = 0; r < nruns; r++)
     for (int s = 0; s < runs[r].nsnaps; s++)
       for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
         if (!pc_study_ref_has(ref, slot)) continue;
         const pc_study_snap *sn = &runs[r].snaps[s];
-        fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g\n", pc_method_name(runs[r].method), s, sn->seconds,
-                (unsigned long long)sn->iterations, pc_study_layer_name(slot), sn->m[slot].relmse, sn->m[slot].rmse,
-                sn->m[slot].l1);
+        fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g,%d,%d,%.6f,%.6f\n", pc_method_name(runs[r].method), s,
+                sn->seconds, (unsigned long long)sn->iterations, pc_study_layer_name(slot), sn->m[slot].relmse,
+                sn->m[slot].rmse, sn->m[slot].l1, runs[r].workers, runs[r].run + 1, sn->worker_seconds, sn->wall);
       }
   return out_commit(&o, e);
 }
@@ -89,8 +89,10 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
   for (int r = 0; r < nruns; r++) {
     const pc_study_run *run = &runs[r];
     const pc_study_snap *last = run->nsnaps ? &run->snaps[run->nsnaps - 1] : NULL;
-    fprintf(f, "    {\"method\": \"%s\", \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
-            pc_method_name(run->method), run->threads, last ? (unsigned long long)last->iterations : 0ULL);
+    fprintf(f, "    {\"method\": \"%s\", \"workers\": %d, \"run\": %d, \"seed\": %llu, \"ranges_rerun\": %u, "
+               "\"group_wall_seconds\": %.6f, \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
+            pc_method_name(run->method), run->workers, run->run + 1, (unsigned long long)run->seed, run->ranges_rerun,
+            run->group_wall, run->threads, last ? (unsigned long long)last->iterations : 0ULL);
     json_number(f, last ? last->seconds : NAN);
     fprintf(f, ", \"rays\": %llu, \"exr\": \"%s.exr\", \"png\": \"%s.png\", \"empty_layers\": [",
             (unsigned long long)run->stats.rays, pc_method_name(run->method), pc_method_name(run->method));
@@ -101,13 +103,12 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       fputs(", \"auto\": ", f);
       json_string(f, run->auto_report);
     }
-    fputs(",\n     \"tails\": ", f);
-    pc_study_tails_json(f, &run->tails);
     fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];
-      fprintf(f, "       {\"seconds\": %.6f, \"iterations\": %llu, \"layers\": {", sn->seconds,
-              (unsigned long long)sn->iterations);
+      fprintf(f, "       {\"seconds\": %.6f, \"worker_seconds\": %.6f, \"wall_seconds\": %.6f, \"iterations\": %llu, "
+                 "\"layers\": {",
+              sn->seconds, sn->worker_seconds, sn->wall, (unsigned long long)sn->iterations);
       for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++) {
         if (!pc_study_ref_has(ref, slot)) continue;
         fprintf(f, "%s\"%s\": {\"relmse\": ", k++ ? ", " : "", pc_study_layer_name(slot));
@@ -172,6 +173,12 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
   fprintf(f, ", \"errors\": \"%s\"", info->reference_path ? "measured" : "estimated");
   fprintf(f, ",\n  \"seconds\": %.6g, \"width\": %d, \"height\": %d, \"seed\": %llu, \"max_snapshots\": %d,\n",
           info->seconds, info->width, info->height, (unsigned long long)info->seed, info->max_snaps);
+  /* the table and the charts: the median curves of this farm size over the runs */
+  fprintf(f, "  \"farm\": ");
+  if (info->host) json_string(f, info->host);
+  else fputs("\"embedded\"", f);
+  fprintf(f, ", \"table_workers\": %d, \"runs\": %d, \"time\": \"worker_seconds / workers\",\n", info->workers,
+          info->runs);
   json_runs(f, runs, nruns, ref);
   json_table(f, t);
   fputs("}\n", f);
@@ -179,7 +186,7 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
 }
 
 int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nruns, int slot,
-                         pc_err *e) {
+                         const pc_study_band *const *bands, pc_err *e) {
   pc_chart_series series[PC_STUDY_MAX_METHODS];
   double *xy = calloc((size_t)nruns * 2 * PC_STUDY_MAX_SNAPSHOTS, sizeof *xy);
   if (!xy) return pc_errf(e, PC_ENOMEM, "out of memory for the chart");
@@ -191,12 +198,23 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
       x[s] = runs[r].snaps[s].seconds;
       y[s] = runs[r].snaps[s].m[slot].relmse;
     }
-    series[ns++] = (pc_chart_series){.name = pc_method_name(runs[r].method), .x = x, .y = y, .n = runs[r].nsnaps};
+    series[ns] = (pc_chart_series){.name = pc_method_name(runs[r].method), .x = x, .y = y, .n = runs[r].nsnaps};
+    /* the band's points are the median curve's (both leave out the times no run reached) */
+    if (bands && bands[r] && bands[r][slot].n == runs[r].nsnaps) {
+      series[ns].lo = bands[r][slot].lo;
+      series[ns].hi = bands[r][slot].hi;
+    }
+    ns++;
   }
   char title[512], path[4096];
-  snprintf(title, sizeof title, "%s: %s relMSE against render time%s", info->scene_name, pc_study_layer_name(slot),
-           info->reference_path ? "" : " (estimated, no reference)");
-  pc_chart c = {.title = title, .x_label = "render time (s)",
+  char xlabel[128] = "render time (s)";
+  if (info->workers > 0)
+    snprintf(xlabel, sizeof xlabel, "render time on %d worker%s (worker-seconds / %d)", info->workers,
+             info->workers > 1 ? "s" : "", info->workers);
+  snprintf(title, sizeof title, "%s: %s relMSE against render time%s%s", info->scene_name, pc_study_layer_name(slot),
+           info->reference_path ? "" : " (estimated, no reference)",
+           info->runs > 1 ? " (median, min-max shaded)" : "");
+  pc_chart c = {.title = title, .x_label = xlabel,
                 .y_label = info->reference_path ? "relMSE" : "estimated relMSE", .width = 800, .height = 560,
                 .series = series, .nseries = ns};
   int rc = PC_OK;

@@ -13,7 +13,9 @@ verbatim into scenes/cornell-box/meshes/), identical to ../shared/scenes/cornell
 """
 import math
 import os
+import struct
 import sys
+import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)  # scenes/
@@ -35,6 +37,7 @@ class Scene:
         self.lines = []
         self.tris = 0           # triangle count (sphere shapes are exact, counted 0)
         self.lights = []        # (description, expected normal) for rectangle emitters
+        self.preview = True     # preview.py models the scene (it has no environment emitters)
 
     def camera(self, origin, target, up, fov, fov_axis=None):
         L = self.lines
@@ -375,6 +378,102 @@ def outdoor():
     return s
 
 
+def write_png(path, w, h, pixel):
+    """8-bit RGB PNG (standard library only); pixel(x, y) gives (r, g, b) in 0..255, row 0 at
+    the top (Mitsuba reads 8-bit images as sRGB: 255 is exactly 1.0)."""
+    raw = b"".join(b"\0" + bytes(c for x in range(w) for c in pixel(x, y)) for y in range(h))
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xffffffff)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
+                chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+
+
+def env_sphere(name, emitter, comment):
+    s = Scene(name, "path", -1, comment)
+    s.preview = False
+    s.camera((0, 0, 4), (0, 0, 0), (0, 1, 0), 40)
+    s.sphere((0, 0, 0), 1.0, diffuse((0.5, 0.5, 0.5)))
+    s.raw(emitter)
+    return s
+
+
+def env_constant():
+    return env_sphere("env-constant", '  <emitter type="constant"><rgb name="radiance" value="2, 2, 2"/></emitter>',
+                      "Diffuse sphere (albedo 0.5) under a constant environment L=2: every sphere pixel is "
+                      "exactly a*L = 1 (a convex object sees only the environment), the background L = 2")
+
+
+def env_white_map():
+    d = os.path.join(ROOT, "env-white-map")
+    os.makedirs(d, exist_ok=True)
+    write_png(os.path.join(d, "white.png"), 16, 8, lambda x, y: (255, 255, 255))
+    return env_sphere("env-white-map",
+                      '  <emitter type="envmap"><string name="filename" value="white.png"/>'
+                      '<float name="scale" value="2"/></emitter>',
+                      "The env-constant scene lit by an envmap of one colour (white PNG, scale 2): "
+                      "must equal the constant emitter, sphere 1 and background 2")
+
+
+def sky_pixel(x, y, w=64, h=32):
+    """A sky: blue above the horizon brightening toward it, a dark ground below, and a small
+    sun (4x2 pixels) at 60 degrees azimuth, 30 degrees elevation."""
+    theta = (y + 0.5) / h * math.pi
+    if abs(x - w // 6) <= 1 and y == h // 3 - 1 or abs(x - w // 6) <= 1 and y == h // 3:
+        return (255, 255, 240)
+    if theta < math.pi / 2:
+        t = theta / (math.pi / 2)
+        return (int(70 + 120 * t), int(110 + 100 * t), int(200 + 40 * t))
+    return (60, 50, 40)
+
+
+def env_objects():
+    d = os.path.join(ROOT, "env-objects")
+    os.makedirs(d, exist_ok=True)
+    write_png(os.path.join(d, "sky.png"), 64, 32, sky_pixel)
+    s = Scene("env-objects", "pcbpt", -1,
+              "Objects on a floor under a sky envmap (rotated 30 degrees about +y) with a small sun: "
+              "Beckmann rough conductor, plastic and glass (Mitsuba's default distribution), diffuse; "
+              "PT, BDPT and PCBPT must agree")
+    s.preview = False
+    s.camera((0, 1.4, 3.6), (0, 0.4, 0), (0, 1, 0), 45)
+    s.rect((0, 0, 0), 3.0, 3.0, "+y", diffuse((0.6, 0.6, 0.6)))
+    s.sphere((-0.8, 0.45, 0), 0.45, '<bsdf type="roughconductor"><string name="material" value="Cu"/>'
+             '<float name="alpha" value="0.2"/></bsdf>')
+    s.sphere((0.2, 0.35, 0.6), 0.35, diffuse((0.2, 0.5, 0.8)))
+    s.box((0.6, 0.0, -0.7), (1.3, 0.7, 0.0), '<bsdf type="roughplastic"><float name="alpha" value="0.3"/>'
+          '<rgb name="diffuseReflectance" value="0.7, 0.3, 0.1"/></bsdf>', rot_y=20)
+    s.sphere((-0.1, 0.3, -0.9), 0.3, '<bsdf type="roughdielectric"><float name="alpha" value="0.25"/>'
+             '<float name="intIOR" value="1.5"/><float name="extIOR" value="1"/></bsdf>')
+    s.raw('  <emitter type="envmap"><string name="filename" value="sky.png"/><float name="scale" value="1.5"/>'
+          '<transform name="toWorld"><rotate x="0" y="1" z="0" angle="30"/></transform></emitter>')
+    return s
+
+
+def thin_glass():
+    """A closed room lit by a ceiling panel; the camera looks through a thin glass pane
+    (thindielectric) standing across the room at a rough GGX glass cube, a diffuse sphere and a
+    Ward sphere (Mitsuba's default balanced variant) behind them."""
+    s = Scene("thin-glass", "pcbpt", -1,
+              "Thin glass pane (thindielectric) in front of a rough glass cube (roughdielectric, GGX), "
+              "a diffuse sphere and a Ward sphere in a closed room lit by a ceiling panel")
+    s.preview = False
+    s.camera((0.0, 1.3, 2.6), (0.0, 0.7, -0.5), (0, 1, 0), 60)
+    s.bsdf("wall", ("diffuse", '<rgb name="reflectance" value="0.7, 0.7, 0.7"/>'))
+    shell(s, (-2.0, 0.0, -2.0), (2.0, 3.0, 3.0), ref("wall"))
+    s.rect((0.0, 2.99, 0.0), 0.6, 0.6, "-y", BLACK, emit=(15, 15, 15))
+    s.rect((0.0, 0.8, 0.9), 1.2, 0.8, "+z", '<bsdf type="thindielectric"><float name="intIOR" value="1.5"/>'
+           '<float name="extIOR" value="1"/></bsdf>')
+    s.box((-0.9, 0.0, -0.8), (-0.2, 0.7, -0.1), '<bsdf type="roughdielectric"><string name="distribution" '
+          'value="ggx"/><float name="alpha" value="0.15"/><float name="intIOR" value="1.5"/>'
+          '<float name="extIOR" value="1"/></bsdf>', rot_y=25)
+    s.sphere((0.6, 0.4, -0.6), 0.4, diffuse((0.8, 0.4, 0.2)))
+    s.sphere((-0.1, 0.3, -1.5), 0.3, '<bsdf type="ward"><float name="alpha" value="0.2"/>'
+             '<rgb name="specularReflectance" value="0.6, 0.45, 0.35"/>'
+             '<rgb name="diffuseReflectance" value="0.2, 0.2, 0.3"/></bsdf>')
+    return s
+
+
 def check_door(preview, path):
     """The ajar door must stay on room A's side (x < -0.05) and leave a crack at the frame."""
     _, shapes, _ = preview.load(path)
@@ -388,7 +487,8 @@ def check_door(preview, path):
     return 0 if xmax <= -0.0499 else 1
 
 
-SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, glossy_floor, glass_lamp, outdoor]
+SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, glossy_floor, glass_lamp, outdoor,
+          env_constant, env_white_map, env_objects, thin_glass]
 
 
 def main():
@@ -396,7 +496,8 @@ def main():
     for fn in SCENES:
         s = fn()
         p = s.write()
-        paths.append(p)
+        if s.preview:
+            paths.append(p)
         print("%-14s %5d triangles (+ exact spheres)  %s" % (s.name, s.tris, os.path.relpath(p, ROOT)))
     if "--check" in sys.argv:
         sys.path.insert(0, HERE)

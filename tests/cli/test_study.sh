@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The study verb from the command line: help, flag errors that name the flag (one line, non-zero
-# exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) against a reference
-# rendered here: every output file exists and study.csv has one row per method, snapshot and
-# layer, with the last snapshot at the end of the budget.
+# exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) on the embedded farm
+# against a reference rendered here: every output file exists in the scene's folder and
+# study.csv has one row per method, snapshot and layer, with the last snapshot at the end of
+# the budget. (The farm studies: tests/farm/study_farm.sh.)
 set -u
 . "$(dirname "$0")/lib.inc"
 scene="$src/scenes/cornell-box/scene.xml"
@@ -16,6 +17,7 @@ check verbs 0 "study" -- "$bin" --help
 check unknown-flag 2 "--frob" -- "$bin" study "$scene" "${ok[@]}" --frob
 check method-refused 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --method pt
 check spp-refused 2 "--spp" -- "$bin" study "$scene" "${ok[@]}" --spp 4
+check halt-noise-refused 2 "--halt-noise" -- "$bin" study "$scene" "${ok[@]}" --halt-noise 0.1
 check bad-methods 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --methods pt,magic
 check twice-methods 2 "twice" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pt
 check bad-seconds 2 "--seconds" -- "$bin" study "$scene" "${ok[@]}" --seconds 0
@@ -26,16 +28,24 @@ check bad-layer 2 "--layer" -- "$bin" study "$scene" "${ok[@]}" --layer s2t2
 check bad-render-flag 2 "--max-depth" -- "$bin" study "$scene" "${ok[@]}" --max-depth 0
 check no-reference-layer 2 "--layer" -- "$bin" study "$scene" --methods pt --seconds 1 --out "$tmp/s" --layer inner
 check no-scene 2 "SCENE" -- "$bin" study "${ok[@]}"
-check missing-reference 1 "nope.exr" -- "$bin" study "$scene" "${ok[@]}" --reference "$tmp/nope.exr"
+check missing-reference 1 "nope.exr" -- "$bin" study "$scene" --methods pt --seconds 2 --reference "$tmp/nope.exr" --out "$tmp/s" "${size[@]}"
+check references-per-scene 2 "one per scene" -- "$bin" study "$scene" "$scene" "${ok[@]}"
+check workers-embedded 2 "--workers" -- "$bin" study "$scene" "${ok[@]}" --workers 1,2
+check host-token 2 "--token-file" -- "$bin" study "$scene" "${ok[@]}" --host 127.0.0.1:1
+check bad-runs 2 "--runs" -- "$bin" study "$scene" "${ok[@]}" --runs 0
+check bad-workers 2 "--workers" -- "$bin" study "$scene" "${ok[@]}" --workers 1,x
+check bad-reference-render 2 "--reference-render" -- "$bin" study "$scene" --methods pt --seconds 1 --out "$tmp/s" --reference-render bdpt
+check both-references 2 "--reference-render" -- "$bin" study "$scene" "${ok[@]}" --reference-render bdpt:1
 check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scene" "${ok[@]}" --width 16
 [ -e "$tmp/s" ] && { echo "FAIL: a refused study created its output folder"; fail=1; }
 check study 0 "needs .*x .* time than pt to reach beauty relMSE" -- "$bin" study "$scene" "${ok[@]}"
 grep -q "^inner *bdpt" "$tmp/out" || { echo "FAIL study: table lacks the inner row of bdpt"; cat "$tmp/out"; fail=1; }
-for f in pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg; do
-  [ -s "$tmp/s/$f" ] || { echo "FAIL study: $f missing"; fail=1; }
+for f in ../report.html pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg; do
+  [ -s "$tmp/s/cornell-box/$f" ] || { echo "FAIL study: $f missing"; fail=1; }
 done
-csv="$tmp/s/study.csv"
-[ "$(head -1 "$csv")" = "method,snapshot,seconds,iterations,layer,relmse,rmse,l1" ] || { echo "FAIL csv: header"; fail=1; }
+csv="$tmp/s/cornell-box/study.csv"
+[ "$(head -1 "$csv")" = "method,snapshot,seconds,iterations,layer,relmse,rmse,l1,workers,run,worker_seconds,wall_seconds" ] ||
+  { echo "FAIL csv: header"; fail=1; }
 for m in pt bdpt; do
   # Every snapshot has the five layers of the reference; 2..12 snapshots; the last one at >= 2 s.
   awk -F, -v m="$m" '
@@ -51,17 +61,38 @@ for m in pt bdpt; do
 done
 if command -v python3 >/dev/null; then
   python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert [m["method"] for m in d["methods"]]==["pt","bdpt"]; assert len(d["headline"])==1' \
-    "$tmp/s/study.json" || { echo "FAIL json"; fail=1; }
+    "$tmp/s/cornell-box/study.json" || { echo "FAIL json"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study outputs"
 # Without a reference: the beauty's error curves are the images' own estimates, and it says so.
 check estimated 0 "relMSE estimated from each image's own iterations" -- "$bin" study "$scene" --methods pt,bdpt --seconds 1 \
   --out "$tmp/e" "${size[@]}" --threads 2
 awk -F, 'NR > 1 { rows++; if ($5 != "beauty" || $6 !~ /^[0-9.e+-]+$/ || $8 != "nan") bad = $0 }
-         END { if (rows < 4 || bad != "") { print "FAIL estimated csv: " rows " rows " bad; exit 1 } }' "$tmp/e/study.csv" || fail=1
+         END { if (rows < 4 || bad != "") { print "FAIL estimated csv: " rows " rows " bad; exit 1 } }' "$tmp/e/cornell-box/study.csv" || fail=1
 if command -v python3 >/dev/null; then
   python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert d["reference"] is None and d["errors"] == "estimated"' \
-    "$tmp/e/study.json" || { echo "FAIL estimated json"; fail=1; }
+    "$tmp/e/cornell-box/study.json" || { echo "FAIL estimated json"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study without a reference"
+# Method auto in a study: its pilot runs as farm jobs charged to its own budget, so its curve
+# starts after the pilot's worker-seconds and ends at the same budget as bdpt's; study.json
+# says what the pilot chose.
+check auto 0 "auto chose " -- "$bin" study "$scene" --methods bdpt,auto --seconds 2 --out "$tmp/a" "${size[@]}" --threads 2
+if command -v python3 >/dev/null; then
+  python3 - "$tmp/a/cornell-box/study.json" <<'PY' || { echo "FAIL auto json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = {x["method"]: x for x in d["methods"]}
+a, b = m["auto"], m["bdpt"]
+assert a["auto"].startswith("chose "), a["auto"]
+pilot = float(a["auto"].split("(pilot ")[1].split(" s)")[0])
+assert pilot > 0, pilot
+first, last = a["snapshots"][0], a["snapshots"][-1]
+# every point comes after the pilot; the whole budget (pilot included) is bdpt's, within one
+# upload of overrun
+assert first["worker_seconds"] > pilot, (first, pilot)
+assert abs(last["worker_seconds"] - b["snapshots"][-1]["worker_seconds"]) < 1.0, (last, b["snapshots"][-1])
+PY
+fi
+[ $fail = 0 ] && echo "ok   study with auto"
 exit $fail

@@ -102,7 +102,7 @@ run() { # label spp [stall]
   "$B/tests/farm_tool" exact "$(ckpt "$J")" "$S/scenes/cornell-box/scene.xml" --spp $2 --method pt --width 64 --height 64 \
     || fail "$1: the farm's sums differ from a single-process render"
   SECS=$(python3 -c "print(round($t1 - $t0, 2))")
-  echo "$1: $2 iterations in $SECS s"
+  echo "$1: $2 iterations in $SECS s (the job's own elapsed time: $(field "$J" elapsed) s)"
 }
 run clean "$SPP"; clean=$SECS
 for k in $(seq $NW); do impair $k; done

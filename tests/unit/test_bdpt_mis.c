@@ -6,7 +6,10 @@
  * double precision, with Russian roulette, sample counts and the heuristic. The weight the
  * integrator computed must equal the explicit one, and re-deriving the weight of every other
  * strategy of the same path through the production routines (pc_mis_extend, pc_connect,
- * pc_mis_weight_hit) must give the explicit weights too, summing to 1. */
+ * pc_mis_weight_hit) must give the explicit weights too, summing to 1. The same on
+ * scenes/env-objects, lit by an envmap: the environment vertex at infinity has solid-angle
+ * densities from both sides and the first vertex of its light paths the disk's area density
+ * times its cosine (path_vertex.h); the explicit evaluation places it far along its direction. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -26,13 +29,13 @@ typedef struct fixture {
   pc_render_settings set;
   pc_tctx c;
   pc_path_vertex *lbuf, *ebuf;
-  int checked, strategies_checked;
+  int checked, strategies_checked, env_checked;
 } fixture;
 
-static void load(fixture *f, bool point_light) {
+static void load_scene(fixture *f, const char *name, bool point_light) {
   const char *src = getenv("PCBPT_SOURCE_DIR");
   char path[4096];
-  snprintf(path, sizeof path, "%s/scenes/glossy-glass/scene.xml", src ? src : ".");
+  snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", src ? src : ".", name);
   pc_err e = {0};
   memset(&f->scene, 0, sizeof f->scene);
   assert_int_equal(pc_scene_load(path, &f->scene, &e), PC_OK);
@@ -47,7 +50,7 @@ static void load(fixture *f, bool point_light) {
     m->specular.value = v3s(1.f);
     mirrors++;
   }
-  assert_int_equal(mirrors, 1);
+  assert_int_equal(mirrors, strcmp(name, "glossy-glass") == 0);
   if (point_light) {
     pc_scene *s = &f->scene;
     s->lights = realloc(s->lights, sizeof(pc_light) * (size_t)(s->nlights + 1));
@@ -78,6 +81,8 @@ static void load(fixture *f, bool point_light) {
   f->c.weighted = true;
 }
 
+static void load(fixture *f, bool point_light) { load_scene(f, "glossy-glass", point_light); }
+
 static void unload(fixture *f) {
   free(f->lbuf);
   free(f->ebuf);
@@ -100,6 +105,10 @@ static double qv(const fixture *f, const fpath *fp, int i) {
 
 static vec3 unit(vec3 a, vec3 b) { return v3_norm(v3_sub(b, a)); }
 
+/* The environment vertex x_0 stands this far along the direction light arrives from. */
+#define ENV_FAR 1e4f
+static bool env_at(const fpath *fp, int i) { return fp->x[i].kind == PC_VTX_ENV; }
+
 /* Solid-angle pdf of scattering at x_i from `from` toward `to` (q included). */
 static double dir_pdf(const fixture *f, const fpath *fp, int i, int from, int to) {
   const pc_path_vertex *v = &fp->x[i];
@@ -118,12 +127,18 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
   int k = fp->k;
   const pc_scene *s = &f->scene;
   const pc_light *l = &s->lights[fp->x[0].light];
-  bool point = l->type == PC_LIGHT_POINT;
+  bool point = l->type == PC_LIGHT_POINT, env = env_at(fp, 0);
   double fwd[2 * MAXV], bwd[2 * MAXV];
-  /* Area pdfs from the light side. */
+  /* Area pdfs from the light side (solid angle at the environment, whose light paths start
+   * on the disk). */
   fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) / (point ? 1.0 : l->area);
+  if (env) fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) * pc_env_pdf(l, v3_neg(fp->x[0].wo));
   for (int i = 1; i <= k; i++) {
     double pd;
+    if (i == 1 && env) {
+      fwd[1] = pc_env_disk_pdf(s) * fabs((double)v3_dot(fp->x[1].ng, fp->x[0].wo));
+      continue;
+    }
     if (i - 1 == 0) {
       vec3 d = unit(fp->x[0].p, fp->x[1].p);
       pd = point ? 0.25 / M_PI : fmax(0.0, v3_dot(fp->x[0].ng, d)) / M_PI;
@@ -143,7 +158,7 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
     } else {
       pd = dir_pdf(f, fp, i + 1, i + 2, i);
     }
-    bwd[i] = pd * geo(fp, i + 1, i);
+    bwd[i] = pd * (i == 0 && env ? 1.0 : geo(fp, i + 1, i));
   }
   if (point) bwd[0] = 0.0;
   double beta = n->power ? 2.0 : 1.0, sum = 0.0;
@@ -168,16 +183,22 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
   const pc_path_vertex *a = &fp->x[ifrom];
   pc_path_vertex *v = &sub[u];
   *v = fp->x[ito];
-  v->kind = fp->x[ito].kind == PC_VTX_CAMERA ? PC_VTX_CAMERA : PC_VTX_SURFACE;
-  v->wo = unit(v->p, a->p);
+  bool to_env = env_at(fp, ito), from_env = a->kind == PC_VTX_ENV;
+  v->kind = fp->x[ito].kind == PC_VTX_CAMERA ? PC_VTX_CAMERA : (to_env ? PC_VTX_ENV : PC_VTX_SURFACE);
+  v->wo = from_env ? v3_neg(a->wo) : unit(v->p, a->p);
+  if (to_env) v->wo = fp->x[ito].wo;
   v->depth = u + 1;
   v->beta = v3s(1.f);
-  vec3 dir = unit(a->p, v->p);
-  float d2 = v3_len2(v3_sub(v->p, a->p));
+  vec3 dir = from_env ? a->wo : unit(a->p, v->p);
+  float d2 = to_env || from_env ? 1.f : v3_len2(v3_sub(v->p, a->p));
+  float cos_in = to_env ? 1.f : v3_absdot(v->ng, dir);
   float pf, pr, cos_out;
   bool delta = false;
   if (ifrom2 < 0) {
-    if (a->kind == PC_VTX_CAMERA) {
+    if (from_env) {
+      pf = pc_env_disk_pdf(&f->scene);
+      cos_out = 1.f;
+    } else if (a->kind == PC_VTX_CAMERA) {
       float cz = v3_dot(dir, f->scene.camera.dir);
       pf = 1.f / (f->scene.camera.image_area * cz * cz * cz);
       cos_out = 0.f;
@@ -193,7 +214,7 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
     pr = (float)dir_pdf(f, fp, ifrom, ito, ifrom2);
     cos_out = v3_absdot(a->ng, dir);
   }
-  pc_mis_extend(n, &sub[u - 1], light_side, v, pf, pr, delta, cos_out, v3_absdot(v->ng, dir), d2);
+  pc_mis_extend(n, &sub[u - 1], light_side, v, pf, pr, delta, cos_out, cos_in, d2);
 }
 
 static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j) {
@@ -203,11 +224,12 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
     float pick = pc_light_choose_pdf(&f->scene, fp->x[0].light);
     const pc_light *l = &f->scene.lights[fp->x[0].light];
     lv[0] = fp->x[0];
-    lv[0].kind = PC_VTX_LIGHT;
+    lv[0].kind = env_at(fp, 0) ? PC_VTX_ENV : PC_VTX_LIGHT;
     lv[0].depth = 1;
     lv[0].beta = v3s(1.f);
     lv[0].delta = false;
     lv[0].mis_near = pc_mis(n, 1.f / (pick * (l->type == PC_LIGHT_POINT ? 1.f : 1.f / l->area)));
+    if (env_at(fp, 0)) lv[0].mis_near = pc_mis(n, 1.f / (pick * pc_env_pdf(l, v3_neg(fp->x[0].wo))));
     lv[0].mis_far = 0.f;
     for (int i = 1; i < j; i++) extend(f, n, fp, lv, i, true, i - 2, i - 1, i);
   }
@@ -248,6 +270,7 @@ static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int 
   }
   assert_true(fabs(sum - 1.0) < 1e-4);
   f->checked++;
+  f->env_checked += env_at(fp, 0);
 }
 
 typedef struct hits {
@@ -264,9 +287,13 @@ static void record_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int ligh
   h->w[h->n++] = pc_mis_weight_hit(c->scene, h->counts, v, light);
 }
 
+static void place_env(fpath *fp) {
+  if (env_at(fp, 0)) fp->x[0].p = v3_madd(fp->x[1].p, fp->x[0].wo, -ENV_FAR);
+}
+
 static void run(fixture *f, pc_mis_counts n, int npaths) {
   f->c.counts = n;
-  f->checked = f->strategies_checked = 0;
+  f->checked = f->strategies_checked = f->env_checked = 0;
   for (int it = 0; it < npaths; it++) {
     f->c.iteration = (uint64_t)it;
     int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
@@ -281,7 +308,8 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
       int t = h.t[i];
       fp.k = t - 1;
       for (int u = 0; u < t; u++) fp.x[u] = f->ebuf[t - 1 - u];
-      fp.x[0].kind = PC_VTX_LIGHT;
+      if (fp.x[0].kind != PC_VTX_ENV) fp.x[0].kind = PC_VTX_LIGHT;
+      place_env(&fp);
       check_path(f, &n, &fp, 0, h.w[i]);
     }
     /* s >= 1 with t >= 1, including s=1 with the light sub-path's own first vertex. */
@@ -293,11 +321,12 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
         fp.k = s + t - 1;
         for (int i = 0; i < s; i++) fp.x[i] = f->lbuf[i];
         for (int u = 0; u < t; u++) fp.x[s + u] = f->ebuf[t - 1 - u];
+        place_env(&fp);
         check_path(f, &n, &fp, s, con.weight);
       }
   }
-  printf("counts n_lt %.3g n_inner %.3g %s: %d paths, %d strategy weights checked\n", n.n_lt, n.n_inner,
-         n.power ? "power" : "balance", f->checked, f->strategies_checked);
+  printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment), %d strategy weights checked\n",
+         n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->strategies_checked);
   assert_true(f->checked > 50);
 }
 
@@ -326,8 +355,24 @@ static void test_mis_point_light_counts(void **state) {
   unload(&f);
 }
 
+static void test_mis_environment(void **state) {
+  (void)state;
+  fixture f;
+  load_scene(&f, "env-objects", false);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  assert_true(f.env_checked > 400);
+  run(&f, (pc_mis_counts){0.37f, 2.f, true}, 400);
+  unload(&f);
+  /* With a point light too: the choice between the environment and it by power. */
+  load_scene(&f, "env-objects", true);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  assert_true(f.env_checked > 100 && f.env_checked < f.checked);
+  unload(&f);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_mis_environment),
       cmocka_unit_test(test_mis_balance),
       cmocka_unit_test(test_mis_power_nl),
       cmocka_unit_test(test_mis_point_light_counts),

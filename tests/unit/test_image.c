@@ -580,6 +580,36 @@ static void test_jpeg_read(void **state) {
   pc_image_free(&img);
 }
 
+/* Radiance RGBE: flat scanlines (width < 8), value = mantissa * 2^(E - 136). */
+static void test_rgbe_read(void **state) {
+  const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n";
+  const unsigned char px[2 * 3 * 4] = {128, 64, 32, 129, 128, 128, 128, 130, 0, 0, 0, 0,
+                                       200, 100, 50, 136, 128, 0, 0, 128, 255, 255, 255, 120};
+  unsigned char file[sizeof head - 1 + sizeof px];
+  memcpy(file, head, sizeof head - 1);
+  memcpy(file + sizeof head - 1, px, sizeof px);
+  const char *p = path_in(state, "sky.hdr");
+  spit(p, file, sizeof file);
+  pc_image img;
+  pc_err e;
+  assert_int_equal(pc_image_read(p, 1, &img, &e), PC_OK); /* linear whatever the flag says */
+  assert_int_equal(img.w, 3);
+  assert_int_equal(img.h, 2);
+  const float expect[] = {1.f, 0.5f, 0.25f, 2.f, 2.f, 2.f, 0.f, 0.f, 0.f, 200.f, 100.f, 50.f,
+                          0.5f, 0.f, 0.f, 255.f / 65536.f, 255.f / 65536.f, 255.f / 65536.f};
+  for (int i = 0; i < 18; i++) assert_float_equal(img.rgb[i], expect[i], 1e-6f * fmaxf(1.f, expect[i]));
+  pc_image_free(&img);
+  /* A header claiming more than PC_IMAGE_MAX_DIM pixels a side is refused before decoding. A
+   * truncated body is read by stb_image as zeros (it has no end-of-data error): no crash. */
+  spit(p, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 40000\n", 49);
+  expect_read_fails(p);
+  spit(p, file, sizeof file - 10);
+  if (pc_image_read(p, 1, &img, &e) == PC_OK) {
+    assert_true(img.w == 3 && img.h == 2 && img.rgb[0] == 1.f);
+    pc_image_free(&img);
+  }
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* Untrusted input */
 
@@ -745,6 +775,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_png_formats, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_huge_header_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_jpeg_read, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_rgbe_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_missing_and_garbage, setup, teardown),
       cmocka_unit_test_setup_teardown(test_truncated_and_corrupt_files, setup, teardown),
       cmocka_unit_test(test_metrics_known_values),

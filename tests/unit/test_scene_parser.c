@@ -70,6 +70,7 @@ static void test_full_scene(void **state) {
   assert_int_equal(m[1].reflectance.tex, 0);
   assert_int_equal(m[2].type, PC_MAT_ROUGHCONDUCTOR);
   assert_true(fabsf(m[2].alpha - 0.25f) < 1e-7f);
+  assert_int_equal(m[2].distribution, PC_MF_GGX);
   vec3 eta, k;
   assert_true(pc_conductor_ior("Au", &eta, &k));
   near3(m[2].eta, eta, 1e-6f);
@@ -86,6 +87,7 @@ static void test_full_scene(void **state) {
   near3(m[5].reflectance.value, v3s(0.5f), 0);
   assert_int_equal(m[6].type, PC_MAT_ROUGHPLASTIC);
   assert_true(fabsf(m[6].alpha - 0.3f) < 1e-7f);
+  assert_int_equal(m[6].distribution, PC_MF_BECKMANN); /* Mitsuba's default */
   assert_int_equal(m[6].reflectance.tex, 1);
   assert_int_equal(m[7].type, PC_MAT_CONDUCTOR);
   assert_true(pc_conductor_ior("Cu", &eta, &k));
@@ -296,11 +298,18 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/></shape>", 3, "more than one BSDF"},
     {"<shape type=\"cube\">\n<medium type=\"homogeneous\" name=\"interior\"/></shape>", 3, "medium"},
     /* emitters */
-    {"<emitter type=\"envmap\"/>", 2, "envmap"},
-    {"<emitter type=\"constant\"/>", 2, "constant"},
+    {"<emitter type=\"envmap\"/>", 2, "filename"},
+    {"<emitter type=\"envmap\"><string name=\"filename\" value=\"nothere.exr\"/></emitter>", 2, "cannot find"},
+    {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"gamma\" value=\"2.2\"/></emitter>", 3, "gamma"},
+    {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"scale\" value=\"-1\"/></emitter>", 3, "scale"},
+    {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<transform name=\"toWorld\"><scale x=\"2\"/></transform></emitter>", 3, "rotation"},
+    {"<emitter type=\"constant\">\n<rgb name=\"radiance\" value=\"0\"/></emitter>", 3, "radiance"},
+    {"<emitter type=\"constant\"/>\n<emitter type=\"constant\"/>", 3, "only one environment"},
     {"<emitter type=\"directional\"/>", 2, "directional"},
     {"<emitter type=\"spot\"/>", 2, "spot"},
-    {"<emitter type=\"sunsky\"/>", 2, "sunsky"},
+    {"<emitter type=\"sunsky\"/>", 2, "emitter 'sunsky': not modelled by pcbpt"},
+    {"<emitter type=\"constant\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
+    {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"samplingWeight\" value=\"2e6\"/></emitter>", 3, "samplingWeight"},
     {"<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>", 2, "nested"},
     {"<shape type=\"cube\">\n<emitter type=\"area\"/></shape>", 3, "radiance"},
     {"<shape type=\"cube\">\n<emitter type=\"point\"/></shape>", 3, "point"},
@@ -324,15 +333,19 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
     {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
     {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
-    {"<bsdf type=\"roughconductor\"/>", 2, "ggx"},
-    {"<bsdf type=\"roughplastic\">\n<string name=\"distribution\" value=\"beckmann\"/></bsdf>", 2, "beckmann"},
+    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"phong\"/></bsdf>", 2, "phong"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
     {"<bsdf type=\"conductor\"><string name=\"material\" value=\"Xx\"/></bsdf>", 2, "Xx"},
     {"<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"1\"/></bsdf>", 2, "eta and k"},
     {"<bsdf type=\"dielectric\">\n<string name=\"intIOR\" value=\"unobtainium\"/></bsdf>", 3, "unobtainium"},
     {"<bsdf type=\"dielectric\">\n<float name=\"intIOR\" value=\"-1\"/></bsdf>", 2, "intIOR"},
-    {"<bsdf type=\"roughdielectric\"/>", 2, "roughdielectric"},
+    {"<bsdf type=\"roughdielectric\"><float name=\"alpha\" value=\"2\"/></bsdf>", 2, "alpha"},
+    {"<bsdf type=\"ward\">\n<string name=\"variant\" value=\"walter\"/></bsdf>", 3, "variant 'walter'"},
+    {"<bsdf type=\"ward\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"ward\"><rgb name=\"specularReflectance\" value=\"0.6\"/><rgb name=\"diffuseReflectance\" value=\"0.5\"/></bsdf>", 2, "energy"},
+    {"<bsdf type=\"ward\"><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
+    {"<bsdf type=\"twosided\">\n<bsdf type=\"roughdielectric\"/></bsdf>", 3, "dielectric"},
     {"<bsdf type=\"twosided\">\n<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "twosided"},
     {"<bsdf type=\"twosided\">\n<bsdf type=\"dielectric\"/></bsdf>", 3, "dielectric"},
     {"<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
@@ -471,6 +484,8 @@ static const bad_case warn_cases[] = {
     {"\n<integer name=\"maxDepth\" value=\"5\"/>" SENSOR, 3, "scene: parameter 'maxDepth'"},
     {"<bsdf type=\"conductor\">\n<string name=\"distribution\" value=\"ggx\"/></bsdf>" SENSOR, 3, "parameter 'distribution' ignored"},
     {"<bsdf type=\"plastic\">\n<float name=\"alpha\" value=\"0.1\"/></bsdf>" SENSOR, 3, "does not read it either"},
+    {"<bsdf type=\"thindielectric\">\n<float name=\"alpha\" value=\"0.1\"/></bsdf>" SENSOR, 3, "does not read it either"},
+    {"<emitter type=\"constant\">\n<float name=\"scale\" value=\"2\"/></emitter>" SENSOR, 3, "emitter 'constant': parameter 'scale' ignored"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"foo\" value=\"0.5\"/></bsdf>" SENSOR, 3, "'foo'"},
     {"<shape type=\"cube\">\n<string name=\"filename\" value=\"quad.obj\"/></shape>" SENSOR, 3, "shape 'cube': parameter 'filename' ignored"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/>\n<boolean name=\"sampleVisible\" value=\"false\"/></bsdf>" SENSOR, 3, "steers"},
@@ -525,13 +540,17 @@ static void test_warnings(void **state) {
                           "<sensor type=\"perspective\">" FOV "<sampler type=\"independent\"><integer name=\"sampleCount\" value=\"7\"/>"
                           "</sampler><film type=\"hdrfilm\"><boolean name=\"banner\" value=\"false\"/><rfilter type=\"gaussian\"/>"
                           "</film></sensor>\n<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
-                          "<float name=\"samplingWeight\" value=\"3\"/></emitter></shape>",
+                          "<float name=\"samplingWeight\" value=\"3\"/></emitter></shape>"
+                          "<emitter type=\"constant\"><float name=\"samplingWeight\" value=\"0.5\"/></emitter>",
                           &o, &s, &e);
   if (rc) print_error("%s\n", e.msg);
   assert_int_equal(rc, 0);
   assert_int_equal(log.n, 3); /* sampler, banner, rfilter */
   assert_int_equal(s.sample_count, 7);
   assert_true(s.lights[0].sampling_weight == 3.f);
+  assert_int_equal(s.nlights, 2);
+  assert_int_equal(s.lights[1].type, PC_LIGHT_ENV);
+  assert_true(s.lights[1].sampling_weight == 0.5f);
   pc_scene_free(&s);
   th_rm_rf(t.root);
   assert_int_equal(failures, 0);
@@ -659,6 +678,36 @@ static void test_defaults_and_values(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's ward: its defaults (balanced, alpha 0.1, specular 0.2, diffuse 0.5) and the
+ * parameters as dp-veach-lamp writes them. */
+static void test_ward(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"ward\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"ward\"><spectrum name=\"diffuseReflectance\" value=\"0\"/>"
+                            "<rgb name=\"specularReflectance\" value=\"0.61600 0.47520 0.35200\"/><float name=\"alphaU\" value=\"0.4\"/>"
+                            "<float name=\"alphaV\" value=\"0.4\"/><string name=\"variant\" value=\"ward-duer\"/></bsdf></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *m = s.materials;
+  assert_int_equal(m[0].type, PC_MAT_WARD);
+  assert_int_equal(m[0].ward, PC_WARD_BALANCED);
+  assert_true(m[0].alpha == 0.1f);
+  near3(m[0].specular.value, v3s(0.2f), 0);
+  near3(m[0].reflectance.value, v3s(0.5f), 0);
+  assert_int_equal(m[1].type, PC_MAT_WARD);
+  assert_int_equal(m[1].ward, PC_WARD_DUER);
+  assert_true(m[1].alpha == 0.4f);
+  near3(m[1].specular.value, v3(0.616f, 0.4752f, 0.352f), 1e-6f);
+  near3(m[1].reflectance.value, v3s(0), 0);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -775,7 +824,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
       cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_include_and_defines),
+      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
