@@ -92,20 +92,21 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   return PC_OK;
 }
 
-static int submit(pc_client *cl, const pc_study_group *g, pc_method method, const auto_choice *ac, uint64_t group,
-                  uint64_t *job, pc_err *e) {
+static int submit(pc_client *cl, const pc_study_group *g, const pc_study_method *method, const auto_choice *ac,
+                  uint64_t group, uint64_t *job, pc_err *e) {
   pc_render_settings set = g->req->set;
-  set.method = method;
+  set.method = method->method;
+  if (method->pcbpt_k > 0) set.pcbpt_k = method->pcbpt_k;
   set.seed = g->seed;
   double budget = g->seconds * g->workers;
-  if (method == PC_METHOD_AUTO) {
+  if (method->method == PC_METHOD_AUTO) {
     set = ac->set;
     budget = g->workers * pc_pilot_remaining(g->seconds, ac->pilot_worker_seconds / g->workers);
   }
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&set, &ps, &psb);
-  if (method == PC_METHOD_AUTO) ps.auto_report = (char *)ac->report;
+  if (method->method == PC_METHOD_AUTO) ps.auto_report = (char *)ac->report;
   ps.study_group = group;
   ps.halt_worker_seconds = budget;
   ps.snapshots = (uint32_t)g->snapshots;
@@ -157,12 +158,12 @@ static int wait_group(pc_study_farm *f, pc_client *cl, const pc_study_group *g, 
         break;
       }
       if (strcmp(st->state, "failed") == 0 || strcmp(st->state, "cancelled") == 0)
-        rc = pc_errf(e, PC_EIO, "%s job %llu %s: %s", pc_method_name(g->methods[m]), (unsigned long long)jobs[m], st->state,
+        rc = pc_errf(e, PC_EIO, "%s job %llu %s: %s", g->methods[m].name, (unsigned long long)jobs[m], st->state,
                      st->error && *st->error ? st->error : "(no reason given)");
       all_done = all_done && strcmp(st->state, "done") == 0;
       rerun[m] = st->ranges_rerun;
       if (show)
-        dprintf(f->log_fd, " %s %.1f/%.0f worker-s (%u snapshots)", pc_method_name(g->methods[m]), st->worker_seconds,
+        dprintf(f->log_fd, " %s %.1f/%.0f worker-s (%u snapshots)", g->methods[m].name, st->worker_seconds,
                 budget, st->snapshots);
     }
     if (show) {
@@ -232,14 +233,14 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
   rc = pc_client_send_bundle(&cl, g->blob, g->blob_n, g->hash, e);
   auto_choice ac = {0};
   bool with_auto = false;
-  for (int m = 0; m < g->nmethods; m++) with_auto = with_auto || g->methods[m] == PC_METHOD_AUTO;
+  for (int m = 0; m < g->nmethods; m++) with_auto = with_auto || g->methods[m].method == PC_METHOD_AUTO;
   double t0 = now_s();
   if (!rc && with_auto) {
     rc = start_worker(f, e);
     if (!rc) rc = run_pilot(&cl, g, &ac, e);
     if (!rc) dprintf(f->log_fd, "  %s: auto %s\n", g->label, ac.report);
   }
-  for (int m = 0; !rc && m < g->nmethods; m++) rc = submit(&cl, g, g->methods[m], &ac, group, &jobs[m], e);
+  for (int m = 0; !rc && m < g->nmethods; m++) rc = submit(&cl, g, &g->methods[m], &ac, group, &jobs[m], e);
   if (!rc) rc = start_worker(f, e);
   if (!rc) rc = wait_group(f, &cl, g, jobs, rerun, e);
   double group_wall = now_s() - t0;
@@ -265,10 +266,10 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
     const char *dir = g->keep_dir ? g->keep_dir : ".";
     snprintf(tmp, sizeof tmp, "%s/.snapshot.%ld.exr", dir, (long)getpid());
     if (g->keep_path) snprintf(keep, sizeof keep, "%s", g->keep_path);
-    else if (g->keep_dir) snprintf(keep, sizeof keep, "%s/%s.exr", g->keep_dir, pc_method_name(run->method));
+    else if (g->keep_dir) snprintf(keep, sizeof keep, "%s/%s.exr", g->keep_dir, run->method.name);
     for (uint32_t k = 1; !rc && k <= nsnaps; k++) rc = fetch_point(&cl, g, jobs[m], k, tmp, false, run, e);
     if (!rc) rc = fetch_point(&cl, g, jobs[m], 0, keep[0] ? keep : tmp, keep[0] != 0, run, e);
-    if (!rc && run->method == PC_METHOD_AUTO) {
+    if (!rc && run->method.method == PC_METHOD_AUTO) {
       /* the pilot's cost counts: every point of auto's curve comes after it */
       for (int k = 0; k < run->nsnaps; k++) {
         run->snaps[k].worker_seconds += ac.pilot_worker_seconds;
