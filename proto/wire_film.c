@@ -4,8 +4,9 @@
  * mantissa planes of nearby pixels repeat, so zstd at a fast level packs them ~20% smaller
  * and ~3x faster than interleaved doubles. PCFILM01 (plain little-endian doubles) is still
  * read, so checkpoints of older coordinators load, and so is a checkpoint without the film's
- * last layer, beauty_sq (written before it existed): it loads with beauty_sq empty, and the
- * job's error estimate says it cannot tell (film.h). Uploads must be whole. */
+ * last layers, beauty_sq and beauty_max, or beauty_max alone (written before they existed): it
+ * loads with them empty, and the job's error estimate and largest iterations say they cannot
+ * tell (film.h). Uploads must be whole. beauty_max merges by max, every other layer by sum. */
 #include "wire_film.h"
 
 #include <math.h>
@@ -34,13 +35,6 @@ static size_t size_of(const pc_film *f, int nlayers) {
 }
 
 size_t pc_wire_film_size(const pc_film *f) { return size_of(f, f->nlayers); }
-
-/* Layers a serialized film of `like`'s shape may hold: all, or (old checkpoints) all but a
- * last beauty_sq. */
-static int short_layers(const pc_film *like) {
-  int q = pc_film_square_layer(like);
-  return q >= 0 && q == like->nlayers - 1 ? like->nlayers - 1 : like->nlayers;
-}
 
 /* Plane by plane, so the loops vectorize. */
 static void put_block(uint8_t *d, const double *v, size_t m) {
@@ -220,7 +214,7 @@ static int src_end(film_src *s, pc_err *e) {
 
 /* Reads and checks a serialized film's header against the shape of `like`; *planes tells the
  * format, *nl how many of like's layers it holds (all, or with `whole` false maybe all but
- * beauty_sq), counts[] and *dropped its counts. */
+ * the per-iteration layers at the end), counts[] and *dropped its counts. */
 static int read_header(film_src *s, const pc_film *like, bool whole, bool *planes, int *nlp, uint64_t *counts,
                        uint64_t *dropped, pc_err *e) {
   const uint8_t *buf = s->total >= HEAD ? src_read(s, HEAD, e) : NULL;
@@ -231,7 +225,7 @@ static int read_header(film_src *s, const pc_film *like, bool whole, bool *plane
   *dropped = get64(buf + 20);
   if ((int)w != like->w || (int)h != like->h)
     return pc_errf(e, PC_EINVAL, "film: resolution %ux%u, the job has %dx%d", w, h, like->w, like->h);
-  if ((int)nl != like->nlayers && (whole || (int)nl != short_layers(like)))
+  if ((int)nl != like->nlayers && (whole || (int)nl < pc_film_per_iteration_first(like) || (int)nl > like->nlayers))
     return pc_errf(e, PC_EINVAL, "film: %u layers, the job has %d", nl, like->nlayers);
   if (s->total != size_of(like, (int)nl))
     return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", s->total, size_of(like, (int)nl));
@@ -252,8 +246,9 @@ static int read_header(film_src *s, const pc_film *like, bool whole, bool *plane
 /* The first pass: the header, then that every sum is finite and, for a delta (bounded), under
  * 2^PC_WIRE_SAMPLE_LOG2 per sample of its layer (2^(2 PC_WIRE_SAMPLE_LOG2) for beauty_sq, whose
  * samples are squares; a biased exponent of at most 1023 + that + the bit length of the count
- * - 1), before anything is read into a film. A delta holds every layer; a checkpoint may be
- * one written before beauty_sq (*nl tells). */
+ * - 1; a maximum is under the same bound as a sum), before anything is read into a film. A
+ * delta holds every layer; a checkpoint may be one written before beauty_sq or beauty_max (*nl
+ * tells). */
 static int check(film_src *s, const pc_film *like, bool bounded, bool *planes, int *nl, uint64_t *counts, pc_err *e) {
   uint64_t dropped;
   int rc = read_header(s, like, bounded, planes, nl, counts, &dropped, e);
@@ -294,7 +289,7 @@ static int apply(film_src *s, pc_film *into, bool add, pc_wire_counts_judge judg
   double v[PLANE_BLOCK];
   into->dropped_nonfinite = add ? into->dropped_nonfinite + dropped : dropped;
   for (int l = 0; l < nl; l++) into->layers[l].count = (add ? into->layers[l].count : 0) + counts[l];
-  for (int l = nl; l < into->nlayers; l++) { /* an old checkpoint's missing beauty_sq (set only) */
+  for (int l = nl; l < into->nlayers; l++) { /* an old checkpoint's missing beauty_sq, beauty_max (set only) */
     into->layers[l].count = 0;
     if (into->layers[l].sum) memset(into->layers[l].sum, 0, px * sizeof(double));
   }
@@ -306,7 +301,9 @@ static int apply(film_src *s, pc_film *into, bool add, pc_wire_counts_judge judg
       const uint8_t *d = src_read(s, 8 * m, e);
       if (!d) return e->code;
       get_block(d, planes, m, add ? v : sum);
-      if (add)
+      if (add && into->layers[l].norm == PC_NORM_MAX)
+        for (size_t i = 0; i < m; i++) sum[i] = v[i] > sum[i] ? v[i] : sum[i];
+      else if (add)
         for (size_t i = 0; i < m; i++) sum[i] += v[i];
     }
   return 0;

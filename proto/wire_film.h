@@ -21,7 +21,8 @@ void pc_wire_film_pack_to(const pc_film *f, uint8_t *out);
 int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e);
 /* Fills `into` (already initialised with the expected shape and layers) from buf; checks the
  * shape, layer names and norms, and that every sum is finite. `into` is unchanged on error.
- * A film serialized before beauty_sq existed (one layer short) loads with beauty_sq empty. */
+ * A film serialized before beauty_sq or beauty_max existed (one or two layers short) loads
+ * with them empty. */
 int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
 /* A delta's sum per sample of its layer stays under 2^PC_WIRE_SAMPLE_LOG2 (1.8e19; no real
  * radiance comes near): larger finite sums would add to infinity or overflow the image's
@@ -31,7 +32,7 @@ int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
  * an error code (with e set) refuses. */
 typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *e);
 /* The same checks (a non-finite or unbounded sum is refused before the counts are judged), then judge
- * (NULL: any counts), then adds buf's sums, counts and dropped samples into `into`
+ * (NULL: any counts), then adds buf's sums (beauty_max: their max), counts and dropped samples into `into`
  * (unchanged on error): a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 
@@ -39,7 +40,7 @@ int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts
  * a small window (once to check, once to add) instead of into a copy of the film. */
 int pc_wire_film_add_z(const uint8_t *z, size_t zn, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 /* A checkpoint: a zstd frame of a serialized film (whole, or of an older coordinator without
- * beauty_sq) checked and unpacked into `into` as pc_wire_film_unpack does, the same way. */
+ * beauty_sq and/or beauty_max) checked and unpacked into `into` as pc_wire_film_unpack does, the same way. */
 int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e);
 
 /* Where pc_wire_film_compress puts the compressed bytes as they come: 0, or an error code. */

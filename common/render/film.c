@@ -1,5 +1,6 @@
 /* film.c: per-strategy layers of unnormalized sums and their sample counts (DESIGN.md §4.2),
- * and the beauty's variance estimated from the beauty_sq layer (docs/variance.md). */
+ * the beauty's variance estimated from the beauty_sq layer and the per-pixel largest iteration
+ * in beauty_max (docs/variance.md). */
 #include "film.h"
 
 #include <math.h>
@@ -41,8 +42,9 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
       rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, e);
       if (rc == PC_OK) f->strategy_index[k + 1 - t][t] = (int8_t)(f->nlayers - 1);
     }
-  /* last, so a film serialized before it existed is this film's layers but the last */
+  /* last, so a film serialized before they existed is this film's layers but the last */
   if (rc == PC_OK) rc = add_layer(f, "beauty_sq", PC_NORM_SQUARE, e);
+  if (rc == PC_OK) rc = add_layer(f, "beauty_max", PC_NORM_MAX, e);
   if (rc != PC_OK) pc_film_free(f);
   return rc;
 }
@@ -52,17 +54,33 @@ void pc_film_free(pc_film *f) {
   memset(f, 0, sizeof *f);
 }
 
-int pc_film_square_layer(const pc_film *f) {
+static int layer_of_norm(const pc_film *f, pc_norm norm) {
   for (int i = f->nlayers - 1; i >= 0; i--)
-    if (f->layers[i].norm == PC_NORM_SQUARE) return i;
+    if (f->layers[i].norm == norm) return i;
   return -1;
 }
+int pc_film_square_layer(const pc_film *f) { return layer_of_norm(f, PC_NORM_SQUARE); }
+int pc_film_max_layer(const pc_film *f) { return layer_of_norm(f, PC_NORM_MAX); }
 
-void pc_film_drop_square(pc_film *f) {
-  int q = pc_film_square_layer(f);
-  if (q < 0) return;
-  free(f->layers[q].sum);
-  f->layers[q].sum = NULL;
+static bool per_iteration(pc_norm norm) { return norm == PC_NORM_SQUARE || norm == PC_NORM_MAX; }
+
+int pc_film_per_iteration_first(const pc_film *f) {
+  int i = f->nlayers;
+  while (i > 0 && per_iteration(f->layers[i - 1].norm)) i--;
+  return i;
+}
+
+void pc_film_drop_per_iteration(pc_film *f) {
+  for (int i = 0; i < f->nlayers; i++)
+    if (per_iteration(f->layers[i].norm)) {
+      free(f->layers[i].sum);
+      f->layers[i].sum = NULL;
+    }
+}
+
+bool pc_film_max_complete(const pc_film *f) {
+  int m = pc_film_max_layer(f);
+  return m >= 0 && f->layers[m].sum && f->layers[m].count > 0 && f->layers[m].count == f->layers[PC_LAYER_PT].count;
 }
 
 void pc_film_clear(pc_film *f) {
@@ -85,7 +103,9 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
   for (int i = 0; i < dst->nlayers; i++) {
     double *d = dst->layers[i].sum;
     const double *s = src->layers[i].sum;
-    if (d && s)
+    if (d && s && dst->layers[i].norm == PC_NORM_MAX)
+      for (size_t j = 0; j < n; j++) d[j] = s[j] > d[j] ? s[j] : d[j];
+    else if (d && s)
       for (size_t j = 0; j < n; j++) d[j] += s[j];
     dst->layers[i].count += src->layers[i].count;
   }
@@ -96,6 +116,7 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
 /* What a layer's sums are multiplied by to make its image. */
 static double layer_scale(const pc_film *f, const pc_film_layer *l) {
   if (l->count == 0) return 0.0;
+  if (l->norm == PC_NORM_MAX) return 1.0; /* a maximum, not a sum */
   return l->norm == PC_NORM_LIGHT ? (double)f->w * f->h / (double)l->count : 1.0 / (double)l->count;
 }
 

@@ -5,8 +5,11 @@
  * light paths and are scaled by W*H/count. The last layer, "beauty_sq", holds the per-pixel sum
  * over iterations of the square of each iteration's whole beauty (its eye layers plus its light
  * splats scaled by W*H/N_L): with the sums it gives an unbiased estimate of the variance of the
- * mean, i.e. of the image's own error (docs/variance.md). It counts iterations like an eye layer
- * and is added, shipped and checkpointed like every other layer. */
+ * mean, i.e. of the image's own error (docs/variance.md). After it, "beauty_max" holds per pixel
+ * and channel the largest single iteration's beauty (the same b_i, rounded to single precision):
+ * with the mean it tells how much of a pixel one iteration carried (fireflies, docs/variance.md
+ * "Heavy tails"). Both count iterations like an eye layer and are shipped and checkpointed like
+ * every other layer; beauty_max merges by max, which is exact and order-independent. */
 #ifndef PC_FILM_H
 #define PC_FILM_H
 
@@ -21,8 +24,9 @@ enum { PC_LAYER_PT = 0, PC_LAYER_NEE = 1, PC_LAYER_LT = 2, PC_LAYER_INNER = 3, P
 #define PC_FILM_MAX_LAYERS 64
 #define PC_FILM_MAX_ST 10 /* s and t of per-strategy layers stay below this */
 
-/* PC_NORM_SQUARE: the beauty_sq layer (counts iterations; not an image of its own). */
-typedef enum { PC_NORM_EYE, PC_NORM_LIGHT, PC_NORM_SQUARE } pc_norm;
+/* PC_NORM_SQUARE: the beauty_sq layer (counts iterations; not an image of its own).
+ * PC_NORM_MAX: the beauty_max layer (counts iterations; its sums are maxima, merged by max). */
+typedef enum { PC_NORM_EYE, PC_NORM_LIGHT, PC_NORM_SQUARE, PC_NORM_MAX } pc_norm;
 
 /* relMSE = mean over pixels and channels of (a - ref)^2 / (ref^2 + PC_RELMSE_EPS): the one
  * definition `compare`, studies and the film's own estimate use. */
@@ -31,7 +35,8 @@ typedef enum { PC_NORM_EYE, PC_NORM_LIGHT, PC_NORM_SQUARE } pc_norm;
 typedef struct pc_film_layer {
   char name[16];   /* "pt", "nee", "lt", "inner", or "s2t3" for per-strategy debug layers */
   pc_norm norm;
-  double *sum;     /* w*h*3; NULL for beauty_sq in films only rendered into (pc_film_drop_square) */
+  double *sum;     /* w*h*3; NULL for beauty_sq and beauty_max in films only rendered into
+                      (pc_film_drop_per_iteration) */
   uint64_t count;  /* iterations (eye) or light paths (light) accumulated */
 } pc_film_layer;
 
@@ -44,7 +49,8 @@ typedef struct pc_film {
 } pc_film;
 
 /* Creates the four standard layers; with strategy_depth > 0 also one layer per (s,t) with
- * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d"; then beauty_sq. */
+ * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d"; then beauty_sq and
+ * beauty_max. */
 int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
 void pc_film_free(pc_film *f);
 void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
@@ -54,11 +60,16 @@ static inline int pc_film_strategy_layer(const pc_film *f, int s, int t) {
 }
 /* Index of the beauty_sq layer, or -1. */
 int pc_film_square_layer(const pc_film *f);
-/* Frees the beauty_sq storage of a film that is only rendered into and never read or merged
- * (the renderer's scratch and per-thread splats), so a job holds one extra layer per film it
- * keeps, not per thread. */
-void pc_film_drop_square(pc_film *f);
-/* Adds src into dst (same shape, same layers): sums and counts. */
+/* Index of the beauty_max layer, or -1. */
+int pc_film_max_layer(const pc_film *f);
+/* Index of the first of the per-iteration layers at the end (beauty_sq, beauty_max): a
+ * checkpoint written before they existed holds the layers before it. */
+int pc_film_per_iteration_first(const pc_film *f);
+/* Frees the beauty_sq and beauty_max storage of a film that is only rendered into and never
+ * read or merged (the renderer's scratch and per-thread splats), so a job holds the extra
+ * layers once per film it keeps, not per thread. */
+void pc_film_drop_per_iteration(pc_film *f);
+/* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max. */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
 /* Normalized RGB of layer i into out (w*h*3). */
 void pc_film_layer_image(const pc_film *f, int i, float *out);
@@ -75,9 +86,13 @@ bool pc_film_variance(const pc_film *f, float *out);
  * (mean^2 alone overestimates it by the variance and biases the estimate low). Returns false
  * like pc_film_variance (*out = NAN). */
 bool pc_film_relmse_estimate(const pc_film *f, double *out);
+/* Whether beauty_max has seen every iteration the sums have (false for a job resumed from a
+ * checkpoint written before it existed, and with no iteration). */
+bool pc_film_max_complete(const pc_film *f);
 /* Writes the beauty and every layer (each normalized by its count) to a multi-layer EXR, with
  * the per-layer counts and `extra` attributes in the header; when the film can tell, also the
- * layer `variance` (pc_film_variance) and the attribute pcbpt.relmse_estimate. */
+ * layer `variance` (pc_film_variance) and the attribute pcbpt.relmse_estimate, and beauty_max
+ * (unscaled) only when pc_film_max_complete. */
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e);
 /* True if every sum is finite. */
 bool pc_film_is_finite(const pc_film *f);

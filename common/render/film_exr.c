@@ -1,5 +1,5 @@
 /* film_exr.c: writes a film as a multi-layer EXR: the beauty in R,G,B, every layer
- * normalized by its own count as <layer>.R/G/B, the per-pixel variance of the beauty's mean as
+ * normalized by its own count as <layer>.R/G/B (beauty_max as it is, the largest iteration), the per-pixel variance of the beauty's mean as
  * variance.R/G/B, and each layer's count (pcbpt.count.<layer>) and the estimated relMSE
  * (pcbpt.relmse_estimate) in the header, so a reader can recover the sums and knows the error. */
 #include <stdio.h>
@@ -27,6 +27,7 @@ int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *ext
     snprintf(names[i], sizeof names[i], "pcbpt.count.%s", f->layers[i].name);
     attrs[na++] = (pc_exr_attr){.name = names[i], .type = PC_ATTR_DOUBLE, .d = (double)f->layers[i].count};
     if (f->layers[i].norm == PC_NORM_SQUARE) continue; /* a means to the variance, not an image */
+    if (f->layers[i].norm == PC_NORM_MAX && !pc_film_max_complete(f)) continue; /* cannot tell */
     float *dst = pix + n * (size_t)k;
     pc_film_layer_image(f, i, dst);
     layers[k].name = f->layers[i].name;

@@ -131,7 +131,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   r->tiles_x = (settings->width + TILE - 1) / TILE;
   r->tiles_y = (settings->height + TILE - 1) / TILE;
   rc = pc_film_init(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
-  pc_film_drop_square(&r->scratch); /* fold_iteration squares straight into the caller's film */
+  pc_film_drop_per_iteration(&r->scratch); /* fold_iteration writes them straight into the caller's film */
   if (rc == PC_OK) rc = pc_pool_create(threads, &r->pool, e);
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
@@ -142,7 +142,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   }
   for (int i = 0; rc == PC_OK && i < threads; i++) {
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
-    pc_film_drop_square(&r->splat[i]);
+    pc_film_drop_per_iteration(&r->splat[i]);
   }
   if (rc != PC_OK) {
     pc_renderer_destroy(r);
@@ -238,7 +238,8 @@ static void light_chunk(void *arg, int thread, int item) {
 /* Folds a finished iteration into the caller's film, in parallel over bands of rows: each
  * layer's scratch sums plus, for light layers, every thread's splats, which are zeroed on the
  * way so the next iteration starts clean; and the square of the iteration's whole beauty into
- * beauty_sq (its light splats are complete only here, after every thread's light paths). Done
+ * beauty_sq and its maximum into beauty_max (its light splats are complete only here, after
+ * every thread's light paths). Done
  * serially this pass would cap the thread speed-up (it moves every layer of the image once per
  * iteration). */
 #define FOLD_ROWS 8
@@ -247,6 +248,7 @@ typedef struct fold_job {
   pc_film *film;
   bool light;
   int square;                  /* the film's beauty_sq layer, -1 if none */
+  int max;                     /* the film's beauty_max layer, -1 if none */
   double beauty_scale[PC_LAYER_STD_COUNT]; /* one iteration's layer sums -> its beauty */
   atomic_uint_fast64_t dropped; /* squares that overflowed */
 } fold_job;
@@ -273,17 +275,24 @@ static void fold_rows(void *arg, int thread, int item) {
         }
       }
     }
-  if (j->square >= 0) {
-    double *q = j->film->layers[j->square].sum;
+  if (j->square >= 0 || j->max >= 0) {
+    double *q = j->square >= 0 ? j->film->layers[j->square].sum : NULL;
+    double *mx = j->max >= 0 ? j->film->layers[j->max].sum : NULL;
     const double *s0 = r->scratch.layers[0].sum, *s1 = r->scratch.layers[1].sum, *s2 = r->scratch.layers[2].sum,
                  *s3 = r->scratch.layers[3].sum;
     const double *c = j->beauty_scale;
     uint64_t bad = 0;
     /* each square is rounded to single precision (relative 6e-8, far below any variance
      * worth estimating): a few iterations' sum then leaves the low byte planes of an upload
-     * zero, which halves what beauty_sq adds to its compressed size (docs/variance.md) */
+     * zero, which halves what beauty_sq adds to its compressed size (docs/variance.md); the
+     * maximum likewise (a maximum of rounded values stays one) */
     for (size_t k = lo; k < hi; k++) {
       double b = s0[k] * c[0] + s1[k] * c[1] + s2[k] * c[2] + s3[k] * c[3];
+      if (mx) {
+        double bf = (double)(float)b;
+        if (bf > mx[k] && isfinite(bf)) mx[k] = bf;
+      }
+      if (!q) continue;
       double b2 = (double)(float)(b * b);
       if (isfinite(b2)) q[k] += b2;
       else bad++;
@@ -311,6 +320,8 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
                         : light ? (double)r->set.width * r->set.height / (double)r->n_light
                                 : 0.0;
   if (j.square >= 0 && !film->layers[j.square].sum) j.square = -1;
+  j.max = pc_film_max_layer(film);
+  if (j.max >= 0 && !film->layers[j.max].sum) j.max = -1;
   atomic_init(&j.dropped, 0);
   pc_pool_run(r->pool, (r->set.height + FOLD_ROWS - 1) / FOLD_ROWS, fold_rows, &j);
   for (int i = 0; i < film->nlayers; i++) {

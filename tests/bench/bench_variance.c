@@ -1,7 +1,7 @@
 /* bench_variance.c: benchmark (not a test) of what the beauty_sq layer costs (docs/variance.md).
  *   bench_variance SCENE.xml [ITERATIONS [THREADS [with|without]]]     (defaults 8, 2)
  * Renders the scene (its own method and size) one iteration at a time, alternating a film with
- * beauty_sq and one without it (pc_film_drop_square: the fold then skips the squares), so
+ * beauty_sq and one without it (pc_film_drop_per_iteration: the fold then skips the squares), so
  * both see the same machine load; prints the mean CPU time of an iteration of each and the
  * difference.
  * Then packs a 4-iteration delta both ways and prints the raw and zstd bytes of an upload.
@@ -63,7 +63,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "bench_variance: %s\n", e.msg);
     return 1;
   }
-  pc_film_drop_square(&without);
+  pc_film_drop_per_iteration(&without);
   if (argc > 4) { /* one variant only, for instruction counts */
     if (strcmp(argv[4], "with") != 0 && strcmp(argv[4], "without") != 0) return 2;
     pc_film *f = strcmp(argv[4], "without") == 0 ? &without : &with;

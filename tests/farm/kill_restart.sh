@@ -1,6 +1,7 @@
 # kill_restart.sh: SIGKILL a worker mid-job, then SIGKILL the coordinator and restart it on
 # the same port: the job completes and counts exactly the requested iterations, its merged
-# sums and per-iteration squares (beauty_sq) are those of a single-process render of them, so
+# sums and per-iteration squares (beauty_sq) are those of a single-process render of them and
+# its per-pixel largest iterations (beauty_max, merged by max) the same bit for bit, so
 # the relMSE the job reports (status) is the one that render estimates, and the checkpoint
 # files a kill leaves behind (stand-ins here: a later generation never recorded, a temporary)
 # are removed when the job resumes (issue 10).
@@ -23,8 +24,8 @@ timeout 55 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "wait"
 [ "$(ls "$T/data/jobs/$J" | grep -c '^ckpt\.')" = 1 ] || fail "stale checkpoints left: $(ls "$T/data/jobs/$J")"
 CK=$(ls "$T/data/jobs/$J"/ckpt.*)
 "$B/tests/farm_tool" exact "$CK" "$S/scenes/furnace/scene.xml" --spp 2000 --width 64 --height 64 >"$T/exact.out" \
-  || { cat "$T/exact.out"; fail "the merged sums or squares differ from a single-process render"; }
-grep -E "beauty_sq|estimated" "$T/exact.out"
+  || { cat "$T/exact.out"; fail "the merged sums, squares or maxima differ from a single-process render"; }
+grep -E "beauty_sq|beauty_max|estimated" "$T/exact.out"
 EST=$(sed -n 's/^estimated relMSE \([^/]*\)\/.*/\1/p' "$T/exact.out")
 python3 -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(abs(a - b) > 1e-5 * b)" \
   "$(job_field "$J" relmse_estimate)" "$EST" || fail "status says relMSE $(job_field "$J" relmse_estimate), the film $EST"

@@ -1,6 +1,7 @@
 /* test_film.c: per-strategy layers keep their own counts and normalizations (DESIGN.md §4.2):
  * eye layers divide by iterations, light layers by light paths / (W*H); adding films adds sums
- * and counts; non-finite samples are dropped and counted; the EXR carries layers and counts. */
+ * and counts (beauty_max: their max, in any order); non-finite samples are dropped and counted;
+ * the EXR carries layers and counts. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -20,10 +21,13 @@ static void test_layers_and_normalization(void **state) {
   pc_film f;
   pc_err e = {0};
   assert_int_equal(pc_film_init(&f, 4, 2, 2, &e), 0);
-  /* 4 standard + path length 1 (s1t1, s0t2) + length 2 (s2t1, s1t2, s0t3) + beauty_sq */
-  assert_int_equal(f.nlayers, 10);
+  /* 4 standard + path length 1 (s1t1, s0t2) + length 2 (s2t1, s1t2, s0t3) + beauty_sq, beauty_max */
+  assert_int_equal(f.nlayers, 11);
   assert_int_equal(pc_film_square_layer(&f), 9);
   assert_int_equal(f.layers[9].norm, PC_NORM_SQUARE);
+  assert_int_equal(pc_film_max_layer(&f), 10);
+  assert_int_equal(f.layers[10].norm, PC_NORM_MAX);
+  assert_int_equal(pc_film_per_iteration_first(&f), 9);
   assert_string_equal(f.layers[PC_LAYER_LT].name, "lt");
   assert_int_equal(f.layers[PC_LAYER_LT].norm, PC_NORM_LIGHT);
   int l = pc_film_strategy_layer(&f, 1, 2);
@@ -72,8 +76,9 @@ static void test_layers_and_normalization(void **state) {
   assert_int_equal(pc_film_write_exr(&f, path, NULL, 0, &e), 0);
   pc_exr_file x;
   assert_int_equal(pc_exr_read_layers(path, &x, &e), 0);
-  /* the beauty and every layer but beauty_sq; no variance: beauty_sq saw no iteration */
-  assert_int_equal(x.nlayers, f.nlayers);
+  /* the beauty and every layer but beauty_sq and beauty_max; no variance and no maximum:
+   * beauty_sq and beauty_max saw no iteration */
+  assert_int_equal(x.nlayers, f.nlayers - 1);
   double v = 0;
   assert_false(pc_film_relmse_estimate(&f, &v));
   assert_true(isnan(v));
@@ -151,6 +156,68 @@ static void test_variance(void **state) {
   pc_film_free(&f);
 }
 
+/* Three films of per-iteration maxima: merged in any order, beauty_max is the same max bit for
+ * bit (and the sums the same sums); the EXR carries it unscaled once it has seen every
+ * iteration, and not while it lags behind the sums (a job resumed from an older checkpoint). */
+static void fill_max_film(pc_film *f, int seed) {
+  int m = pc_film_max_layer(f);
+  for (int j = 0; j < 6; j++) {
+    f->layers[PC_LAYER_PT].sum[j] = seed + j;
+    f->layers[m].sum[j] = (double)((seed * 7 + j * 5) % 11) + 0.125 * seed;
+  }
+  for (int l = 0; l < f->nlayers; l++) f->layers[l].count = l == PC_LAYER_LT ? 2u * (unsigned)seed : (unsigned)seed;
+}
+
+static void test_max_merge(void **state) {
+  (void)state;
+  pc_err e = {0};
+  pc_film part[3], abc, cba;
+  for (int i = 0; i < 3; i++) {
+    assert_int_equal(pc_film_init(&part[i], 2, 1, 0, &e), 0);
+    fill_max_film(&part[i], i + 1);
+  }
+  assert_int_equal(pc_film_init(&abc, 2, 1, 0, &e), 0);
+  assert_int_equal(pc_film_init(&cba, 2, 1, 0, &e), 0);
+  for (int i = 0; i < 3; i++) assert_int_equal(pc_film_add(&abc, &part[i], &e), 0);
+  for (int i = 2; i >= 0; i--) assert_int_equal(pc_film_add(&cba, &part[i], &e), 0);
+  int m = pc_film_max_layer(&abc);
+  assert_int_equal(m, PC_LAYER_STD_COUNT + 1);
+  for (int j = 0; j < 6; j++) {
+    double want = 0;
+    for (int i = 0; i < 3; i++) want = fmax(want, part[i].layers[m].sum[j]);
+    assert_true(abc.layers[m].sum[j] == want && cba.layers[m].sum[j] == want);
+    assert_true(abc.layers[PC_LAYER_PT].sum[j] == 3 * j + 6);
+  }
+  assert_int_equal(abc.layers[m].count, 6);
+  assert_true(pc_film_max_complete(&abc));
+
+  char dir[] = "/tmp/pcbpt-film-XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char path[256];
+  snprintf(path, sizeof path, "%s/m.exr", dir);
+  for (int lag = 0; lag < 2; lag++) {
+    abc.layers[m].count = 6 - lag;
+    assert_int_equal(pc_film_max_complete(&abc), lag == 0);
+    assert_int_equal(pc_film_write_exr(&abc, path, NULL, 0, &e), 0);
+    pc_exr_file x;
+    assert_int_equal(pc_exr_read_layers(path, &x, &e), 0);
+    int found = -1;
+    for (int i = 0; i < x.nlayers; i++)
+      if (strcmp(x.names[i], "beauty_max") == 0) found = i;
+    if (lag) assert_int_equal(found, -1);
+    else {
+      assert_true(found >= 0);
+      for (int j = 0; j < 6; j++) assert_true(x.layers[found].rgb[j] == (float)abc.layers[m].sum[j]);
+    }
+    pc_exr_file_free(&x);
+    unlink(path);
+  }
+  rmdir(dir);
+  for (int i = 0; i < 3; i++) pc_film_free(&part[i]);
+  pc_film_free(&abc);
+  pc_film_free(&cba);
+}
+
 static void test_bad_sizes(void **state) {
   (void)state;
   pc_film f;
@@ -163,6 +230,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_layers_and_normalization),
       cmocka_unit_test(test_variance),
+      cmocka_unit_test(test_max_merge),
       cmocka_unit_test(test_bad_sizes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

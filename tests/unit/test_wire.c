@@ -316,52 +316,122 @@ static void film_blocks(void **st) {
   free_film(&a); free_film(&b);
 }
 
-/* A checkpoint of a coordinator from before beauty_sq (one layer short) loads with beauty_sq
- * empty, so the job's estimate says it cannot tell; an upload one layer short is refused. */
-static void film_without_square(void **st) {
+/* A checkpoint of a coordinator from before beauty_sq and beauty_max (two layers short), or
+ * before beauty_max alone (one short), loads with the missing layers empty, so the job says it
+ * cannot tell its error or its largest iterations; an upload short of a layer is refused. */
+static void film_without_per_iteration(void **st) {
   (void)st;
   pc_err e = {0};
   pc_film old, now;
-  assert_int_equal(pc_film_init(&old, 3, 2, 0, &e), 0);
   assert_int_equal(pc_film_init(&now, 3, 2, 0, &e), 0);
-  int q = pc_film_square_layer(&old);
-  assert_int_equal(q, old.nlayers - 1);
-  free(old.layers[q].sum); /* the old coordinator's film: the same layers but the last */
-  old.nlayers--;
-  for (int l = 0; l < old.nlayers; l++) {
-    old.layers[l].count = l == PC_LAYER_LT ? 30 : 5;
-    for (int i = 0; i < 18; i++) old.layers[l].sum[i] = l + 0.25 * i;
+  int q = pc_film_square_layer(&now), mx = pc_film_max_layer(&now);
+  assert_int_equal(q, now.nlayers - 2);
+  assert_int_equal(mx, now.nlayers - 1);
+  for (int missing = 2; missing >= 1; missing--) {
+    assert_int_equal(pc_film_init(&old, 3, 2, 0, &e), 0);
+    for (int l = old.nlayers - missing; l < old.nlayers; l++) free(old.layers[l].sum);
+    old.nlayers -= missing; /* the old coordinator's film: the same layers but the last */
+    for (int l = 0; l < old.nlayers; l++) {
+      old.layers[l].count = l == PC_LAYER_LT ? 30 : 5;
+      for (int i = 0; i < 18; i++) old.layers[l].sum[i] = l + 0.25 * i;
+    }
+    for (int i = 0; i < 18; i++) now.layers[q].sum[i] = now.layers[mx].sum[i] = 9.0;
+    now.layers[q].count = now.layers[mx].count = 4;
+    uint8_t *raw, *z;
+    size_t n, zn;
+    assert_int_equal(pc_wire_film_pack(&old, &raw, &n, &e), 0);
+    assert_true(n < pc_wire_film_size(&now));
+    assert_int_not_equal(pc_wire_film_add(raw, n, &now, NULL, NULL, &e), 0);
+    assert_int_equal(now.layers[q].count, 4);
+    assert_int_equal(pc_wire_compress(raw, n, &z, &zn, &e), 0);
+    assert_int_equal(pc_wire_film_load(z, zn, &now, &e), 0);
+    assert_int_equal(now.layers[PC_LAYER_LT].count, 30);
+    assert_true(now.layers[PC_LAYER_INNER].sum[17] == 3 + 0.25 * 17);
+    assert_int_equal(now.layers[q].count, missing == 2 ? 0 : 5);
+    assert_true(now.layers[q].sum[5] == (missing == 2 ? 0.0 : q + 0.25 * 5));
+    assert_int_equal(now.layers[mx].count, 0);
+    assert_true(now.layers[mx].sum[5] == 0.0);
+    assert_false(pc_film_max_complete(&now));
+    double est;
+    assert_int_equal(pc_film_relmse_estimate(&now, &est), missing == 1);
+    free(raw);
+    free(z);
+    pc_film_free(&old);
   }
-  for (int i = 0; i < 18; i++) now.layers[q].sum[i] = 9.0;
-  now.layers[q].count = 4;
+  /* a film three layers short is no checkpoint of this job */
+  assert_int_equal(pc_film_init(&old, 3, 2, 0, &e), 0);
+  for (int l = old.nlayers - 3; l < old.nlayers; l++) free(old.layers[l].sum);
+  old.nlayers -= 3;
   uint8_t *raw, *z;
   size_t n, zn;
   assert_int_equal(pc_wire_film_pack(&old, &raw, &n, &e), 0);
-  assert_true(n < pc_wire_film_size(&now));
-  assert_int_not_equal(pc_wire_film_add(raw, n, &now, NULL, NULL, &e), 0);
-  assert_int_equal(now.layers[q].count, 4);
   assert_int_equal(pc_wire_compress(raw, n, &z, &zn, &e), 0);
-  assert_int_equal(pc_wire_film_load(z, zn, &now, &e), 0);
-  assert_int_equal(now.layers[PC_LAYER_LT].count, 30);
-  assert_true(now.layers[PC_LAYER_INNER].sum[17] == 3 + 0.25 * 17);
-  assert_int_equal(now.layers[q].count, 0);
-  assert_true(now.layers[q].sum[5] == 0.0);
-  double est;
-  assert_false(pc_film_relmse_estimate(&now, &est));
+  assert_int_equal(pc_wire_film_load(z, zn, &now, &e), PC_EINVAL);
   free(raw);
   free(z);
-  /* a whole film loads the same way, beauty_sq included */
-  now.layers[q].count = 5;
-  now.layers[q].sum[2] = 7.0;
-  assert_int_equal(pc_wire_film_pack(&now, &raw, &n, &e), 0);
-  assert_int_equal(pc_wire_compress(raw, n, &z, &zn, &e), 0);
-  now.layers[q].sum[2] = 0.0;
-  assert_int_equal(pc_wire_film_load(z, zn, &now, &e), 0);
-  assert_true(now.layers[q].sum[2] == 7.0 && now.layers[q].count == 5);
-  free(raw);
-  free(z);
-  pc_film_free(&now);
   pc_film_free(&old);
+  pc_film_free(&now);
+}
+
+/* The checkpoint round trip keeps beauty_sq and beauty_max bit for bit; uploads merge
+ * beauty_max by max, in either order, and everything else by sum. */
+static void film_max_roundtrip(void **st) {
+  (void)st;
+  pc_err e = {0};
+  pc_film a, b, ab, ba, back;
+  assert_int_equal(pc_film_init(&a, 50, 50, 0, &e), 0);
+  assert_int_equal(pc_film_init(&b, 50, 50, 0, &e), 0);
+  int q = pc_film_square_layer(&a), mx = pc_film_max_layer(&a);
+  for (int l = 0; l < a.nlayers; l++) {
+    a.layers[l].count = l == PC_LAYER_LT ? 6 : 3;
+    b.layers[l].count = l == PC_LAYER_LT ? 10 : 5;
+  }
+  for (int i = 0; i < 7500; i++) {
+    a.layers[PC_LAYER_PT].sum[i] = i / 7.0;
+    b.layers[PC_LAYER_PT].sum[i] = i / 3.0;
+    a.layers[q].sum[i] = (double)(float)(i / 5.0);
+    a.layers[mx].sum[i] = (double)(float)((i * 37 % 101) / 9.0);
+    b.layers[mx].sum[i] = (double)(float)((i * 53 % 103) / 9.0);
+  }
+  uint8_t *za, *zb;
+  size_t zan, zbn;
+  assert_int_equal(pc_wire_film_zip(&a, &za, &zan, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&b, &zb, &zbn, &e), 0);
+  assert_int_equal(pc_film_init(&ab, 50, 50, 0, &e), 0);
+  assert_int_equal(pc_film_init(&ba, 50, 50, 0, &e), 0);
+  assert_int_equal(pc_film_init(&back, 50, 50, 0, &e), 0);
+  assert_int_equal(pc_wire_film_add_z(za, zan, &ab, NULL, NULL, &e), 0);
+  assert_int_equal(pc_wire_film_add_z(zb, zbn, &ab, NULL, NULL, &e), 0);
+  assert_int_equal(pc_wire_film_add_z(zb, zbn, &ba, NULL, NULL, &e), 0);
+  assert_int_equal(pc_wire_film_add_z(za, zan, &ba, NULL, NULL, &e), 0);
+  assert_memory_equal(ab.layers[mx].sum, ba.layers[mx].sum, 7500 * sizeof(double));
+  for (int i = 0; i < 7500; i++) {
+    assert_true(ab.layers[mx].sum[i] == fmax(a.layers[mx].sum[i], b.layers[mx].sum[i]));
+    assert_true(ab.layers[PC_LAYER_PT].sum[i] == a.layers[PC_LAYER_PT].sum[i] + b.layers[PC_LAYER_PT].sum[i]);
+  }
+  assert_int_equal(ab.layers[mx].count, 8);
+  assert_true(pc_film_max_complete(&ab));
+  /* a checkpoint of the merged film loads back whole */
+  uint8_t *zc;
+  size_t zcn;
+  assert_int_equal(pc_wire_film_zip(&ab, &zc, &zcn, &e), 0);
+  assert_int_equal(pc_wire_film_load(zc, zcn, &back, &e), 0);
+  for (int l = 0; l < ab.nlayers; l++) {
+    assert_int_equal(back.layers[l].count, ab.layers[l].count);
+    assert_memory_equal(back.layers[l].sum, ab.layers[l].sum, 7500 * sizeof(double));
+  }
+  /* and a worker's further upload merges into it by max */
+  assert_int_equal(pc_wire_film_add_z(za, zan, &back, NULL, NULL, &e), 0);
+  assert_memory_equal(back.layers[mx].sum, ab.layers[mx].sum, 7500 * sizeof(double));
+  assert_int_equal(back.layers[mx].count, 11);
+  free(za);
+  free(zb);
+  free(zc);
+  pc_film_free(&a);
+  pc_film_free(&b);
+  pc_film_free(&ab);
+  pc_film_free(&ba);
+  pc_film_free(&back);
 }
 
 /* A delta's sums are bounded per sample of their layer (2^64 each): 1.7e308 in one sample is
@@ -420,7 +490,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
-    cmocka_unit_test(film_without_square), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
+    cmocka_unit_test(film_without_per_iteration), cmocka_unit_test(film_max_roundtrip), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
