@@ -401,6 +401,25 @@ static void print_reruns(FILE *f, const study_args *a, scene_study *s) {
       }
 }
 
+/* Heavy tails of every run's final image on the largest farm (study.h, docs/variance.md). */
+static void print_tails(FILE *f, const study_args *a, scene_study *s, int big) {
+  fprintf(f, "heavy tails of the final images: per pixel brighter than %g of the image mean, its largest single "
+             "iteration / its mean (1: every iteration alike; N: one iteration carried the pixel)\n",
+          PC_STUDY_TAILS_LIT);
+  fprintf(f, "%-10s %4s %10s %8s %10s %10s %10s  %s\n", "method", "run", "N", "pixels", "p50", "p99", "max", "at");
+  for (int r = 0; r < a->runs; r++)
+    for (int m = 0; m < a->nmethods; m++) {
+      const pc_study_run *run = run_at(a, s, big, r, m);
+      const pc_study_tails *t = &run->tails;
+      if (!t->known) {
+        fprintf(f, "%-10s %4d  (cannot tell: the image has no beauty_max over all its iterations)\n", run->method.name, r + 1);
+        continue;
+      }
+      fprintf(f, "%-10s %4d %10llu %8zu %10.3g %10.3g %10.3g  (%d, %d)\n", run->method.name, r + 1,
+              (unsigned long long)t->iterations, t->pixels, t->p50, t->p99, t->max, t->max_x, t->max_y);
+    }
+}
+
 /* The scaling summary: per method, wall time to the same error at each farm size. */
 static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
   int slot = a->layer;
@@ -529,6 +548,8 @@ static int write_scene(const study_args *a, scene_study *s, FILE *f, pc_err *e) 
       print_spread(f, a, s, big, &table);
     }
     print_reruns(f, a, s);
+    fprintf(f, "\n");
+    print_tails(f, a, s, big);
   }
   if (!rc && a->nsizes > 1) {
     fprintf(f, "\n");

@@ -62,6 +62,21 @@ typedef struct pc_study_snap {
   pc_metrics m[PC_STUDY_NLAYERS]; /* zero where the reference lacks the layer */
 } pc_study_snap;
 
+/* Heavy tails of a method's final image (study_tails.c): over the pixels whose luminance is above
+ * PC_STUDY_TAILS_LIT times the image's mean, the ratio of the pixel's largest single iteration
+ * (the film's beauty_max) to its mean; 1 means every iteration gave the same, N (the
+ * iterations) that one iteration carried the whole pixel. */
+#define PC_STUDY_TAILS_LIT 0.01
+typedef struct pc_study_tails {
+  bool known;           /* the image had beauty_max over all its iterations */
+  uint64_t iterations;  /* N, the bound of every ratio */
+  size_t pixels;        /* lit pixels the ratios are over */
+  double p50, p99, max; /* NAN when no pixel is lit */
+  int max_x, max_y;     /* where the largest ratio is */
+} pc_study_tails;
+/* From an image the farm wrote; t->known false (and PC_OK) when it has no complete beauty_max. */
+int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e);
+
 typedef struct pc_study_run {
   pc_study_method method;
   int threads;
@@ -75,6 +90,7 @@ typedef struct pc_study_run {
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
+  pc_study_tails tails;  /* of the final image */
 } pc_study_run;
 
 void pc_study_run_free(pc_study_run *run);

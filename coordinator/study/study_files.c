@@ -84,6 +84,22 @@ static const char *reach_name(pc_reach r) {
   return "?";
 }
 
+/* The final image's heavy tails (study.h), null when it cannot tell. */
+static void json_tails(FILE *f, const pc_study_tails *t) {
+  if (!t->known) {
+    fputs("null", f);
+    return;
+  }
+  fprintf(f, "{\"iterations\": %llu, \"lit_fraction_of_mean\": %g, \"pixels\": %zu, \"max_over_mean_p50\": ",
+          (unsigned long long)t->iterations, PC_STUDY_TAILS_LIT, t->pixels);
+  json_number(f, t->p50);
+  fputs(", \"max_over_mean_p99\": ", f);
+  json_number(f, t->p99);
+  fputs(", \"max_over_mean_max\": ", f);
+  json_number(f, t->max);
+  fprintf(f, ", \"max_pixel\": [%d, %d]}", t->max_x, t->max_y);
+}
+
 static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_study_ref *ref) {
   fputs("  \"methods\": [\n", f);
   for (int r = 0; r < nruns; r++) {
@@ -103,6 +119,8 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       fputs(", \"auto\": ", f);
       json_string(f, run->auto_report);
     }
+    fputs(",\n     \"tails\": ", f);
+    json_tails(f, &run->tails);
     fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];

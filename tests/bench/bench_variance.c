@@ -1,10 +1,12 @@
-/* bench_variance.c: benchmark (not a test) of what the beauty_sq layer costs (docs/variance.md).
+/* bench_variance.c: benchmark (not a test) of what the per-iteration layers beauty_sq and
+ * beauty_max cost (docs/variance.md).
  *   bench_variance SCENE.xml [ITERATIONS [THREADS [with|without]]]     (defaults 8, 2)
  * Renders the scene (its own method and size) one iteration at a time, alternating a film with
  * beauty_sq and one without it (pc_film_drop_per_iteration: the fold then skips the squares), so
  * both see the same machine load; prints the mean CPU time of an iteration of each and the
  * difference.
- * Then packs a 4-iteration delta both ways and prints the raw and zstd bytes of an upload.
+ * Then packs a 4-iteration delta with and without its last layer, beauty_max, and prints the
+ * raw and zstd bytes of an upload.
  * Other load still disturbs CPU times (caches, memory bandwidth): the difference is only
  * meaningful against its printed spread. With `with` or `without` it renders only into that
  * film and prints nothing else: run both under `valgrind --tool=callgrind` and compare the
@@ -93,18 +95,18 @@ int main(int argc, char **argv) {
     return 1;
   }
   double m0 = t[0] / n, m1 = t[1] / n, md = d / n, se = sqrt(fmax(d2 / n - md * md, 0) / (n - 1));
-  printf("%s %s %dx%d, %d threads, %d iterations each: %.2f ms CPU with beauty_sq, %.2f ms without: "
+  printf("%s %s %dx%d, %d threads, %d iterations each: %.2f ms CPU with beauty_sq and beauty_max, %.2f ms without: "
          "%+.2f%% (+- %.2f%%, paired)\n",
          argv[1], pc_method_name(req.set.method), req.set.width, req.set.height, threads, n, 1e3 * m0, 1e3 * m1,
          100 * md / m1, 100 * se / m1);
-  /* an upload: a delta of 4 iterations, with and without its beauty_sq layer */
+  /* an upload: a delta of 4 iterations, with and without its beauty_max layer */
   pc_film delta = {0};
   size_t raw[2], z[2];
   rc = pc_film_init(&delta, req.set.width, req.set.height, 0, &e);
   if (!rc) rc = pc_render_iterations(r, 1000, 4, &delta, NULL, NULL, NULL, NULL, &e);
   if (!rc) rc = upload_bytes(&delta, &raw[0], &z[0], &e);
   if (!rc) {
-    delta.nlayers--; /* the same film as an upload before beauty_sq */
+    delta.nlayers--; /* the same film as an upload before beauty_max */
     rc = upload_bytes(&delta, &raw[1], &z[1], &e);
     delta.nlayers++;
   }
@@ -112,7 +114,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "bench_variance: %s\n", e.msg);
     return 1;
   }
-  printf("upload of 4 iterations: %zu bytes raw, %zu zstd with beauty_sq; %zu raw, %zu zstd without (%+.1f%%)\n", raw[0],
+  printf("upload of 4 iterations: %zu bytes raw, %zu zstd with beauty_max; %zu raw, %zu zstd without (%+.1f%%)\n", raw[0],
          z[0], raw[1], z[1], 100.0 * ((double)z[0] / (double)z[1] - 1));
   pc_film_free(&delta);
   pc_film_free(&with);

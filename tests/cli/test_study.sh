@@ -3,7 +3,8 @@
 # exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) on the embedded farm
 # against a reference rendered here: every output file exists in the scene's folder and
 # study.csv has one row per method, snapshot and layer, with the last snapshot at the end of
-# the budget. (The farm studies: tests/farm/study_farm.sh.)
+# the budget, and every method's heavy tails are in the table, study.json and report.html.
+# (The farm studies: tests/farm/study_farm.sh.)
 set -u
 . "$(dirname "$0")/lib.inc"
 scene="$src/scenes/cornell-box/scene.xml"
@@ -63,6 +64,25 @@ done
 if command -v python3 >/dev/null; then
   python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert [m["method"] for m in d["methods"]]==["pt","bdpt"]; assert len(d["headline"])==1' \
     "$tmp/s/cornell-box/study.json" || { echo "FAIL json"; fail=1; }
+  # Heavy tails of every final image: the largest single iteration over the pixel mean is at
+  # least 1 (the mean is no larger than the largest) and at most N (the iterations), ordered
+  # p50 <= p99 <= max, at a pixel of the image.
+  python3 - "$tmp/s/cornell-box/study.json" <<'PY' || { echo "FAIL tails json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+for m in d["methods"]:
+    t = m["tails"]
+    assert t is not None, m["method"]
+    n = t["iterations"]
+    assert n == m["iterations"] and n >= 2, (m["method"], t)
+    assert 0 < t["pixels"] <= 32 * 32, t
+    assert 1 - 1e-5 <= t["max_over_mean_p50"] <= t["max_over_mean_p99"] <= t["max_over_mean_max"] <= n * (1 + 1e-5), t
+    x, y = t["max_pixel"]
+    assert 0 <= x < 32 and 0 <= y < 32, t
+PY
+  grep -q "^heavy tails of the final images" "$tmp/out" || { echo "FAIL study: no heavy-tails table"; fail=1; }
+  grep -Eq "^bdpt +1 +[0-9]+ +[0-9]+ " "$tmp/out" || { echo "FAIL study: no heavy-tails line of bdpt"; cat "$tmp/out"; fail=1; }
+  grep -q "heavy tails of the final images" "$tmp/s/report.html" || { echo "FAIL study: no heavy tails in report.html"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study outputs"
 # Without a reference: the beauty's error curves are the images' own estimates, and it says so.

@@ -1,0 +1,66 @@
+/* study_tails.c: how heavy-tailed a method's image is, from its final EXR alone: per pixel,
+ * how much of the pixel its largest single iteration carried (the film's beauty_max over its
+ * mean, docs/variance.md "Heavy tails"), summarised over the image's lit pixels. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "study.h"
+
+static double luminance(const float *rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The q-quantile of sorted v[0..n) (nearest rank). */
+static double quantile(const double *v, size_t n, double q) {
+  size_t k = (size_t)ceil(q * (double)n);
+  return v[k > 0 ? k - 1 : 0];
+}
+
+int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e) {
+  memset(t, 0, sizeof *t);
+  t->p50 = t->p99 = t->max = NAN;
+  t->max_x = t->max_y = -1;
+  const pc_image *beauty = NULL, *mx = NULL;
+  for (int i = 0; i < x->nlayers; i++) {
+    if (x->names[i][0] == '\0') beauty = &x->layers[i];
+    if (strcmp(x->names[i], "beauty_max") == 0) mx = &x->layers[i];
+  }
+  double n_max = pc_study_exr_number(x, "pcbpt.count.beauty_max"), n_pt = pc_study_exr_number(x, "pcbpt.count.pt");
+  /* the film writes beauty_max only when it saw every iteration; an older image has none */
+  if (!beauty || !mx || !(n_max >= 1) || n_max != n_pt) return PC_OK;
+  t->iterations = (uint64_t)n_max;
+  size_t np = (size_t)x->w * x->h;
+  double mean = 0;
+  for (size_t p = 0; p < np; p++) mean += luminance(beauty->rgb + 3 * p);
+  mean /= (double)np;
+  double *r = malloc((np ? np : 1) * sizeof *r);
+  if (!r) return pc_errf(e, PC_ENOMEM, "out of memory for the tails of a %dx%d image", x->w, x->h);
+  size_t n = 0;
+  for (size_t p = 0; p < np; p++) {
+    double y = luminance(beauty->rgb + 3 * p);
+    if (!(y > PC_STUDY_TAILS_LIT * mean)) continue;
+    /* the luminance of the per-channel maxima: at least the largest iteration's luminance, the
+     * same when one iteration holds all three channels' maxima (a firefly does), and still at
+     * most N times the mean */
+    double ratio = luminance(mx->rgb + 3 * p) / y;
+    r[n++] = ratio;
+    if (!(ratio <= t->max)) {
+      t->max = ratio;
+      t->max_x = (int)(p % (size_t)x->w);
+      t->max_y = (int)(p / (size_t)x->w);
+    }
+  }
+  t->known = true;
+  t->pixels = n;
+  if (n) {
+    qsort(r, n, sizeof *r, cmp_double);
+    t->p50 = quantile(r, n, 0.5);
+    t->p99 = quantile(r, n, 0.99);
+  }
+  free(r);
+  return PC_OK;
+}
