@@ -30,9 +30,12 @@ static int submit_candidate(pc_pilot_farm *fp, const pc_pilot_candidate *c, uint
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
   sub.priority = fp->priority;
-  /* a farm job cannot be bound by "at least N iterations and T seconds": T when it has one */
-  if (seconds > 0) ps.halt_worker_seconds = seconds * workers;
-  else sub.halt_iterations = min_iterations;
+  if (seconds > 0) {
+    ps.halt_worker_seconds = seconds * workers;
+    ps.min_iterations = min_iterations; /* the variance needs 2 however slow an iteration is */
+  } else {
+    sub.halt_iterations = min_iterations;
+  }
   return pc_client_submit(fp->cl, &sub, job, e);
 }
 
