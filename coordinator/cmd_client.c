@@ -121,7 +121,7 @@ int pc_cmd_submit(int argc, char **argv) {
   char report[1024] = "";
   if (!rc && req.method_auto) {
     /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
-     * them; the client waits for each and takes its cost from the job's wall time */
+     * them; the client waits for them and takes each one's cost from its worker-seconds */
     pc_pilot pilot;
     double slice;
     uint64_t min_it;
@@ -135,6 +135,7 @@ int pc_cmd_submit(int argc, char **argv) {
       fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
       if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot.seconds);
     }
+    pc_pilot_free(&pilot);
   }
   uint64_t job = 0;
   if (!rc) rc = submit_one(&cl, hash, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, fp.priority, report, &job, &e);

@@ -301,11 +301,15 @@ int pc_cmd_render(int argc, char **argv) {
     double slice;
     uint64_t min_it;
     pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
-    if (pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_local_render, &local, &err) != PC_OK) goto fail;
-    pc_render_settings chosen = pilot.c[pilot.best].set;
-    chosen.seed = req.set.seed;
-    req.set = chosen;
-    pc_pilot_report(&pilot, auto_report, sizeof auto_report);
+    int prc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_local_render, &local, &err);
+    if (prc == PC_OK) {
+      pc_render_settings chosen = pilot.c[pilot.best].set;
+      chosen.seed = req.set.seed;
+      req.set = chosen;
+      pc_pilot_report(&pilot, auto_report, sizeof auto_report);
+    }
+    pc_pilot_free(&pilot);
+    if (prc != PC_OK) goto fail;
     printf("auto: %s\n", auto_report);
     fflush(stdout);
     pilot_s = now_s() - t_start;

@@ -1,47 +1,60 @@
 /* pilot_farm.c: --method auto's candidates as short farm jobs (pilot_farm.h). */
 #include "pilot_farm.h"
 
+#include <errno.h>
 #include <sodium.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "bundle.h"
 #include "wire_settings.h"
 
-int pc_pilot_farm_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                         pc_pilot_candidate *c, pc_err *e) {
-  pc_pilot_farm *fp = user;
+/* Every candidate of a batch in one study group: the coordinator interleaves their ranges by
+ * least worker time, so the farm's load falls on all of them alike. */
+static int submit_candidate(pc_pilot_farm *fp, const pc_pilot_candidate *c, uint64_t group, int workers, double seconds,
+                            uint64_t min_iterations, uint64_t *job, pc_err *e) {
   char name[200];
   snprintf(name, sizeof name, "%.120s [auto pilot: %s]", fp->name, c->label);
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
-  pc_wire_settings_to_proto(set, &ps, &psb);
+  pc_wire_settings_to_proto(&c->set, &ps, &psb);
+  ps.study_group = group;
+  ps.group_workers = (uint32_t)workers;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = name;
   sub.bundle_hash.data = (uint8_t *)fp->hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
   sub.priority = fp->priority;
-  if (seconds > 0 && fp->workers > 0) {
-    /* a group of its own, so a study of a smaller farm than the one connected keeps its size */
-    randombytes_buf(&ps.study_group, sizeof ps.study_group);
-    ps.study_group |= 1;
-    ps.group_workers = (uint32_t)fp->workers;
-    ps.halt_worker_seconds = seconds * fp->workers;
-  } else if (seconds > 0) {
-    /* a farm job cannot be bound by "at least N iterations and T seconds": T, but at least 1 s
-     * for the scheduling round trips */
-    sub.halt_seconds = seconds > 1 ? seconds : 1;
+  if (seconds > 0) {
+    ps.halt_worker_seconds = seconds * workers;
+    ps.min_iterations = min_iterations; /* the variance needs 2 however slow an iteration is */
   } else {
     sub.halt_iterations = min_iterations;
   }
-  uint64_t job = 0;
-  int rc = pc_client_submit(fp->cl, &sub, &job, e);
-  while (!rc) {
+  return pc_client_submit(fp->cl, &sub, job, e);
+}
+
+static int farm_size(pc_pilot_farm *fp, int *n, pc_err *e) {
+  *n = fp->workers;
+  if (*n > 0) return PC_OK;
+  Pcbpt__Envelope *env = NULL;
+  int rc = pc_client_status(fp->cl, (uint64_t)-1, &env, e);
+  if (!rc) *n = env->status_reply->n_workers > 0 ? (int)env->status_reply->n_workers : 1;
+  if (env) pcbpt__envelope__free_unpacked(env, NULL);
+  return rc;
+}
+
+/* Waits for job to end and takes its figures into c. */
+static int wait_candidate(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c, pc_err *e) {
+  for (;;) {
     Pcbpt__Envelope *in = NULL;
-    if ((rc = pc_client_status(fp->cl, job, &in, e)) != 0) break;
+    int rc = pc_client_status(fp->cl, job, &in, e);
+    if (rc) return rc;
     if (in->status_reply->n_jobs != 1) {
       pcbpt__envelope__free_unpacked(in, NULL);
       return pc_errf(e, PC_EIO, "auto pilot: job %llu vanished", (unsigned long long)job);
@@ -52,14 +65,53 @@ int pc_pilot_farm_render(void *user, const pc_render_settings *set, double secon
       if (!done) rc = pc_errf(e, PC_EIO, "auto pilot: job %llu (%s) %s: %s", (unsigned long long)job, c->label, j->state, j->error);
       c->iterations = j->iterations_done;
       c->seconds = j->worker_seconds;
-      c->relmse = j->relmse_estimate;
+      c->own_relmse = j->relmse_estimate;
       fp->worker_seconds += j->worker_seconds;
       pcbpt__envelope__free_unpacked(in, NULL);
-      break;
+      return rc;
     }
     pcbpt__envelope__free_unpacked(in, NULL);
     struct timespec ts = {0, 50000000};
     nanosleep(&ts, NULL);
   }
+}
+
+static const pc_image *layer_named(const pc_exr_file *x, const char *name) {
+  for (int i = 0; i < x->nlayers; i++)
+    if (strcmp(x->names[i], name) == 0) return &x->layers[i];
+  return NULL;
+}
+
+/* Fetches the candidate's image (beauty and variance layers) into c. */
+static int fetch_image(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c, pc_err *e) {
+  char dir[] = "/tmp/pcbpt-pilot.XXXXXX", path[64];
+  if (!mkdtemp(dir)) return pc_errf(e, PC_EIO, "auto pilot: temporary folder: %s", strerror(errno));
+  snprintf(path, sizeof path, "%s/c.exr", dir);
+  uint64_t bytes = 0;
+  pc_exr_file x = {0};
+  int rc = pc_client_fetch(fp->cl, job, path, &bytes, e);
+  if (!rc) rc = pc_exr_read_layers(path, &x, e);
+  if (!rc) {
+    const pc_image *beauty = layer_named(&x, ""), *var = layer_named(&x, "variance");
+    if (!beauty) rc = pc_errf(e, PC_EPARSE, "auto pilot: job %llu's image has no beauty", (unsigned long long)job);
+    else rc = pc_pilot_keep_image(c, x.w, x.h, beauty->rgb, var ? var->rgb : NULL, e);
+  }
+  pc_exr_file_free(&x);
+  unlink(path);
+  rmdir(dir);
+  return rc;
+}
+
+int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e) {
+  pc_pilot_farm *fp = user;
+  uint64_t jobs[PC_PILOT_MAX] = {0}, group;
+  int workers = 0;
+  if (n > PC_PILOT_MAX) return pc_errf(e, PC_EINVAL, "auto pilot: %d candidates", n);
+  int rc = farm_size(fp, &workers, e);
+  randombytes_buf(&group, sizeof group);
+  group |= 1; /* never 0 (no group) */
+  for (int i = 0; i < n && !rc; i++) rc = submit_candidate(fp, &c[i], group, workers, seconds, min_iterations, &jobs[i], e);
+  for (int i = 0; i < n && !rc; i++) rc = wait_candidate(fp, jobs[i], &c[i], e);
+  for (int i = 0; i < n && !rc; i++) rc = fetch_image(fp, jobs[i], &c[i], e);
   return rc;
 }

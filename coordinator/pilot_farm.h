@@ -16,16 +16,16 @@ typedef struct pc_pilot_farm {
   const uint8_t *hash;   /* the scene's bundle, already sent */
   const char *name;      /* the job's name: candidates are "<name> [auto pilot: <label>]" */
   int priority;
-  /* 0: each candidate is bound by wall seconds (submit). > 0: by slice x workers worker-seconds,
-   * on at most `workers` workers at once (a study of that farm size). */
+  /* Farm size: each candidate is bound by slice x workers worker-seconds, on at most `workers`
+   * workers at once (a study's farm size); 0: every worker connected. */
   int workers;
   double worker_seconds; /* out: the summed worker-seconds of every candidate's job */
 } pc_pilot_farm;
 
-/* pc_pilot_render_fn: submits the candidate as a job and waits for its end. Its cost is the
- * job's worker-seconds (the render seconds of its merged uploads), which on a shared farm
- * measures the candidate rather than the queue it waited in. */
-int pc_pilot_farm_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                         pc_pilot_candidate *c, pc_err *e);
+/* pc_pilot_render_fn: submits the candidates as jobs of one study group (interleaved by least
+ * worker time), waits for their end and fetches their images. A candidate's cost is its job's
+ * worker-seconds (the render seconds of its merged uploads), which on a shared farm measures
+ * the candidate rather than the queue it waited in. */
+int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
 
 #endif

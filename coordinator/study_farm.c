@@ -83,12 +83,16 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   pc_pilot_farm fp = {.cl = cl, .hash = g->hash, .name = g->scene_path, .workers = g->workers};
   pc_pilot pilot;
   int rc = pc_pilot_run(&pilot, &base, slice, min_it, pc_pilot_farm_render, &fp, e);
-  if (rc) return rc;
+  if (rc) {
+    pc_pilot_free(&pilot);
+    return rc;
+  }
   ac->set = pilot.c[pilot.best].set;
   ac->set.seed = g->seed;
   ac->pilot_worker_seconds = fp.worker_seconds;
   pilot.seconds = fp.worker_seconds; /* the report gives the cost charged to the budget */
   pc_pilot_report(&pilot, ac->report, sizeof ac->report);
+  pc_pilot_free(&pilot);
   return PC_OK;
 }
 

@@ -3,6 +3,7 @@
 #include "pilot.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -45,7 +46,7 @@ static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
-  c->relmse = -1;
+  c->relmse = c->own_relmse = -1;
   if (m == PC_METHOD_PCBPT) {
     c->set.pcbpt_k = k;
     c->set.uniform_mix = mix;
@@ -56,7 +57,83 @@ static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method
   }
 }
 
+void pc_pilot_free(pc_pilot *p) {
+  for (int i = 0; i < p->n; i++) {
+    free(p->c[i].mean);
+    free(p->c[i].var);
+    p->c[i].mean = p->c[i].var = NULL;
+    p->c[i].npix = 0;
+  }
+}
+
+int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, const float *var, pc_err *e) {
+  free(c->mean);
+  free(c->var);
+  c->mean = c->var = NULL;
+  c->npix = 0;
+  if (!var || w < 1 || h < 1) return PC_OK; /* it cannot tell its variance: no image */
+  int step = 1;
+  while ((size_t)((w + step - 1) / step) * (size_t)((h + step - 1) / step) > PC_PILOT_MAX_PIXELS) step++;
+  int nx = (w + step - 1) / step, ny = (h + step - 1) / step;
+  size_t n = (size_t)nx * (size_t)ny * 3;
+  c->mean = malloc(n * sizeof *c->mean);
+  c->var = malloc(n * sizeof *c->var);
+  if (!c->mean || !c->var) {
+    free(c->mean);
+    free(c->var);
+    c->mean = c->var = NULL;
+    return pc_errf(e, PC_ENOMEM, "auto pilot: out of memory for a %dx%d image", nx, ny);
+  }
+  size_t k = 0;
+  for (int y = 0; y < h; y += step)
+    for (int x = 0; x < w; x += step)
+      for (int ch = 0; ch < 3; ch++, k++) {
+        size_t j = ((size_t)y * (size_t)w + (size_t)x) * 3 + (size_t)ch;
+        c->mean[k] = mean[j];
+        c->var[k] = var[j];
+      }
+  c->npix = nx * ny;
+  return PC_OK;
+}
+
+/* relMSE of every candidate with an image against the pooled mean m of all of them, weighted
+ * by iterations: v_c / (max(m^2 - v_m, 0) + eps) averaged over the kept values, with v_c the
+ * variance of c's mean and v_m that of the pooled mean (E[m^2] = exact^2 + v_m, as in
+ * pc_film_relmse_estimate). The same denominator for all keeps their ranking free of the
+ * noise of each one's own mean. */
+static void pooled_relmse(pc_pilot *p) {
+  int npix = 0;
+  double n_all = 0;
+  for (int i = 0; i < p->n; i++) {
+    pc_pilot_candidate *c = &p->c[i];
+    c->relmse = c->own_relmse;
+    if (!c->npix || c->iterations < 2) continue;
+    if (npix && c->npix != npix) return; /* not the same image: own estimates only */
+    npix = c->npix;
+    n_all += (double)c->iterations;
+  }
+  if (!npix) return;
+  double sum[PC_PILOT_MAX] = {0};
+  size_t nv = (size_t)npix * 3;
+  for (size_t k = 0; k < nv; k++) {
+    double m = 0, vm = 0;
+    for (int i = 0; i < p->n; i++) {
+      const pc_pilot_candidate *c = &p->c[i];
+      if (!c->npix || c->iterations < 2) continue;
+      double w = (double)c->iterations / n_all;
+      m += w * c->mean[k];
+      vm += w * w * c->var[k];
+    }
+    double den = fmax(m * m - vm, 0.0) + PC_RELMSE_EPS;
+    for (int i = 0; i < p->n; i++)
+      if (p->c[i].npix && p->c[i].iterations >= 2) sum[i] += p->c[i].var[k] / den;
+  }
+  for (int i = 0; i < p->n; i++)
+    if (p->c[i].npix && p->c[i].iterations >= 2) p->c[i].relmse = sum[i] / (double)nv;
+}
+
 void pc_pilot_choose(pc_pilot *p) {
+  pooled_relmse(p);
   p->best = -1;
   for (int i = 0; i < p->n; i++) {
     pc_pilot_candidate *c = &p->c[i];
@@ -77,11 +154,10 @@ void pc_pilot_choose(pc_pilot *p) {
 
 static int render_from(pc_pilot *p, int from, double slice, uint64_t min_it, pc_pilot_render_fn render, void *user,
                        pc_err *e) {
-  for (int i = from; i < p->n; i++) {
-    int rc = render(user, &p->c[i].set, slice, min_it, &p->c[i], e);
-    if (rc) return rc;
-  }
-  return PC_OK;
+  if (from >= p->n) return PC_OK;
+  int rc = render(user, &p->c[from], p->n - from, slice, min_it, e);
+  if (!rc) pc_pilot_choose(p);
+  return rc;
 }
 
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint64_t min_it, pc_pilot_render_fn render,
@@ -89,24 +165,16 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   memset(p, 0, sizeof *p);
   double t0 = now_s();
   add_candidate(p, base, PC_METHOD_BDPT, 0, 0);
-  add_candidate(p, base, PC_METHOD_PCBPT, 1, base->uniform_mix);
-  add_candidate(p, base, PC_METHOD_PCBPT, 2, base->uniform_mix);
+  for (int k = 1; k <= 4; k *= 2) add_candidate(p, base, PC_METHOD_PCBPT, k, base->uniform_mix);
   int rc = render_from(p, 0, slice, min_it, render, user, e);
   if (rc) return rc;
-  pc_pilot_choose(p);
-  /* K = 4 and 8 only while doubling K still paid: efficiency over K has one peak (more
-   * connections cost linearly and gain less each), so past a drop there is nothing to find */
-  for (int k = 4; k <= 8 && p->c[p->n - 1].efficiency >= p->c[p->n - 2].efficiency; k *= 2) {
-    add_candidate(p, base, PC_METHOD_PCBPT, k, base->uniform_mix);
-    if ((rc = render_from(p, p->n - 1, slice, min_it, render, user, e)) != 0) return rc;
-    pc_pilot_choose(p);
-  }
-  if (p->c[p->best].set.method == PC_METHOD_PCBPT) {
-    int n = p->n;
+  /* efficiency over K has one peak (more connections cost linearly and gain less each), so K=8
+   * only while doubling K still paid */
+  int n = p->n;
+  if (p->c[3].efficiency >= p->c[2].efficiency) add_candidate(p, base, PC_METHOD_PCBPT, 8, base->uniform_mix);
+  if (p->c[p->best].set.method == PC_METHOD_PCBPT)
     add_candidate(p, base, PC_METHOD_PCBPT, p->c[p->best].set.pcbpt_k, base->uniform_mix >= 0.35f ? 0.2f : 0.5f);
-    if ((rc = render_from(p, n, slice, min_it, render, user, e)) != 0) return rc;
-    pc_pilot_choose(p);
-  }
+  if ((rc = render_from(p, n, slice, min_it, render, user, e)) != 0) return rc;
   p->seconds = now_s() - t0;
   return PC_OK;
 }
@@ -121,40 +189,76 @@ void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
   }
 }
 
-int pc_pilot_local_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                          pc_pilot_candidate *c, pc_err *e) {
-  const pc_pilot_local *l = user;
+/* One candidate of pc_pilot_local_render. */
+typedef struct local_run {
   pc_film film;
-  int rc = pc_film_init(&film, set->width, set->height, 0, e);
-  if (rc) return rc;
-  pc_renderer *r = NULL;
-  pc_render_settings s = *set;
-  s.strategy_layers = 0;
-  rc = pc_renderer_create(l->scene, &s, l->threads, &r, e);
-  pc_render_stats st = {0};
-  double spent = 0, cpu = 0, cpu_first = 0;
-  uint64_t it = 0;
-  /* one iteration at a time, so a slow candidate overruns its slice by one iteration at most.
-   * The cost is the process's CPU time, not wall time: on a shared machine the wall time of a
-   * few iterations mostly measures the other processes (the renderer's phases all run on its
-   * pool, so on an idle machine CPU time / threads is the wall time) */
-  while (!rc && (it < min_iterations || spent < seconds)) {
-    double t0 = now_s(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
-    rc = pc_render_iterations(r, it, 1, &film, &st, NULL, NULL, NULL, e);
-    spent += now_s() - t0;
-    cpu += clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
-    if (it == 0) cpu_first = cpu;
-    it++;
-  }
+  pc_renderer *r;
+  pc_render_stats st;
+  double cpu, cpu_first, wall;
+  bool done;
+} local_run;
+
+static int local_finish(pc_pilot_candidate *c, local_run *lr, pc_err *e) {
+  double cpu = lr->cpu;
+  uint64_t it = c->iterations;
   /* the first iteration also warms caches and allocators: the cost per iteration comes from
    * the others when there are any */
-  if (it >= 2 && cpu > cpu_first) cpu = (cpu - cpu_first) * (double)it / (double)(it - 1);
+  if (it >= 2 && cpu > lr->cpu_first) cpu = (cpu - lr->cpu_first) * (double)it / (double)(it - 1);
+  c->seconds = cpu;
+  if (!pc_film_relmse_estimate(&lr->film, &c->own_relmse)) c->own_relmse = -1;
+  size_t n = (size_t)lr->film.w * lr->film.h * 3;
+  float *mean = malloc(n * sizeof *mean), *var = malloc(n * sizeof *var);
+  int rc = PC_OK;
+  if (!mean || !var) rc = pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
   if (!rc) {
-    c->iterations = it;
-    c->seconds = cpu > 0 ? cpu : spent;
-    if (!pc_film_relmse_estimate(&film, &c->relmse)) c->relmse = -1;
+    pc_film_beauty(&lr->film, mean);
+    rc = pc_pilot_keep_image(c, lr->film.w, lr->film.h, mean, pc_film_variance(&lr->film, var) ? var : NULL, e);
   }
-  pc_renderer_destroy(r);
-  pc_film_free(&film);
+  free(mean);
+  free(var);
+  return rc;
+}
+
+int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e) {
+  const pc_pilot_local *l = user;
+  local_run *runs = calloc((size_t)n, sizeof *runs);
+  if (!runs) return pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
+  int rc = PC_OK, made = 0;
+  while (made < n) {
+    pc_render_settings s = c[made].set;
+    s.strategy_layers = 0;
+    if ((rc = pc_film_init(&runs[made].film, s.width, s.height, 0, e)) != 0) break;
+    if ((rc = pc_renderer_create(l->scene, &s, l->threads, &runs[made].r, e)) != 0) {
+      pc_film_free(&runs[made].film);
+      break;
+    }
+    made++;
+  }
+  /* round robin, one iteration at a time: a slow candidate overruns its slice by one iteration
+   * at most, and the machine's load falls on every candidate alike. The cost is the process's
+   * CPU time, not wall time: on a shared machine the wall time of a few iterations mostly
+   * measures the other processes (the renderer's phases all run on its pool, so on an idle
+   * machine CPU time / threads is the wall time) */
+  for (bool busy = true; busy && !rc;) {
+    busy = false;
+    for (int i = 0; i < n && !rc; i++) {
+      local_run *lr = &runs[i];
+      if (lr->done) continue;
+      double t0 = now_s(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+      rc = pc_render_iterations(lr->r, c[i].iterations, 1, &lr->film, &lr->st, NULL, NULL, NULL, e);
+      lr->cpu += clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
+      lr->wall += now_s() - t0;
+      if (c[i].iterations == 0) lr->cpu_first = lr->cpu;
+      c[i].iterations++;
+      lr->done = c[i].iterations >= min_iterations && lr->wall >= seconds;
+      busy = busy || !lr->done;
+    }
+  }
+  for (int i = 0; i < n && !rc; i++) rc = local_finish(&c[i], &runs[i], e);
+  for (int i = 0; i < made; i++) {
+    pc_renderer_destroy(runs[i].r);
+    pc_film_free(&runs[i].film);
+  }
+  free(runs);
   return rc;
 }

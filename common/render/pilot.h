@@ -28,14 +28,25 @@
  * so its estimate of a heavy-tailed method is more often low than high. */
 #define PC_PILOT_BDPT_MARGIN 1.05
 
+/* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every
+ * candidate's error is measured against the same denominator: the mean of all candidates'
+ * images, which estimates the exact image far better than any one candidate's few iterations
+ * (a candidate's own relMSE estimate divides by its own noisy mean, which on a heavy-tailed
+ * scene makes two iterations' figures differ by 10x between candidates of equal merit). */
+#define PC_PILOT_MAX_PIXELS (1 << 18)
+
 typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2", "pcbpt K=2 mix=0.2" */
   uint64_t iterations;  /* rendered by the pilot */
-  double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), wall
-                           seconds of the pilot job on a farm */
-  double relmse;        /* estimated relMSE of their mean (< 0: could not tell) */
+  double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), worker-
+                           seconds of the candidate's job on a farm */
+  double own_relmse;    /* the image's own relMSE estimate (< 0: could not tell) */
+  double relmse;        /* relMSE against the candidates' pooled mean (pc_pilot_choose; the
+                           own estimate when no image was kept); < 0: could not tell */
   double efficiency;    /* 1 / (relmse * seconds); 0 when it could not tell */
+  int npix;             /* pixels kept (0: none) */
+  float *mean, *var;    /* npix * 3: the image and the variance of each value's mean */
 } pc_pilot_candidate;
 
 typedef struct pc_pilot {
@@ -44,10 +55,18 @@ typedef struct pc_pilot {
   double seconds;       /* wall time of the whole pilot (its cost) */
 } pc_pilot;
 
-/* Renders `set` for about `seconds` (at least `min_iterations` iterations) and fills
- * iterations, seconds and relmse of *c. */
-typedef int (*pc_pilot_render_fn)(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                                  pc_pilot_candidate *c, pc_err *e);
+void pc_pilot_free(pc_pilot *p);
+
+/* Keeps candidate c's image: mean and variance of the mean (w*h*3 each, var NULL when the
+ * image cannot tell), subsampled on a fixed grid to at most PC_PILOT_MAX_PIXELS pixels. */
+int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, const float *var, pc_err *e);
+
+/* Renders the n candidates side by side (interleaved, so a change of the machine's load
+ * falls on all of them alike), each for about `seconds` of its own cost and at least
+ * `min_iterations` iterations, and fills iterations, seconds, own_relmse and (if it can) the
+ * image of each. */
+typedef int (*pc_pilot_render_fn)(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations,
+                                  pc_err *e);
 
 /* What the pilot spends per candidate for a job bound by seconds (0: none) and iterations
  * (0: none): seconds * PC_PILOT_FRACTION / candidates with --time, else enough for min
@@ -63,13 +82,16 @@ double pc_pilot_remaining(double seconds, double pilot_seconds);
 /* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
 uint64_t pc_pilot_seed(uint64_t job_seed);
 
-/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1, 2, then 4 and 8 while doubling K raised
- * the efficiency (the other settings of base);
- * if PCBPT won, stage 2 renders the winning K with the other uniform mix (0.2, or 0.5 when
- * base's is below 0.35). Picks the most efficient (BDPT on a tie within PC_PILOT_BDPT_MARGIN). */
+/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1, 2, 4 side by side (the other settings
+ * of base); stage 2 renders K = 8 if doubling K from 2 to 4 still paid, and, if PCBPT leads,
+ * its best K with the other uniform mix (0.2, or 0.5 when base's is below 0.35). Picks the most
+ * efficient (BDPT on a tie within PC_PILOT_BDPT_MARGIN). Free with pc_pilot_free, also after
+ * a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
                  pc_pilot_render_fn render, void *user, pc_err *e);
-/* Picks p->best from the measured candidates (used by pc_pilot_run; exposed for the tests). */
+/* Measures every candidate against the pooled mean of their images (candidates without an
+ * image keep their own estimate) and picks p->best (used by pc_pilot_run; exposed for the
+ * tests). */
 void pc_pilot_choose(pc_pilot *p);
 
 /* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */
@@ -80,7 +102,6 @@ typedef struct pc_pilot_local {
   const pc_scene *scene;
   int threads;
 } pc_pilot_local;
-int pc_pilot_local_render(void *user, const pc_render_settings *set, double seconds, uint64_t min_iterations,
-                          pc_pilot_candidate *c, pc_err *e);
+int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
 
 #endif

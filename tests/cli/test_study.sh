@@ -114,6 +114,10 @@ first, last = a["snapshots"][0], a["snapshots"][-1]
 # upload of overrun
 assert first["worker_seconds"] > pilot, (first, pilot)
 assert abs(last["worker_seconds"] - b["snapshots"][-1]["worker_seconds"]) < 1.0, (last, b["snapshots"][-1])
+# every candidate's job ran at least the 2 iterations its variance needs, however small its
+# slice of worker-seconds (Settings.min_iterations)
+its = [int(part.split(" it ")[1]) for part in a["auto"].split("; ")[1:]]
+assert len(its) >= 4 and min(its) >= 2, a["auto"]
 PY
 fi
 [ $fail = 0 ] && echo "ok   study with auto"
