@@ -114,9 +114,10 @@ else
 fi
 
 # 2: the reference is reused; a worker dies mid-study
+# (the reference is in place before the study starts: copied after, it raced the study's look)
+mkdir -p "$T/k/cornell-box" && cp "$d/reference-bdpt-2s.exr" "$T/k/cornell-box/"
 "$B/pcbpt-coord" study "$scene" "${common[@]}" --seconds 3 --reference-render bdpt:2 --out "$T/k" >"$T/study2.out" 2>&1 &
 STUDY=$!; PIDS+=("$STUDY")
-mkdir -p "$T/k/cornell-box" && cp "$d/reference-bdpt-2s.exr" "$T/k/cornell-box/"
 for _ in $(seq 100); do grep -q "snap" <(ls "$T/data/jobs"/*/ 2>/dev/null) && break; sleep 0.1; done
 n0=$(grep -c "submitted" "$T/coord.log")
 sleep 1.5
