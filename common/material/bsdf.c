@@ -8,7 +8,7 @@
 
 void pc_material_prepare(pc_material *m) {
   if (m->type == PC_MAT_PLASTIC || m->type == PC_MAT_ROUGHPLASTIC) pc_plastic_prepare(m);
-  if (m->type == PC_MAT_WARD) m->spec_sampling_weight = pc_spec_weight(m);
+  if (m->type == PC_MAT_WARD || m->type == PC_MAT_PHONG) m->spec_sampling_weight = pc_spec_weight(m);
 }
 
 bool pc_bsdf_is_delta(const pc_material *m) {
@@ -46,6 +46,8 @@ static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_eval(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_eval(c, wo, wi);
   case PC_MAT_WARD: return pc_ward_eval(c, wo, wi);
+  case PC_MAT_PHONG: return pc_phong_eval(c, wo, wi);
+  case PC_MAT_ROUGHDIFFUSE: return pc_roughdiffuse_eval(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC: break;
@@ -61,6 +63,8 @@ static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_pdf(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_pdf(c, wo, wi);
   case PC_MAT_WARD: return pc_ward_pdf(c, wo, wi);
+  case PC_MAT_PHONG: return pc_phong_pdf(c, wo, wi);
+  case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_pdf(c, wo, wi); /* Mitsuba samples it as Lambertian */
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC: break;
@@ -79,6 +83,8 @@ static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_THINDIELECTRIC: return pc_thindielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_WARD: return pc_ward_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_PHONG: return pc_phong_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_sample(c, wo, u0, u1, u2, s);
   }
   return false;
 }
@@ -206,7 +212,8 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
   vec2 uv = sh->uv;
   float q = 0.f;
   switch (m->type) {
-  case PC_MAT_DIFFUSE: q = v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)); break;
+  case PC_MAT_DIFFUSE:
+  case PC_MAT_ROUGHDIFFUSE: q = v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)); break;
   case PC_MAT_CONDUCTOR:
   case PC_MAT_ROUGHCONDUCTOR: q = v3_maxc(pc_slot_eval(&m->specular, texs, uv)); break;
   case PC_MAT_PLASTIC:
@@ -222,6 +229,9 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
     break;
   case PC_MAT_WARD: /* the two lobes add */
     q = v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
+    break;
+  case PC_MAT_PHONG:
+    q = m->lobe_scale * v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
     break;
   }
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;

@@ -78,4 +78,10 @@ vec3 pc_ward_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_ward_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 bool pc_ward_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
+vec3 pc_phong_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_phong_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_phong_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_roughdiffuse_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+
 #endif

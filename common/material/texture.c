@@ -59,6 +59,16 @@ vec3 pc_texture_average(const pc_texture *t) {
   return v3((float)(s[0] / n), (float)(s[1] / n), (float)(s[2] / n));
 }
 
+vec3 pc_texture_maximum(const pc_texture *t) {
+  if (t->type == PC_TEX_CONST) return t->value;
+  if (t->type == PC_TEX_CHECKER) return v3_max(t->color0, t->color1);
+  const pc_image *img = &t->img;
+  vec3 m = v3s(0.f);
+  for (size_t i = 0; img->rgb && i < (size_t)img->w * (size_t)img->h; i++)
+    m = v3_max(m, v3(img->rgb[3 * i], img->rgb[3 * i + 1], img->rgb[3 * i + 2]));
+  return m;
+}
+
 void pc_texture_free(pc_texture *t) {
   if (t->type == PC_TEX_BITMAP) pc_image_free(&t->img);
 }

@@ -31,6 +31,8 @@ static inline vec3 pc_slot_eval(const pc_tex_slot *s, const pc_texture *texs, ve
 /* Mitsuba's getAverage(): the mean over the texture (for plastic's sampling weight, see
  * pc_material_prepare). */
 vec3 pc_texture_average(const pc_texture *t);
+/* Mitsuba's getMaximum(): the componentwise largest value (for ensureEnergyConservation). */
+vec3 pc_texture_maximum(const pc_texture *t);
 void pc_texture_free(pc_texture *t);
 
 #endif

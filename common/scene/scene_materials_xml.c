@@ -9,13 +9,6 @@
 
 static pc_tex_slot konst(float v) { return (pc_tex_slot){.tex = -1, .value = v3s(v)}; }
 
-/* Reads a plugin's parameters and refuses any other child element. */
-static int params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np) {
-  int rc = pc_sx_params(c, n, what, p, np);
-  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next)
-    if (!pc_sx_is_param(ch, p, np)) rc = pc_sx_unexpected(c, ch, what);
-  return rc;
-}
 
 static int what_of(const pc_xml_node *n, const char *type, char *buf) {
   snprintf(buf, PC_SX_WHAT_MAX, "%s '%.60s'", n->name, type);
@@ -84,7 +77,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
   if (strcmp(type, "diffuse") == 0) {
     pc_param p[] = {{"reflectance", PC_P_SLOT, &m->reflectance, 0, 0}};
     m->type = PC_MAT_DIFFUSE;
-    if ((rc = params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
   } else if (strcmp(type, "conductor") == 0 || strcmp(type, "roughconductor") == 0) {
     bool rough = type[0] == 'r';
     const char *material = "Cu", *dist = "beckmann";
@@ -96,7 +89,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
     m->type = rough ? PC_MAT_ROUGHCONDUCTOR : PC_MAT_CONDUCTOR;
-    if ((rc = params_only(c, n, what, p, rough ? 9 : 5))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 9 : 5))) return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, m))) return rc;
     if (p[1].set != p[2].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both eta and k or neither", c->file, n->line, what);
     if (p[1].set && p[0].set)
@@ -120,7 +113,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"nonlinear", PC_P_BOOL, &m->nonlinear, 0, 0}, {"distribution", PC_P_STRING, &dist, 0, 0},
                     {"alpha", PC_P_FLOAT, &m->alpha, 0, 0}, {"alphaU", PC_P_FLOAT, &au, 0, 0},
                     {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
         (rc = check_ior(c, n, what, "intIOR", m->int_ior)) || (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, m))) return rc;
@@ -138,7 +131,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0},
                     {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
         (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[5], &p[6], &p[7], m->alpha, au, av, dist, m))) return rc;
@@ -154,7 +147,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     pc_param p[] = {{"variant", PC_P_STRING, &variant, 0, 0}, {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
                     {"diffuseReflectance", PC_P_SLOT, &m->reflectance, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
+    if ((rc = pc_sx_params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
       return rc;
     if (strcmp(variant, "balanced") == 0) m->ward = PC_WARD_BALANCED;
     else if (strcmp(variant, "ward") == 0) m->ward = PC_WARD_ORIGINAL;
@@ -201,7 +194,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->twosided = true;
     return 0;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt", c->file, n->line, type);
+    return pc_sx_bsdf_more(c, n, type, what, m);
   }
   return 0;
 }
@@ -250,7 +243,7 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
                     {"filename", PC_P_STRING, &filename, 0, 0}, {"filterType", PC_P_STRING, &filter, 0, 0},
                     {"wrapMode", PC_P_STRING, &wrap, 0, 0}, {"wrapModeU", PC_P_STRING, &wrapu, 0, 0},
                     {"wrapModeV", PC_P_STRING, &wrapv, 0, 0}, {"gamma", PC_P_FLOAT, &gamma, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 10))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, 10))) return rc;
     if (!(gamma == 0 || gamma == -1 || (gamma > 0 && gamma <= 10)))
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: gamma must be -1 (sRGB) or in (0, 10]", c->file, p[9].line, what);
     if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
@@ -274,7 +267,7 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
     t.color1 = v3s(0.2f);
     pc_param p[] = {common[0], common[1], common[2], common[3],
                     {"color0", PC_P_COLOR, &t.color0, 0, 0}, {"color1", PC_P_COLOR, &t.color1, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 6))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, 6))) return rc;
   } else {
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: texture '%s': not modelled by pcbpt", c->file, n->line, type);
   }

@@ -78,6 +78,8 @@ typedef struct pc_param {
 int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np);
 /* True if pc_sx_params consumed this child. */
 bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np);
+/* pc_sx_params, refusing any other child element. */
+int pc_sx_params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np);
 /* Error for a child element the caller does not accept. */
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what);
 
@@ -122,6 +124,9 @@ int pc_sx_wrap(pc_sx *c, const pc_xml_node *n, const char *what, int rc);
 /* BSDF and texture elements (scene_materials_xml.c). */
 int pc_sx_bsdf(pc_sx *c, const pc_xml_node *n, int *index);
 int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index);
+/* The BSDFs of scene_bsdf_lambertian_xml.c (phong, roughdiffuse) into *m, or the one-line
+ * refusal of a plugin pcbpt does not model. */
+int pc_sx_bsdf_more(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m);
 int pc_sx_default_material(pc_sx *c, const pc_xml_node *n, int *index);
 
 #endif

@@ -97,6 +97,22 @@ static pc_material mk_ward(pc_ward_variant v, float alpha, float spec, float dif
   pc_material_prepare(&m);
   return m;
 }
+static pc_material mk_phong(float exponent, float spec, float diff, float scale) {
+  pc_material m = base_material(PC_MAT_PHONG);
+  m.exponent = exponent;
+  m.lobe_scale = scale;
+  m.specular = slot(spec, 0.7f * spec, 0.9f * spec);
+  m.reflectance = slot(diff, 0.6f * diff, 0.3f * diff);
+  pc_material_prepare(&m);
+  return m;
+}
+static pc_material mk_roughdiffuse(float alpha, bool fast) {
+  pc_material m = base_material(PC_MAT_ROUGHDIFFUSE);
+  m.alpha = alpha;
+  m.fast_approx = fast;
+  m.reflectance = slot(0.9f, 0.5f, 0.2f);
+  return m;
+}
 static bool is_dielectric(const pc_material *m) {
   return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
 }
@@ -119,7 +135,7 @@ typedef struct tcase {
   pc_shading sh;
 } tcase;
 
-#define MAX_CASES 64
+#define MAX_CASES 96
 static int all_cases(tcase *c) {
   int n = 0;
   pc_shading flat = mk_shading(0), tilted = mk_shading(0.35f);
@@ -148,6 +164,13 @@ static int all_cases(tcase *c) {
       {"ward-balanced-0.4", mk_ward(PC_WARD_BALANCED, 0.4f, 0.616f, 0.f)},
       {"ward-original-0.2", mk_ward(PC_WARD_ORIGINAL, 0.2f, 0.5f, 0.4f)},
       {"ward-duer-0.3", mk_ward(PC_WARD_DUER, 0.3f, 0.3f, 0.2f)},
+      {"phong-30", mk_phong(30.f, 0.2f, 0.5f, 1.f)},
+      {"phong-3", mk_phong(3.f, 0.6f, 0.3f, 1.f)},
+      {"phong-500-scaled", mk_phong(500.f, 0.9f, 0.6f, 0.66f)},
+      {"phong-0", mk_phong(0.f, 0.4f, 0.f, 1.f)},
+      {"roughdiffuse-0.2", mk_roughdiffuse(0.2f, false)},
+      {"roughdiffuse-1", mk_roughdiffuse(1.f, false)},
+      {"roughdiffuse-fast-0.5", mk_roughdiffuse(0.5f, true)},
   };
   for (size_t i = 0; i < sizeof mats / sizeof mats[0]; i++) {
     c[n++] = (tcase){mats[i].name, mats[i].m, flat};
@@ -168,6 +191,8 @@ static int all_cases(tcase *c) {
   c[n++] = (tcase){"roughdielectric-ggx-0.1-tilted", mk_roughdielectric(PC_MF_GGX, 0.1f), tilted};
   c[n++] = (tcase){"thindielectric-tilted", mk_thindielectric(), tilted};
   c[n++] = (tcase){"ward-balanced-0.2-tilted", mk_ward(PC_WARD_BALANCED, 0.2f, 0.5f, 0.4f), tilted};
+  c[n++] = (tcase){"phong-30-tilted", mk_phong(30.f, 0.5f, 0.4f, 1.f), tilted};
+  c[n++] = (tcase){"roughdiffuse-0.5-tilted", mk_roughdiffuse(0.5f, false), tilted};
   assert_true(n <= MAX_CASES);
   return n;
 }
@@ -729,6 +754,75 @@ static void test_ward_values(void **state) {
   }
 }
 
+/* Mitsuba's phong: (n+2)/(2 pi) ks cos^n(angle to the mirror direction) + kd/pi, times the
+ * energy-conservation scale; at normal incidence the specular lobe reflects exactly ks. */
+static void test_phong_values(void **state) {
+  (void)state;
+  const float ks = 0.3f, kd = 0.4f, ex = 20.f, ct = 0.8f, st = sqrtf(1 - ct * ct);
+  pc_shading sh = mk_shading(0);
+  vec3 n = sh.sh.n, t = sh.sh.s;
+  vec3 in = v3_norm(v3_add(v3_scale(t, st), v3_scale(n, ct))), mirror = v3_norm(v3_add(v3_scale(t, -st), v3_scale(n, ct)));
+  pc_material m = base_material(PC_MAT_PHONG);
+  m.exponent = ex;
+  m.lobe_scale = 0.5f;
+  m.specular = slot(ks, ks, ks);
+  m.reflectance = slot(kd, kd, kd);
+  pc_material_prepare(&m);
+  assert_true(fabsf(m.spec_sampling_weight - ks / (ks + kd)) < 1e-6f);
+  float d = kd * (float)PC_INV_PI, peak = ks * (ex + 2) / (2 * (float)PC_PI);
+  assert_true(close3(pc_bsdf_eval(&m, NULL, &sh, in, mirror, PC_RADIANCE), v3s(0.5f * (peak + d)), 2e-5f, 0));
+  /* toward the normal the angle to the mirror direction is theta */
+  assert_true(close3(pc_bsdf_eval(&m, NULL, &sh, in, n, PC_RADIANCE), v3s(0.5f * (peak * powf(ct, ex) + d)), 2e-5f, 0));
+  float pdf = (ks / (ks + kd)) * (ex + 1) / (2 * (float)PC_PI) + (kd / (ks + kd)) * ct * (float)PC_INV_PI;
+  assert_true(close_rel(pc_bsdf_pdf(&m, NULL, &sh, in, mirror), pdf, 2e-5f, 0));
+  /* normal incidence, no diffuse: albedo ks by quadrature over the hemisphere */
+  m.reflectance = slot(0, 0, 0);
+  m.lobe_scale = 1.f;
+  pc_material_prepare(&m);
+  double sum = 0;
+  const int NT = 2000;
+  for (int i = 0; i < NT; i++) {
+    float c = (i + 0.5f) / NT;
+    sum += pc_bsdf_eval(&m, NULL, &sh, n, dir_local(&sh, c, 0.3f), PC_RADIANCE).x * c * (2 * PC_PI / NT);
+  }
+  assert_true(fabs(sum - ks) < 1e-3);
+}
+
+/* Mitsuba's roughdiffuse: alpha 0 is Lambertian in both variants; the full model at known
+ * angles (Oren and Nayar's eq. 30-31 with sigma = alpha / sqrt 2). */
+static void test_roughdiffuse_values(void **state) {
+  (void)state;
+  pc_shading sh = mk_shading(0.2f);
+  pc_material lam = mk_diffuse();
+  pc_rng r = pc_rng_make(9, 0, PC_STREAM_MISC, 9);
+  for (int fast = 0; fast < 2; fast++) {
+    pc_material m = mk_roughdiffuse(0.f, fast);
+    m.reflectance = lam.reflectance;
+    for (int i = 0; i < 500; i++) {
+      vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+      assert_true(close3(pc_bsdf_eval(&m, NULL, &sh, wo, wi, PC_RADIANCE), pc_bsdf_eval(&lam, NULL, &sh, wo, wi, PC_RADIANCE),
+                         1e-6f, 0));
+      assert_true(close_rel(pc_bsdf_pdf(&m, NULL, &sh, wo, wi), pc_bsdf_pdf(&lam, NULL, &sh, wo, wi), 1e-6f, 0));
+    }
+  }
+  /* wo at 60 degrees, wi at 30 degrees in the same azimuth (cos dphi = 1), alpha 0.6, rho 0.5 */
+  pc_shading flat = mk_shading(0);
+  pc_material m = mk_roughdiffuse(0.6f, false);
+  m.reflectance = slot(0.5f, 0.5f, 0.5f);
+  double s2 = 0.18, ta = PC_PI / 3, tb = PC_PI / 6, rho = 0.5;
+  double c1 = 1 - 0.5 * s2 / (s2 + 0.33), c2 = 0.45 * s2 / (s2 + 0.09) * sin(ta);
+  double c3 = 0.125 * s2 / (s2 + 0.09) * pow(4 * ta * tb / (PC_PI * PC_PI), 2);
+  double l1 = rho * (c1 + c2 * tan(tb)) + 0 * c3, l2 = 0.17 * rho * rho * s2 / (s2 + 0.13) * (1 - pow(2 * tb / PC_PI, 2));
+  double want = (l1 + l2) / PC_PI;
+  vec3 wo = dir_local(&flat, cosf((float)ta), 0.4f), wi = dir_local(&flat, cosf((float)tb), 0.4f);
+  assert_true(close_rel(pc_bsdf_eval(&m, NULL, &flat, wo, wi, PC_RADIANCE).x, (float)want, 1e-4f, 0));
+  /* the qualitative model: (A + B sin(alpha) tan(beta)) rho / pi */
+  m.fast_approx = true;
+  double a = 1 - 0.5 * s2 / (s2 + 0.33), b = 0.45 * s2 / (s2 + 0.09);
+  want = rho * (a + b * sin(ta) * tan(tb)) / PC_PI;
+  assert_true(close_rel(pc_bsdf_eval(&m, NULL, &flat, wo, wi, PC_RADIANCE).x, (float)want, 1e-4f, 0));
+}
+
 /* ---- textures ---- */
 
 static void test_checkerboard(void **state) {
@@ -803,6 +897,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_known_values),
       cmocka_unit_test(test_ward_values),
+      cmocka_unit_test(test_phong_values),
+      cmocka_unit_test(test_roughdiffuse_values),
       cmocka_unit_test(test_checkerboard),
       cmocka_unit_test(test_bitmap),
       cmocka_unit_test(test_finite),

@@ -318,7 +318,7 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>\n<float name=\"samplingWeight\" value=\"-1\"/></emitter></shape>", 3, "samplingWeight"},
     {"\n<shape type=\"hair\"/>", 3, "shape 'hair': not modelled by pcbpt"},
     /* BSDFs */
-    {"<bsdf type=\"phong\"/>", 2, "phong"},
+    {"<bsdf type=\"hk\"/>", 2, "hk"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"1.5, 0.5, 0.5\"/></bsdf>", 3, "above 1"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"-0.5\"/></bsdf>", 3, "negative"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.1, 0.2\"/></bsdf>", 3, "1 or 3"},
@@ -708,6 +708,55 @@ static void test_ward(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's phong (defaults: exponent 30, specular 0.2, diffuse 0.5; a sum above 1 scaled by
+ * 0.99/max unless ensureEnergyConservation is false) and roughdiffuse (alpha 0.2, either
+ * reflectance name). */
+static void test_phong_roughdiffuse(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"phong\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"phong\"><float name=\"exponent\" value=\"50\"/>"
+                            "<rgb name=\"specularReflectance\" value=\"0.5 0.5 0.5\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.9 0.1 0.1\"/></bsdf></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"phong\"><boolean name=\"ensureEnergyConservation\" value=\"false\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.9 0.1 0.1\"/></bsdf></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"><float name=\"alpha\" value=\"0.7\"/>"
+                            "<boolean name=\"useFastApprox\" value=\"true\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.3 0.2 0.1\"/></bsdf></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *m = s.materials;
+  assert_int_equal(m[0].type, PC_MAT_PHONG);
+  assert_true(m[0].exponent == 30.f && m[0].lobe_scale == 1.f);
+  near3(m[0].specular.value, v3s(0.2f), 0);
+  near3(m[0].reflectance.value, v3s(0.5f), 0);
+  assert_true(m[1].exponent == 50.f);
+  assert_true(fabsf(m[1].lobe_scale - 0.99f / 1.4f) < 1e-6f);
+  assert_true(m[2].lobe_scale == 1.f);
+  assert_int_equal(m[3].type, PC_MAT_ROUGHDIFFUSE);
+  assert_true(m[3].alpha == 0.2f && !m[3].fast_approx);
+  near3(m[3].reflectance.value, v3s(0.5f), 0);
+  assert_true(m[4].alpha == 0.7f && m[4].fast_approx);
+  near3(m[4].reflectance.value, v3(0.3f, 0.2f, 0.1f), 1e-6f);
+  pc_scene_free(&s);
+  /* the scaling is a warning, an error under --strict; both names at once are refused */
+  pc_scene_load_opts strict = {.strict = true};
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"phong\"><spectrum name=\"diffuseReflectance\" value=\"0.95\"/>"
+                "</bsdf></shape>\n";
+  assert_int_not_equal(load_body_opts(&t, body, &strict, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "ensureEnergyConservation"));
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"><spectrum name=\"reflectance\" value=\"0.5\"/>"
+                "<spectrum name=\"diffuseReflectance\" value=\"0.5\"/></bsdf></shape>\n";
+  assert_int_not_equal(load_body(&t, body, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "not both"));
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -824,7 +873,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
       cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward),
+      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
