@@ -49,7 +49,7 @@ int pc_sx_params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param
 }
 
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
-  static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", NULL};
+  static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", "sensor", NULL};
   const char *type = pc_xml_attr(ch, "type");
   if (strcmp(ch->name, "animation") == 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: animation (motion blur): not modelled by pcbpt (in %s)", c->file, ch->line, what);

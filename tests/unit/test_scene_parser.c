@@ -319,6 +319,7 @@ static const bad_case bad_cases[] = {
     {"\n<shape type=\"hair\"/>", 3, "shape 'hair': not modelled by pcbpt"},
     /* BSDFs */
     {"<bsdf type=\"hk\"/>", 2, "hk"},
+    {"<shape type=\"disk\">\n<sensor type=\"irradiancemeter\"/></shape>", 3, "irradiancemeter': not modelled"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"1.5, 0.5, 0.5\"/></bsdf>", 3, "above 1"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"-0.5\"/></bsdf>", 3, "negative"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.1, 0.2\"/></bsdf>", 3, "1 or 3"},
@@ -757,6 +758,55 @@ static void test_phong_roughdiffuse(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
+ * instance's toWorld after their own; the group itself is not rendered. */
+static void test_instances(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"shapeGroup\" id=\"g\"><shape type=\"rectangle\">"
+                            "<transform name=\"toWorld\"><translate x=\"1\"/></transform>"
+                            "<bsdf type=\"diffuse\"/></shape><shape type=\"sphere\"><float name=\"radius\" value=\"0.5\"/></shape></shape>\n"
+                            "<shape type=\"instance\"><ref id=\"g\"/></shape>\n"
+                            "<shape type=\"instance\"><ref id=\"g\"/><transform name=\"toWorld\"><scale value=\"2\"/>"
+                            "<translate z=\"5\"/></transform></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 4);
+  assert_int_equal(s.shapes[0].kind, PC_SHAPE_MESH);
+  assert_int_equal(s.shapes[1].kind, PC_SHAPE_SPHERE);
+  assert_int_equal(s.shapes[0].material, s.shapes[2].material);
+  /* rectangle corner (-1,-1,0) -> (0,-1,0) -> scaled (0,-2,0) -> (0,-2,5) */
+  bool found = false;
+  for (uint32_t i = 0; i < s.shapes[2].mesh.nverts; i++) {
+    vec3 p = s.shapes[2].mesh.p[i];
+    found |= fabsf(p.x) < 1e-6f && fabsf(p.y + 2) < 1e-6f && fabsf(p.z - 5) < 1e-6f;
+  }
+  assert_true(found);
+  near3(s.shapes[3].center, v3(0, 0, 5), 1e-6f);
+  assert_true(fabsf(s.shapes[3].radius - 1.f) < 1e-6f);
+  pc_scene_free(&s);
+  const struct { const char *body, *want; } bad[] = {
+      {"<shape type=\"instance\"><ref id=\"nope\"/></shape>", "not a shapegroup"},
+      {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"rectangle\"><emitter type=\"area\">"
+       "<rgb name=\"radiance\" value=\"1 1 1\"/></emitter></shape></shape>", "emitter in a group: not modelled"},
+      {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"sphere\"/></shape><shape type=\"instance\"><ref id=\"g\"/>"
+       "<transform name=\"toWorld\"><scale x=\"2\"/></transform></shape>", "holds a sphere"},
+      {"<shape type=\"shapegroup\"><shape type=\"sphere\"/></shape>", "needs an id"},
+  };
+  char buf[1024];
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    snprintf(buf, sizeof buf, SENSOR "%s", bad[i].body);
+    assert_int_not_equal(load_body(&t, buf, &s, &e), 0);
+    if (!strstr(e.msg, bad[i].want)) print_error("%s\n", e.msg);
+    assert_non_null(strstr(e.msg, bad[i].want));
+  }
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -873,7 +923,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
       cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse),
+      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
