@@ -163,6 +163,7 @@ struct pc_coord {
   double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
   int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
   bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
+  bool one_worker;           /* only one worker will ever come (embedded render): ranges keep nothing back */
   bool trim_due;             /* peers went: return freed memory to the system at the next tick */
   double last_refusal_log;   /* refused handshakes are logged at most every 10 s */
 };
