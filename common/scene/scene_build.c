@@ -135,8 +135,16 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
     pc_material *m = &s->materials[i];
     /* Derived quantities (plastic's lobe choice) use a slot's constant; for a textured slot
      * that is the texture's average, as Mitsuba's getAverage(). */
-    pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance};
-    for (int k = 0; k < 3; k++) {
+    pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance, &m->sigma_a};
+    /* A wrapper's material comes before it (so wrapping cannot loop), and is prepared first. */
+    bool wraps = m->type == PC_MAT_BUMPMAP || m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING;
+    if (wraps && !(m->nested >= 0 && m->nested < i))
+      return pc_errf(e, PC_EINVAL, "%s: material %d wraps material %d", s->path, i, m->nested);
+    if (m->type == PC_MAT_BUMPMAP && !(m->bump_tex >= 0 && m->bump_tex < s->ntextures))
+      return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, m->bump_tex, s->ntextures);
+    m->inner = wraps ? &s->materials[m->nested] : NULL;
+    bool coating = m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING;
+    for (int k = 0; k < (coating ? 4 : 3); k++) {
       if (slots[k]->tex >= s->ntextures)
         return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, slots[k]->tex, s->ntextures);
       if (slots[k]->tex >= 0) slots[k]->value = pc_texture_average(&s->textures[slots[k]->tex]);
