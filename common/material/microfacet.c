@@ -3,13 +3,14 @@
 
 float pc_mf_d(const pc_microfacet *d, vec3 m) {
   if (!(m.z > 0.f)) return 0.f;
-  float a2 = d->alpha * d->alpha, c2 = m.z * m.z, s2 = m.x * m.x + m.y * m.y;
+  float au = d->alpha, av = d->alpha_v, c2 = m.z * m.z;
+  float e = (m.x * m.x / (au * au) + m.y * m.y / (av * av)) / c2;
   float r;
   if (d->type == PC_MF_BECKMANN) {
-    r = expf(-s2 / (a2 * c2)) / (PC_PI * a2 * c2 * c2);
+    r = expf(-e) / (PC_PI * au * av * c2 * c2);
   } else {
-    float root = c2 + s2 / a2;
-    r = 1.f / (PC_PI * a2 * root * root);
+    float root = (1.f + e) * c2;
+    r = 1.f / (PC_PI * au * av * root * root);
   }
   /* Mitsuba flushes negligible values to zero; it also removes overflow. */
   return (isfinite(r) && r * m.z >= 1e-20f) ? r : 0.f;
@@ -20,21 +21,25 @@ float pc_mf_g1(const pc_microfacet *d, vec3 v, vec3 m) {
   float sin2 = v.x * v.x + v.y * v.y;
   if (sin2 == 0.f) return 1.f;
   float tan_theta = sqrtf(sin2) / fabsf(v.z);
+  /* The roughness seen along v's azimuth (Mitsuba's projectRoughness). */
+  float alpha = d->alpha;
+  if (d->alpha_v != d->alpha)
+    alpha = sqrtf((v.x * v.x * d->alpha * d->alpha + v.y * v.y * d->alpha_v * d->alpha_v) / sin2);
   float g;
   if (d->type == PC_MF_BECKMANN) {
-    float a = 1.f / (d->alpha * tan_theta);
+    float a = 1.f / (alpha * tan_theta);
     if (a >= 1.6f) return 1.f;
     g = (3.535f * a + 2.181f * a * a) / (1.f + 2.276f * a + 2.577f * a * a);
   } else {
-    float root = d->alpha * tan_theta;
+    float root = alpha * tan_theta;
     g = 2.f / (1.f + sqrtf(1.f + root * root));
   }
   return isfinite(g) ? g : 0.f;
 }
 
-static vec3 ggx_sample_visible(float alpha, vec3 v, float u1, float u2) {
+static vec3 ggx_sample_visible(float au, float av, vec3 v, float u1, float u2) {
   /* Stretch to the hemisphere configuration of unit roughness. */
-  vec3 vh = v3_norm(v3(alpha * v.x, alpha * v.y, v.z));
+  vec3 vh = v3_norm(v3(au * v.x, av * v.y, v.z));
   float len2 = vh.x * vh.x + vh.y * vh.y;
   vec3 t1 = len2 > 0.f ? v3_scale(v3(-vh.y, vh.x, 0.f), 1.f / sqrtf(len2)) : v3(1.f, 0.f, 0.f);
   vec3 t2 = v3_cross(vh, t1);
@@ -45,15 +50,21 @@ static vec3 ggx_sample_visible(float alpha, vec3 v, float u1, float u2) {
   p2 = (1.f - s) * sqrtf(fmaxf(0.f, 1.f - p1 * p1)) + s * p2;
   vec3 nh = v3_add(v3_add(v3_scale(t1, p1), v3_scale(t2, p2)),
                    v3_scale(vh, sqrtf(fmaxf(0.f, 1.f - p1 * p1 - p2 * p2))));
-  return v3_norm(v3(alpha * nh.x, alpha * nh.y, fmaxf(0.f, nh.z)));
+  return v3_norm(v3(au * nh.x, av * nh.y, fmaxf(0.f, nh.z)));
 }
 
 vec3 pc_mf_sample(const pc_microfacet *d, vec3 v, float u1, float u2) {
-  if (d->type == PC_MF_GGX) return ggx_sample_visible(d->alpha, v, u1, u2);
-  /* Beckmann: tan^2 theta = -alpha^2 log(1 - u1), phi uniform (Mitsuba's sampleAll). */
-  float tan2 = -d->alpha * d->alpha * logf(fmaxf(1.f - u1, 1e-30f));
+  if (d->type == PC_MF_GGX) return ggx_sample_visible(d->alpha, d->alpha_v, v, u1, u2);
+  /* Beckmann: tan^2 theta = -alpha^2 log(1 - u1), phi uniform (Mitsuba's sampleAll); when
+   * anisotropic, phi from the elliptical distribution and alpha^2 the roughness along it. */
+  float phi = 2.f * PC_PI * u2, a2 = d->alpha * d->alpha;
+  if (d->alpha_v != d->alpha) {
+    phi = atanf(d->alpha_v / d->alpha * tanf(PC_PI + 2.f * PC_PI * u2)) + PC_PI * floorf(2.f * u2 + 0.5f);
+    float cs = cosf(phi) / d->alpha, sn = sinf(phi) / d->alpha_v;
+    a2 = 1.f / (cs * cs + sn * sn);
+  }
+  float tan2 = -a2 * logf(fmaxf(1.f - u1, 1e-30f));
   float c = 1.f / sqrtf(1.f + tan2), s = sqrtf(fmaxf(0.f, 1.f - c * c));
-  float phi = 2.f * PC_PI * u2;
   return v3(s * cosf(phi), s * sinf(phi), c);
 }
 

@@ -31,6 +31,16 @@ static pc_id_kind ref_kind(pc_sx *c, const pc_xml_node *ch) {
   return r ? r->kind : PC_ID_OTHER;
 }
 
+static bool bitmap_without_gamma(const pc_xml_node *tex) {
+  const char *type = pc_xml_attr(tex, "type");
+  if (!type || strcmp(type, "bitmap") != 0) return false;
+  for (const pc_xml_node *g = tex->first; g; g = g->next) {
+    const char *name = pc_xml_attr(g, "name");
+    if (name && strcmp(name, "gamma") == 0) return false;
+  }
+  return true;
+}
+
 /* Reads the wrapped BSDF (exactly one) and, for bumpmap, the displacement texture (exactly
  * one) among the children that are not parameters. */
 static int wrapped(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np, pc_material *m, bool bump) {
@@ -40,21 +50,16 @@ static int wrapped(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p
     bool ref = strcmp(ch->name, "ref") == 0;
     bool is_bsdf = strcmp(ch->name, "bsdf") == 0 || (ref && ref_kind(c, ch) == PC_ID_BSDF);
     bool is_tex = bump && (strcmp(ch->name, "texture") == 0 || (ref && ref_kind(c, ch) == PC_ID_TEXTURE));
-    if (is_bsdf && nb++ == 0) rc = child_object(c, ch, what, PC_ID_BSDF, &m->nested);
+    /* Mitsuba refuses a bitmap bump map without an explicit gamma (8-bit files would be read as
+     * sRGB, rarely what a height field means). */
+    if (is_tex && !ref && nt == 0 && bitmap_without_gamma(ch))
+      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: a bitmap bump map needs an explicit 'gamma' (usually 1.0), as Mitsuba requires",
+                   c->file, ch->line, what);
+    else if (is_bsdf && nb++ == 0) rc = child_object(c, ch, what, PC_ID_BSDF, &m->nested);
     else if (is_tex && nt++ == 0) rc = child_object(c, ch, what, PC_ID_TEXTURE, &m->bump_tex);
     else if (is_bsdf || is_tex)
       rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one nested %s", c->file, ch->line, what, is_bsdf ? "BSDF" : "texture");
     else rc = pc_sx_unexpected(c, ch, what);
-    /* Mitsuba refuses a bitmap bump map without an explicit gamma (8-bit files would be read as
-     * sRGB, rarely what a height field means). */
-    if (!rc && is_tex && !ref && nt == 1) {
-      const char *type = pc_xml_attr(ch, "type");
-      bool gamma = false;
-      for (const pc_xml_node *g = ch->first; g; g = g->next) gamma |= pc_xml_attr(g, "name") && !strcmp(pc_xml_attr(g, "name"), "gamma");
-      if (type && strcmp(type, "bitmap") == 0 && !gamma)
-        rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: a bitmap bump map needs an explicit 'gamma' (usually 1.0), as Mitsuba requires",
-                     c->file, ch->line, what);
-    }
   }
   if (rc) return rc;
   if (nb == 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps no BSDF", c->file, n->line, what);

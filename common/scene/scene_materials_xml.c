@@ -38,16 +38,21 @@ static int check_max1(pc_sx *c, const pc_param *p, const pc_tex_slot *s, const c
   return 0;
 }
 
-/* alpha, or alphaU and alphaV (equal: pcbpt's rough models are isotropic), into m->alpha. */
+/* alpha, or alphaU and alphaV, into m->alpha (and m->alpha_v when they differ: anisotropic
+ * roughness, which Mitsuba's roughconductor and roughdielectric have; the others refuse it). */
 static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
                            float a, float u, float v, pc_material *m) {
   if (au->set != av->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both alphaU and alphaV or neither", c->file, n->line, what);
   if (au->set) {
     if (alpha->set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give alpha or alphaU/alphaV, not both", c->file, n->line, what);
-    if (u != v)
+    bool aniso_ok = m->type == PC_MAT_ROUGHCONDUCTOR || m->type == PC_MAT_ROUGHDIELECTRIC;
+    if (u != v && !aniso_ok)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: anisotropic roughness (alphaU != alphaV) unsupported", c->file, n->line, what);
+    if (u != v && !(v > 0.f && v <= 1.f))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alphaV must lie in (0, 1]", c->file, n->line, what);
     a = u;
+    m->alpha_v = u != v ? v : 0.f;
   }
   if (!(a > 0.f && a <= 1.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);

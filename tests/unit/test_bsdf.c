@@ -117,6 +117,10 @@ static pc_material mk_coating(const pc_material *inner, float eta, float alpha, 
   pc_material_prepare(&m);
   return m;
 }
+static pc_material mk_aniso(pc_material m, float alpha_v) {
+  m.alpha_v = alpha_v;
+  return m;
+}
 static pc_material mk_bumpmap(const pc_material *inner) {
   pc_material m = base_material(PC_MAT_BUMPMAP);
   m.inner = inner;
@@ -192,6 +196,10 @@ static int all_cases(tcase *c) {
       {"ward-balanced-0.4", mk_ward(PC_WARD_BALANCED, 0.4f, 0.616f, 0.f)},
       {"ward-original-0.2", mk_ward(PC_WARD_ORIGINAL, 0.2f, 0.5f, 0.4f)},
       {"ward-duer-0.3", mk_ward(PC_WARD_DUER, 0.3f, 0.3f, 0.2f)},
+      {"roughconductor-aniso-ggx", mk_aniso(mk_conductor("Cu", 0.05f), 0.4f)},
+      {"roughconductor-aniso-beckmann", mk_aniso(mk_beckmann_conductor("Al", 0.5f), 0.1f)},
+      {"roughdielectric-aniso-ggx", mk_aniso(mk_roughdielectric(PC_MF_GGX, 0.4f), 0.08f)},
+      {"roughdielectric-aniso-beckmann", mk_aniso(mk_roughdielectric(PC_MF_BECKMANN, 0.1f), 0.3f)},
       {"coating-diffuse", mk_coating(&in[0], 1.5f, 0, PC_MF_GGX, v3s(0), 1)},
       {"coating-absorbing-roughconductor", mk_coating(&in[1], 1.33f, 0, PC_MF_GGX, v3(0.5f, 1, 2), 0.3f)},
       {"coating-over-twosided-diffuse", mk_coating(&in[2], 1.5f, 0, PC_MF_GGX, v3s(0), 1)},
@@ -221,6 +229,7 @@ static int all_cases(tcase *c) {
   c[n++] = (tcase){"thindielectric-tilted", mk_thindielectric(), tilted};
   c[n++] = (tcase){"ward-balanced-0.2-tilted", mk_ward(PC_WARD_BALANCED, 0.2f, 0.5f, 0.4f), tilted};
   c[n++] = (tcase){"coating-diffuse-tilted", mk_coating(&in[0], 1.5f, 0, PC_MF_GGX, v3s(0), 1), tilted};
+  c[n++] = (tcase){"roughconductor-aniso-ggx-tilted", mk_aniso(mk_conductor("Au", 0.3f), 0.05f), tilted};
   c[n++] = (tcase){"bumpmap-diffuse", mk_bumpmap(&in[0]), bumped};
   c[n++] = (tcase){"bumpmap-twosided-diffuse", mk_bumpmap(&in[2]), bumped};
   c[n++] = (tcase){"bumpmap-roughconductor-beckmann", mk_bumpmap(&in[5]), bumped};
