@@ -1,4 +1,4 @@
-/* microfacet.h: the microfacet distributions of Mitsuba 0.6 (beckmann, its default, and ggx;
+/* microfacet.h: the microfacet distributions of Mitsuba 0.6 (beckmann, its default, ggx and phong;
  * isotropic, or anisotropic with alphaU along the frame's s and alphaV along t) in a local
  * frame (normal = +z): D, Smith's masking G1 (Mitsuba's forms, with its
  * back-facing check: the exact one for GGX, Walter's rational approximation for Beckmann), and
@@ -10,7 +10,9 @@
 
 #include "vecmath.h"
 
-typedef enum { PC_MF_GGX = 0, PC_MF_BECKMANN = 1 } pc_mf_type;
+/* PC_MF_PHONG: Mitsuba's "phong" (or "as"): the Phong distribution with exponent 2/alpha^2 - 2,
+ * Ashikhmin-Shirley's when anisotropic; Beckmann's masking; sampled by D(m) cos(theta_m). */
+typedef enum { PC_MF_GGX = 0, PC_MF_BECKMANN = 1, PC_MF_PHONG = 2 } pc_mf_type;
 
 /* Mitsuba clamps roughness to this so that D stays finite. */
 #define PC_MF_MIN_ALPHA 1e-4f

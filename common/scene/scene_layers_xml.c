@@ -77,6 +77,14 @@ static int positive(pc_sx *c, const pc_xml_node *n, const char *what, const char
   return 0;
 }
 
+int pc_sx_distribution(const char *name, pc_mf_type *out) {
+  if (strcmp(name, "beckmann") == 0) *out = PC_MF_BECKMANN;
+  else if (strcmp(name, "ggx") == 0) *out = PC_MF_GGX;
+  else if (strcmp(name, "phong") == 0 || strcmp(name, "as") == 0) *out = PC_MF_PHONG;
+  else return -1;
+  return 0;
+}
+
 int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m) {
   m->nested = m->bump_tex = -1;
   if (strcmp(type, "bumpmap") == 0) {
@@ -93,11 +101,13 @@ int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const c
   m->alpha = 0.1f;
   m->distribution = PC_MF_BECKMANN;
   const char *dist = "beckmann";
+  float au = 0, av = 0;
   pc_param p[] = {{"intIOR", PC_P_IOR, &m->int_ior, 0, 0}, {"extIOR", PC_P_IOR, &m->ext_ior, 0, 0},
                   {"thickness", PC_P_FLOAT, &m->thickness, 0, 0}, {"sigmaA", PC_P_SLOT, &m->sigma_a, 0, 0},
                   {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
-                  {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0}};
-  int np = rough ? 7 : 5, rc;
+                  {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
+                  {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
+  int np = rough ? 9 : 5, rc;
   if ((rc = pc_sx_params(c, n, what, p, np)) || (rc = wrapped(c, n, what, p, np, m, false)) ||
       (rc = positive(c, n, what, "intIOR", m->int_ior)) || (rc = positive(c, n, what, "extIOR", m->ext_ior)))
     return rc;
@@ -110,10 +120,15 @@ int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const c
   if (m->specular.tex < 0 && v3_maxc(m->specular.value) > 1.f)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'specularReflectance' above 1 would create energy", c->file, n->line, what);
   if (!rough) return 0;
-  if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
-  else if (strcmp(dist, "beckmann") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s': not modelled by pcbpt (beckmann or ggx)", c->file,
-                   n->line, what, dist);
+  if (pc_sx_distribution(dist, &m->distribution) != 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: distribution '%s' unknown (beckmann, ggx, phong or as)", c->file, n->line,
+                   what, dist);
+  if (p[7].set != p[8].set || (p[7].set && p[6].set))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give alpha, or both alphaU and alphaV", c->file, n->line, what);
+  if (p[7].set && au != av)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: anisotropic roughness (alphaU != alphaV) unsupported, as in Mitsuba",
+                   c->file, n->line, what);
+  if (p[7].set) m->alpha = au;
   if (!(m->alpha > 0.f && m->alpha <= 1.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);
   return 0;

@@ -63,11 +63,9 @@ static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_
 static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
                        float a, float u, float v, const char *dist, pc_material *m) {
   /* Mitsuba's default when no distribution is given is beckmann. */
-  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
-  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
-  else
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
-                   n->line, what, dist);
+  if (pc_sx_distribution(dist, &m->distribution) != 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: distribution '%s' unknown (beckmann, ggx, phong or as)", c->file, n->line,
+                   what, dist);
   return check_roughness(c, n, what, alpha, au, av, a, u, v, m);
 }
 

@@ -121,6 +121,11 @@ static pc_material mk_aniso(pc_material m, float alpha_v) {
   m.alpha_v = alpha_v;
   return m;
 }
+static pc_material mk_dist(pc_material m, pc_mf_type dist) {
+  m.distribution = dist;
+  pc_material_prepare(&m); /* roughplastic's table follows the distribution */
+  return m;
+}
 static pc_material mk_bumpmap(const pc_material *inner) {
   pc_material m = base_material(PC_MAT_BUMPMAP);
   m.inner = inner;
@@ -156,7 +161,7 @@ typedef struct tcase {
   pc_shading sh;
 } tcase;
 
-#define MAX_CASES 96
+#define MAX_CASES 128
 static int all_cases(tcase *c) {
   int n = 0;
   pc_shading flat = mk_shading(0), tilted = mk_shading(0.35f), bumped = mk_bump_shading(0.6f);
@@ -200,6 +205,11 @@ static int all_cases(tcase *c) {
       {"roughconductor-aniso-beckmann", mk_aniso(mk_beckmann_conductor("Al", 0.5f), 0.1f)},
       {"roughdielectric-aniso-ggx", mk_aniso(mk_roughdielectric(PC_MF_GGX, 0.4f), 0.08f)},
       {"roughdielectric-aniso-beckmann", mk_aniso(mk_roughdielectric(PC_MF_BECKMANN, 0.1f), 0.3f)},
+      {"roughconductor-phong-0.2", mk_dist(mk_conductor("Cu", 0.2f), PC_MF_PHONG)},
+      {"roughconductor-as-aniso", mk_aniso(mk_dist(mk_conductor("Al", 0.1f), PC_MF_PHONG), 0.5f)},
+      {"roughdielectric-phong-0.3", mk_dist(mk_roughdielectric(PC_MF_GGX, 0.3f), PC_MF_PHONG)},
+      {"roughplastic-phong-0.2", mk_dist(mk_plastic(0.2f, false), PC_MF_PHONG)},
+      {"roughcoating-phong-0.3-diffuse", mk_coating(&in[0], 1.5f, 0.3f, PC_MF_PHONG, v3s(0), 1)},
       {"coating-diffuse", mk_coating(&in[0], 1.5f, 0, PC_MF_GGX, v3s(0), 1)},
       {"coating-absorbing-roughconductor", mk_coating(&in[1], 1.33f, 0, PC_MF_GGX, v3(0.5f, 1, 2), 0.3f)},
       {"coating-over-twosided-diffuse", mk_coating(&in[2], 1.5f, 0, PC_MF_GGX, v3s(0), 1)},

@@ -333,7 +333,7 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
     {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
     {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
-    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"phong\"/></bsdf>", 2, "phong"},
+    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"walter\"/></bsdf>", 2, "distribution 'walter' unknown"},
     {"<bsdf type=\"roughplastic\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
     {"<bsdf type=\"roughconductor\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"1.2\"/></bsdf>", 2, "alphaV"},
     {"<bsdf type=\"bumpmap\">\n<bsdf type=\"diffuse\"/></bsdf>", 2, "displacement texture"},
@@ -347,7 +347,8 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"coating\"><float name=\"thickness\" value=\"-1\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "thickness"},
     {"<bsdf type=\"coating\"><rgb name=\"specularReflectance\" value=\"1.5\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "above 1"},
     {"<bsdf type=\"coating\"/>", 2, "wraps no BSDF"},
-    {"<bsdf type=\"roughcoating\"><string name=\"distribution\" value=\"phong\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "'phong': not modelled"},
+    {"<bsdf type=\"roughcoating\"><string name=\"distribution\" value=\"blinn\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "'blinn' unknown"},
+    {"<bsdf type=\"roughcoating\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "anisotropic"},
     {"<bsdf type=\"roughcoating\"><float name=\"alpha\" value=\"0\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "alpha"},
     {"<texture type=\"scale\" id=\"t\">\n<float name=\"scale\" value=\"-1\"/><texture type=\"checkerboard\"/></texture>", 2, "positive"},
     {"<texture type=\"scale\" id=\"t\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/></texture>", 3, "unexpected"},
@@ -791,7 +792,7 @@ static void test_layers(void **state) {
       "<float name=\"alphaV\" value=\"0.3\"/></bsdf></bsdf></bsdf>\n"
       "<bsdf type=\"coating\" id=\"coat\"><float name=\"intIOR\" value=\"1.075\"/><rgb name=\"sigmaA\" value=\"0.1 0.2 0.3\"/>"
       "<float name=\"thickness\" value=\"2\"/><ref id=\"inner\"/></bsdf>\n"
-      "<bsdf type=\"roughcoating\" id=\"rc\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0.3\"/>"
+      "<bsdf type=\"roughcoating\" id=\"rc\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.3\"/><float name=\"alphaV\" value=\"0.3\"/>"
       "<bsdf type=\"diffuse\"/></bsdf>\n"
       "<shape type=\"rectangle\"><ref id=\"bumped\"/></shape><shape type=\"rectangle\"><ref id=\"inner\"/></shape>"
       "<shape type=\"rectangle\"><ref id=\"coat\"/></shape><shape type=\"sphere\"><ref id=\"rc\"/></shape>"
