@@ -1,5 +1,5 @@
 /* texture.c: texture lookups as Mitsuba 0.6 does them: constants, bitmaps (bilinear, repeat
- * wrap, uv (0,0) at the image's bottom-left) and the checkerboard, all after Mitsuba's
+ * wrap, uv (0,0) at the image's top-left as in Mitsuba) and the checkerboard, all after Mitsuba's
  * Texture2D mapping uv' = uv * scale + offset, and the `scale` texture's multiplier. */
 #include "texture.h"
 
@@ -21,8 +21,10 @@ bool pc_bitmap_footprint(const pc_image *img, float u, float v, vec3 px[4], floa
   /* Repeat wrap first, so huge coordinates cannot overflow the integer conversion. */
   u -= floorf(u);
   v -= floorf(v);
-  /* Texel centres sit at half-integer coordinates; image row 0 is the top (v = 1). */
-  float x = u * (float)img->w - 0.5f, y = (1.f - v) * (float)img->h - 0.5f;
+  /* Texel centres sit at half-integer coordinates; image row 0 (the top of the file) is at
+   * v = 0, as Mitsuba's MIPMap::evalBilinear (its OBJ loader flips vt, so OBJ files look as
+   * their authors meant). */
+  float x = u * (float)img->w - 0.5f, y = v * (float)img->h - 0.5f;
   float fx = floorf(x), fy = floorf(y);
   *dx = x - fx;
   *dy = y - fy;

@@ -31,8 +31,8 @@ typedef struct pc_tex_slot {
 
 vec3 pc_texture_eval(const pc_texture *t, vec2 uv);
 /* The four texels of a bilinear lookup at (u, v) (repeat wrap): px = {(x0,y0), (x1,y0), (x0,y1),
- * (x1,y1)} with image row y growing downward (v = 1 - y / h), and the fractions dx, dy toward
- * x1, y1. False for an empty image. */
+ * (x1,y1)} with image row y growing downward as v does (v = y / h), and the fractions dx, dy
+ * toward x1, y1. False for an empty image. */
 bool pc_bitmap_footprint(const pc_image *img, float u, float v, vec3 px[4], float *dx, float *dy);
 static inline vec3 pc_slot_eval(const pc_tex_slot *s, const pc_texture *texs, vec2 uv) {
   return s->tex < 0 ? s->value : pc_texture_eval(&texs[s->tex], uv);

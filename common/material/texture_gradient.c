@@ -15,12 +15,12 @@ static void bitmap_gradient(const pc_image *img, float u, float v, vec3 g[2]) {
   float dx, dy;
   g[0] = g[1] = v3s(0.f);
   if (!pc_bitmap_footprint(img, u, v, p, &dx, &dy)) return;
-  /* x = u w - 1/2 grows with u; y = (1 - v) h - 1/2 shrinks as v grows. */
+  /* x = u w - 1/2 and y = v h - 1/2. */
   vec3 du = v3_add(v3_scale(v3_sub(p[1], p[0]), 1.f - dy), v3_scale(v3_sub(p[3], p[2]), dy));
   vec3 row0 = v3_add(v3_scale(p[0], 1.f - dx), v3_scale(p[1], dx));
   vec3 row1 = v3_add(v3_scale(p[2], 1.f - dx), v3_scale(p[3], dx));
   g[0] = v3_scale(du, (float)img->w);
-  g[1] = v3_scale(v3_sub(row1, row0), -(float)img->h);
+  g[1] = v3_scale(v3_sub(row1, row0), (float)img->h);
 }
 
 void pc_texture_gradient(const pc_texture *t, vec2 uv, vec3 grad[2]) {

@@ -852,19 +852,19 @@ static void test_bitmap(void **state) {
   for (int y = 0; y < H; y++)
     for (int x = 0; x < W; x++) {
       const float *p = px + 3 * (y * W + x);
-      /* Row 0 is the top of the image: v = 1 - (y + 0.5) / H. */
-      vec2 uv = {(x + 0.5f) / W, 1.f - (y + 0.5f) / H};
+      /* Row 0 is the top of the image, at v = 0 as in Mitsuba: v = (y + 0.5) / H. */
+      vec2 uv = {(x + 0.5f) / W, (y + 0.5f) / H};
       assert_true(close3(pc_texture_eval(&t, uv), v3(p[0], p[1], p[2]), 1e-5f, 1e-5f));
       vec2 wrapped = {uv.x + 2.f, uv.y - 3.f}; /* repeat */
       assert_true(close3(pc_texture_eval(&t, wrapped), v3(p[0], p[1], p[2]), 1e-5f, 1e-4f));
     }
   /* Halfway between texels (0,0) and (1,0) of the top row; and across the wrap seam. */
-  vec3 mid = pc_texture_eval(&t, (vec2){1.f / W, 1.f - 0.5f / H});
+  vec3 mid = pc_texture_eval(&t, (vec2){1.f / W, 0.5f / H});
   assert_true(close3(mid, v3(1.5f, 2.5f, 3.5f), 1e-5f, 1e-5f));
-  vec3 seam = pc_texture_eval(&t, (vec2){0.f, 1.f - 0.5f / H});
+  vec3 seam = pc_texture_eval(&t, (vec2){0.f, 0.5f / H});
   assert_true(close3(seam, v3(3.f, 4.f, 5.f), 1e-5f, 1e-5f)); /* (texel 0 + texel 2) / 2 */
-  /* Bottom-left texel at uv near (0, 0). */
-  vec3 bl = pc_texture_eval(&t, (vec2){0.5f / W, 0.5f / H});
+  /* Bottom-left texel at uv near (0, 1). */
+  vec3 bl = pc_texture_eval(&t, (vec2){0.5f / W, 1.f - 0.5f / H});
   assert_true(close3(bl, v3(9.f, 10.f, 11.f), 1e-5f, 1e-5f));
   assert_true(close3(pc_texture_average(&t), v3(7.5f, 8.5f, 9.5f), 1e-5f, 0));
 
@@ -872,7 +872,7 @@ static void test_bitmap(void **state) {
   pc_material m = mk_diffuse();
   m.reflectance.tex = 0;
   pc_shading sh = mk_shading(0);
-  sh.uv = (vec2){0.5f / W, 0.5f / H};
+  sh.uv = (vec2){0.5f / W, 1.f - 0.5f / H};
   vec3 f = pc_bsdf_eval(&m, &t, &sh, sh.sh.n, dir_local(&sh, 0.5f, 1.f), PC_RADIANCE);
   assert_true(close3(f, v3_scale(v3(9.f, 10.f, 11.f), PC_INV_PI), 1e-5f, 0));
   assert_true(pc_bsdf_continuation(&m, &t, &sh) == 1.f);
@@ -927,6 +927,11 @@ static void test_bumpmap_frame(void **state) {
   pc_shading sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f});
   assert_true(close3(sh.sh.n, v3_norm(v3(-4, 0, 1)), 0, 1e-5f));
   assert_true(close3(sh.nb, z, 0, 0));
+  /* The same ramp down the image's rows: v grows downward (Mitsuba's uv), so dh/dv = +4. */
+  texs[2].img = (pc_image){1, 4, ramp};
+  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f});
+  assert_true(close3(sh.sh.n, v3_norm(v3(0, -4, 1)), 0, 1e-5f));
+  texs[2].img = (pc_image){4, 1, ramp};
   /* Mitsuba's `scale` texture scales the slope; filterType nearest has none. */
   texs[2].scaled = true;
   texs[2].scale = v3s(0.25f);
