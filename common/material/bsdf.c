@@ -184,7 +184,7 @@ static bool bump_side(const pc_shading *sh, vec3 w) { return v3_dot(w, sh->nb) *
 /* The material a query of (wo, wi) evaluates: a bumpmap's wrapped one (the shading frame is
  * already the bumped one, see pc_shading_make), or NULL where the query is zero. */
 static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec3 wo, const vec3 *wi) {
-  if (m->type != PC_MAT_BUMPMAP) return m;
+  if (m->type != PC_MAT_BUMPMAP) return m; /* (a twosided bumpmap's frame is on wo's side already) */
   if (!m->inner || m->inner->type == PC_MAT_BUMPMAP || !bump_side(sh, wo) || (wi && !bump_side(sh, *wi))) return NULL;
   return m->inner;
 }

@@ -98,9 +98,10 @@ typedef struct pc_bsdf_sampled {
 /* The shading point of a surface hit as Mitsuba's computeShadingFrame makes it (normal ns,
  * tangent s along dpdu projected into the tangent plane), and for a bumpmap material the frame
  * its displacement texture perturbs (bsdf_bumpmap.c). dpdu and dpdv are the position's
- * derivatives along the texture coordinates. */
+ * derivatives along the texture coordinates; wo the direction the path arrived from (a twosided
+ * bumpmap seen from behind mirrors its frame to that side). */
 pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu, vec3 dpdv,
-                           vec2 uv);
+                           vec2 uv, vec3 wo);
 
 /* Precomputes derived data (plastic tables, sampling weights). Call once per material after parsing. A textured
  * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set

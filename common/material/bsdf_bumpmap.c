@@ -42,14 +42,31 @@ static frame bumped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, ve
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
+/* Mitsuba's twosided around a bumpmap, queried from behind, turns the directions over the
+ * unbumped tangent plane and evaluates the bumped material in front. The same, with the
+ * directions kept: the bumped frame mirrored through that plane to the back (made right-handed
+ * again, which no model can tell), and the unbumped normal flipped to the back too. */
+static vec3 mirror(vec3 v, vec3 nb) { return v3_sub(v, v3_scale(nb, 2.f * v3_dot(v, nb))); }
+
+static void to_back(pc_shading *sh) {
+  vec3 nb = sh->nb;
+  frame f = sh->sh;
+  sh->sh.n = mirror(f.n, nb);
+  sh->sh.s = mirror(f.s, nb);
+  sh->sh.t = v3_cross(sh->sh.n, sh->sh.s);
+  sh->nb = v3_neg(nb);
+}
+
 pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu, vec3 dpdv,
-                           vec2 uv) {
+                           vec2 uv, vec3 wo) {
   pc_shading sh;
   sh.ng = ng;
   sh.uv = uv;
   sh.sh = shading_frame(ns, dpdu);
   sh.nb = ns;
-  if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs)
+  if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
     sh.sh = bumped_frame(&texs[m->bump_tex], ng, sh.sh, dpdu, dpdv, uv);
+    if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(&sh);
+  }
   return sh;
 }

@@ -201,9 +201,6 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
       }
     }
     if (m->twosided) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps another twosided BSDF", c->file, inner->line, what);
-    if (m->type == PC_MAT_BUMPMAP) /* its frame would have to turn over with the side: put twosided inside it */
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: a bumpmap inside twosided: not modelled by pcbpt", c->file,
-                     inner->line, what);
     if (m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cannot wrap a dielectric (it is two-sided already)", c->file, inner->line, what);
     m->twosided = true;

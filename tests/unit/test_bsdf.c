@@ -906,8 +906,8 @@ static void test_bumpmap_frame(void **state) {
   vec3 dpdu = v3(1.5f, 0.3f, -0.2f), dpdv = v3(-0.1f, 0.8f, 0.4f);
   for (int t = 0; t < 2; t++) {
     bump.bump_tex = t;
-    pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f});
-    pc_shading bumped = pc_shading_make(&bump, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f});
+    pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+    pc_shading bumped = pc_shading_make(&bump, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
     assert_true(close3(bumped.sh.n, plain.sh.n, 0, 1e-5f) && close3(bumped.sh.s, plain.sh.s, 0, 1e-5f));
     for (int i = 0; i < 2000; i++) {
       vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
@@ -918,38 +918,60 @@ static void test_bumpmap_frame(void **state) {
     }
   }
   /* The Mitsuba frame's tangent follows dp/du. */
-  pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0, 0});
+  pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0, 0}, ns);
   assert_true(v3_dot(plain.sh.s, dpdu) > 0.f && fabsf(v3_dot(plain.sh.s, ns)) < 1e-6f);
   assert_true(close3(v3_cross(plain.sh.s, plain.sh.t), ns, 0, 1e-6f));
   /* The ramp, between texel centres 1 and 2 (u in (3/8, 5/8)). */
   bump.bump_tex = 2;
   vec3 z = v3(0, 0, 1);
-  pc_shading sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f});
+  pc_shading sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(-4, 0, 1)), 0, 1e-5f));
   assert_true(close3(sh.nb, z, 0, 0));
   /* The same ramp down the image's rows: v grows downward (Mitsuba's uv), so dh/dv = +4. */
   texs[2].img = (pc_image){1, 4, ramp};
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f});
+  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(0, -4, 1)), 0, 1e-5f));
   texs[2].img = (pc_image){4, 1, ramp};
   /* Mitsuba's `scale` texture scales the slope; filterType nearest has none. */
   texs[2].scaled = true;
   texs[2].scale = v3s(0.25f);
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f});
+  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(-1, 0, 1)), 0, 1e-5f));
   texs[2].nearest = true;
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f});
+  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, z, 0, 1e-6f));
   /* A direction on different sides of the two frames sees nothing, either way round. */
   texs[2].nearest = false;
   texs[2].scale = v3s(1.f);
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f});
+  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   pc_material d = mk_diffuse();
   bump.inner = &d;
   vec3 grazing = v3_norm(v3(1, 0, 0.1f)); /* above z, below the bumped normal */
   assert_true(v3_is_zero(pc_bsdf_eval(&bump, texs, &sh, z, grazing, PC_RADIANCE)));
   assert_true(v3_is_zero(pc_bsdf_eval(&bump, texs, &sh, grazing, z, PC_RADIANCE)));
   assert_true(!v3_is_zero(pc_bsdf_eval(&bump, texs, &sh, z, v3_norm(v3(-1, 0, 1)), PC_RADIANCE)));
+  /* A twosided bumpmap seen from behind is its front mirrored through the unbumped tangent
+   * plane (Mitsuba's twosided turns the directions over, then bumps): same values, pdfs and
+   * cosines with the bumped normal. */
+  pc_material gl = mk_conductor("Au", 0.3f);
+  bump.inner = &gl;
+  bump.twosided = true;
+  vec3 mz = v3(0, 0, -1);
+  pc_shading front = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading behind = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, mz);
+  int nonzero = 0;
+  for (int i = 0; i < 2000; i++) {
+    vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+    wo.z = -fabsf(wo.z);
+    vec3 mo = v3(wo.x, wo.y, -wo.z), mi = v3(wi.x, wi.y, -wi.z);
+    vec3 fb = pc_bsdf_eval(&bump, texs, &behind, wo, wi, PC_RADIANCE);
+    vec3 ff = pc_bsdf_eval(&bump, texs, &front, mo, mi, PC_RADIANCE);
+    assert_true(close3(fb, ff, 1e-3f, 1e-6f));
+    assert_true(close_rel(pc_bsdf_pdf(&bump, texs, &behind, wo, wi), pc_bsdf_pdf(&bump, texs, &front, mo, mi), 1e-3f, 1e-6f));
+    assert_true(close_rel(v3_absdot(wi, behind.sh.n), v3_absdot(mi, front.sh.n), 1e-5f, 1e-6f));
+    nonzero += !v3_is_zero(fb);
+  }
+  assert_true(nonzero > 200);
 }
 
 /* A coating of the outside medium's index and no absorption is no coating: the same values,

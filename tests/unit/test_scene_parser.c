@@ -341,7 +341,6 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"bumpmap\">\n<texture type=\"checkerboard\"/></bsdf>", 2, "wraps no BSDF"},
     {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
     {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/>\n<float name=\"x\" value=\"1\"/></bsdf>", 3, "x"},
-    {"<bsdf type=\"twosided\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "bumpmap inside twosided: not modelled"},
     {"<bsdf type=\"coating\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 2, "bumpmap inside another BSDF: not modelled"},
     {"<bsdf type=\"coating\"><float name=\"intIOR\" value=\"1.2\"/><float name=\"extIOR\" value=\"1.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "differ"},
     {"<bsdf type=\"coating\"><float name=\"thickness\" value=\"-1\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "thickness"},
