@@ -197,6 +197,19 @@ int pc_client_fetch_snapshot(pc_client *cl, uint64_t job, uint32_t snapshot, con
   return rc;
 }
 
+int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_err *e) {
+  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
+  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
+  env.submit = (Pcbpt__Submit *)sub;
+  int rc = pc_client_send(cl, &env, e);
+  if (!rc) rc = pc_client_recv(cl, 60, &in, e);
+  if (rc) return rc;
+  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "unexpected reply to submit");
+  else *job = in->submit_reply->job_id;
+  pcbpt__envelope__free_unpacked(in, NULL);
+  return rc;
+}
+
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e) {
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__StatusRequest sr = PCBPT__STATUS_REQUEST__INIT;

@@ -24,6 +24,9 @@ void pc_client_close(pc_client *cl);
 int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const uint8_t *hash, pc_err *e);
 /* Downloads a job's image to `out` (through a temporary file renamed into place); *bytes is
  * its size. */
+/* Sends a Submit of an uploaded bundle (the caller fills name, bundle hash, settings, halts and
+ * priority) and waits for its reply: *job is the new job's id. */
+int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_err *e);
 /* Asks for the status of `job` (0: every job); *out is a STATUS_REPLY envelope the caller frees
  * with pcbpt__envelope__free_unpacked. */
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e);

@@ -10,6 +10,7 @@
 
 #include "bundle.h"
 #include "client.h"
+#include "pilot_farm.h"
 #include "render_flags.h"
 #include "cli_scene.h"
 #include "scene.h"
@@ -56,6 +57,25 @@ static int connect_or_say(const char *verb, const common_opts *o, pc_client *cl)
 
 static int parse_job_id(const char *s, uint64_t *id) { return pc_parse_u64(s, 1, UINT64_MAX, id) ? 0 : -1; }
 
+/* Submits one job of the uploaded bundle. */
+static int submit_one(pc_client *cl, const uint8_t *hash, const pc_render_settings *set, const char *name, uint64_t spp,
+                      double seconds, double halt_noise, int priority, const char *auto_report, uint64_t *job, pc_err *e) {
+  Pcbpt__Settings ps;
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(set, &ps, &psb);
+  ps.halt_noise = halt_noise;
+  ps.auto_report = (char *)auto_report;
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  sub.name = (char *)name;
+  sub.bundle_hash.data = (uint8_t *)hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = spp;
+  sub.halt_seconds = seconds;
+  sub.priority = priority;
+  return pc_client_submit(cl, &sub, job, e);
+}
+
 int pc_cmd_submit(int argc, char **argv) {
   common_opts o;
   opts_default(&o);
@@ -96,34 +116,36 @@ int pc_cmd_submit(int argc, char **argv) {
   if (rc) { free(blob); return rc; }
   rc = pc_client_send_bundle(&cl, blob, n, hash, &e);
   free(blob);
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
-  Pcbpt__Settings ps;
-  pc_wire_settings_buf psb;
-  pc_wire_settings_to_proto(&req.set, &ps, &psb);
-  ps.halt_noise = req.halt_noise;
-  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   const char *base = strrchr(scene_path, '/');
-  sub.name = (char *)(o.name ? o.name : base ? base + 1 : scene_path);
-  sub.bundle_hash.data = hash;
-  sub.bundle_hash.len = PC_BUNDLE_HASH;
-  sub.settings = &ps;
-  sub.halt_iterations = req.spp;
-  sub.halt_seconds = req.seconds;
-  sub.priority = (int32_t)o.priority;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  Pcbpt__Envelope *in = NULL;
-  if (!rc) rc = pc_client_send(&cl, &env, &e);
-  if (!rc) rc = pc_client_recv(&cl, 60, &in, &e);
+  pc_pilot_farm fp = {.cl = &cl, .hash = hash, .name = o.name ? o.name : base ? base + 1 : scene_path, .priority = (int)o.priority};
+  char report[1024] = "";
+  if (!rc && req.method_auto) {
+    /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
+     * them; the client waits for them and takes each one's cost from its worker-seconds */
+    pc_pilot pilot;
+    double slice;
+    uint64_t min_it;
+    pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
+    rc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_farm_render, &fp, &e);
+    if (!rc) {
+      uint64_t seed = req.set.seed;
+      req.set = pilot.c[pilot.best].set;
+      req.set.seed = seed;
+      pc_pilot_report(&pilot, report, sizeof report);
+      fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
+      if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot.seconds);
+    }
+    pc_pilot_free(&pilot);
+  }
+  uint64_t job = 0;
+  if (!rc) rc = submit_one(&cl, hash, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, fp.priority, report, &job, &e);
   pc_client_close(&cl);
-  if (rc || in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) {
-    fprintf(stderr, "pcbpt-coord submit: %s\n", rc ? e.msg : "unexpected reply");
-    if (in) pcbpt__envelope__free_unpacked(in, NULL);
+  if (rc) {
+    fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
     return 1;
   }
-  if (o.json) printf("{\"job\": %llu}\n", (unsigned long long)in->submit_reply->job_id);
-  else printf("%llu\n", (unsigned long long)in->submit_reply->job_id);
-  pcbpt__envelope__free_unpacked(in, NULL);
+  if (o.json) printf("{\"job\": %llu}\n", (unsigned long long)job);
+  else printf("%llu\n", (unsigned long long)job);
   return 0;
 }
 
@@ -152,8 +174,11 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u}", j->halt_noise,
-           j->worker_seconds, j->snapshots, j->ranges_rerun);
+    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
+           j->halt_noise, j->worker_seconds, j->snapshots, j->ranges_rerun);
+    if (*j->auto_report) json_str(j->auto_report);
+    else printf("null");
+    printf("}");
     return;
   }
   char est[32] = "-";
@@ -162,6 +187,7 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
          (unsigned long long)j->job_id, j->state, j->method, (unsigned long long)j->iterations_done,
          (unsigned long long)j->halt_iterations, j->elapsed, j->iterations_per_second, j->eta_seconds, est, j->workers, j->name,
          *j->error ? "  error: " : "", j->error);
+  if (*j->auto_report) printf("       auto: %s\n", j->auto_report);
 }
 
 static int status_like(const char *verb, int argc, char **argv, bool workers) {

@@ -16,6 +16,7 @@
 #include "client.h"
 #include "embedded.h"
 #include "image.h"
+#include "pilot.h"
 #include "render.h"
 #include "thread_pool.h"
 #include "wire_settings.h"
@@ -127,13 +128,14 @@ static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt_
 }
 
 static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob, size_t n, const uint8_t *hash,
-                      const pc_render_request *req, uint64_t *job, pc_err *e) {
+                      const pc_render_request *req, const char *auto_report, uint64_t *job, pc_err *e) {
   int rc = pc_client_send_bundle(cl, blob, n, hash, e);
   if (rc) return rc;
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&req->set, &ps, &psb);
   ps.halt_noise = req->halt_noise;
+  ps.auto_report = (char *)auto_report;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)scene_path;
   sub.bundle_hash.data = (uint8_t *)hash;
@@ -141,14 +143,7 @@ static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob
   sub.settings = &ps;
   sub.halt_iterations = req->spp;
   sub.halt_seconds = req->seconds;
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  if ((rc = pc_client_send(cl, &env, e)) != 0 || (rc = pc_client_recv(cl, 60, &in, e)) != 0) return rc;
-  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "embedded farm: unexpected reply to submit");
-  else *job = in->submit_reply->job_id;
-  pcbpt__envelope__free_unpacked(in, NULL);
-  return rc;
+  return pc_client_submit(cl, &sub, job, e);
 }
 
 /* Asks the coordinator to finish the job with what is rendered (Ctrl-C). */
@@ -168,8 +163,8 @@ static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
 /* Submits the job to the embedded farm, shows progress until it ends and fetches the image to
  * `out`. *secs is the wall time from submission to the end of the job. */
 static int run_job(pc_embedded *farm, int threads, const char *scene_path, const uint8_t *blob, size_t blob_n,
-                   const uint8_t *hash, const pc_render_request *req, const char *out, progress_state *prog, double *secs,
-                   pc_err *e) {
+                   const uint8_t *hash, const pc_render_request *req, const char *auto_report, const char *out,
+                   progress_state *prog, double *secs, pc_err *e) {
   pc_client cl;
   int rc = pc_client_connect(farm->hostport, farm->token, &cl, e);
   if (rc) return rc;
@@ -177,7 +172,7 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
   double t0 = now_s();
   prog->t0 = t0;
   bool halted = false;
-  rc = submit_job(&cl, scene_path, blob, blob_n, hash, req, &job, e);
+  rc = submit_job(&cl, scene_path, blob, blob_n, hash, req, auto_report, &job, e);
   if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
   while (!rc) {
     Pcbpt__Envelope *env = NULL;
@@ -285,6 +280,8 @@ int pc_cmd_render(int argc, char **argv) {
   pc_embedded farm;
   bool farm_up = false;
   char *out_owned = NULL, *png = NULL;
+  char auto_report[1024] = "";
+  pc_pilot pilot;
   /* the scene is checked here so a bad one is one clear line, before any farm starts */
   if (pc_cli_load_scene("render", &req, scene_path, &scene, &err) != PC_OK) goto fail;
   if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
@@ -295,6 +292,28 @@ int pc_cmd_render(int argc, char **argv) {
     pc_renderer *probe = NULL;
     if (pc_renderer_create(&scene, &req.set, 1, &probe, &err) != PC_OK) goto fail;
     pc_renderer_destroy(probe);
+  }
+  double t_start = now_s(), pilot_s = 0;
+  if (req.method_auto) {
+    /* the pilot renders in this process on the scene already built (render's one worker
+     * would render it with the same threads); its wall time is taken from a --time budget */
+    pc_pilot_local local = {.scene = &scene, .threads = (int)threads};
+    double slice;
+    uint64_t min_it;
+    pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
+    int prc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_local_render, &local, &err);
+    if (prc == PC_OK) {
+      pc_render_settings chosen = pilot.c[pilot.best].set;
+      chosen.seed = req.set.seed;
+      req.set = chosen;
+      pc_pilot_report(&pilot, auto_report, sizeof auto_report);
+    }
+    pc_pilot_free(&pilot);
+    if (prc != PC_OK) goto fail;
+    printf("auto: %s\n", auto_report);
+    fflush(stdout);
+    pilot_s = now_s() - t_start;
+    if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot_s);
   }
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);
@@ -315,7 +334,8 @@ int pc_cmd_render(int argc, char **argv) {
   if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
   farm_up = true;
   double secs = 0;
-  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, out, &prog, &secs, &err);
+  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, auto_report, out, &prog, &secs, &err);
+
   pc_embedded_stop(&farm);
   farm_up = false;
   if (prog.show) fputc('\n', stderr);
@@ -336,8 +356,10 @@ int pc_cmd_render(int argc, char **argv) {
   char est[48] = "";
   if (has_attr(&img, "pcbpt.relmse_estimate"))
     snprintf(est, sizeof est, ", est. relMSE %.4g", attr_number(&img, "pcbpt.relmse_estimate"));
-  printf("%s: %.0f iterations, %.2f s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
-         pc_method_name(req.set.method), it, secs, samples / secs, rays / secs * 1e-6,
+  char pilot_note[48] = "";
+  if (req.method_auto) snprintf(pilot_note, sizeof pilot_note, " (+ %.2f s pilot)", pilot_s);
+  printf("%s: %.0f iterations, %.2f s%s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
+         pc_method_name(req.set.method), it, secs, pilot_note, samples / secs, rays / secs * 1e-6,
          threads ? (int)threads : pc_cpu_count(), est, dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
   if (it > 0)
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",

@@ -43,7 +43,10 @@ static const char study_help[] =
     "left out of that layer's comparison.\n"
     "Without a reference the beauty's relMSE and RMSE are each image's own estimates from the spread of\n"
     "its iterations (docs/variance.md; L1 and the other layers are not measured), and the output says so.\n\n"
-    "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt (each at most once)\n"
+    "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt, pcbpt-kN (pcbpt with K=N),\n"
+    "                        auto (each at most once, at most 8;\n"
+    "                        auto: --method auto's pilot as farm jobs charged to its budget, then the\n"
+    "                        winner for the rest; docs/auto.md)\n"
     "  --seconds S           render time per method on the farm (S x workers worker-seconds)\n"
     "  --reference REF.exr   reference image of the same size (its layers are compared by name); once\n"
     "                        per scene, in the scenes' order; without one, errors are estimated\n"
@@ -68,12 +71,12 @@ typedef struct study_args {
   pc_render_request req;
   const char *scenes[MAX_SCENES], *references[MAX_SCENES], *out, *host, *token;
   int nscenes, nreferences;
-  pc_method methods[PC_STUDY_MAX_METHODS];
+  pc_study_method methods[PC_STUDY_MAX_METHODS];
   int nmethods;
   double seconds, target_error;
   long long threads, snapshots, runs;
   int workers[MAX_SIZES], nsizes; /* farm sizes, ascending */
-  pc_method ref_method;           /* --reference-render */
+  pc_study_method ref_method;     /* --reference-render */
   double ref_seconds;             /* 0: none */
   int layer;
 } study_args;
@@ -85,11 +88,13 @@ static int parse_methods(study_args *a, const char *list, pc_err *e) {
   a->nmethods = 0;
   char *save = NULL;
   for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-    pc_method m;
-    if (pc_method_parse(tok, &m) != PC_OK)
-      return pc_errf(e, PC_EINVAL, "--methods: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt)", tok);
+    if (a->nmethods == PC_STUDY_MAX_METHODS)
+      return pc_errf(e, PC_EINVAL, "--methods: at most %d methods in one study", PC_STUDY_MAX_METHODS);
+    pc_study_method m;
+    pc_err me = {0};
+    if (pc_study_method_parse(tok, &m, &me) != PC_OK) return pc_errf(e, PC_EINVAL, "--methods: %s", me.msg);
     for (int i = 0; i < a->nmethods; i++)
-      if (a->methods[i] == m) return pc_errf(e, PC_EINVAL, "--methods: '%s' given twice", tok);
+      if (strcmp(a->methods[i].name, m.name) == 0) return pc_errf(e, PC_EINVAL, "--methods: '%s' given twice", tok);
     a->methods[a->nmethods++] = m;
   }
   if (a->nmethods == 0) return pc_errf(e, PC_EINVAL, "--methods: empty list");
@@ -124,8 +129,8 @@ static int parse_reference_render(study_args *a, const char *v, pc_err *e) {
     return pc_errf(e, PC_EINVAL, "--reference-render: '%s' is not METHOD:SECONDS", v);
   memcpy(buf, v, (size_t)(colon - v));
   buf[colon - v] = '\0';
-  if (pc_method_parse(buf, &a->ref_method) != PC_OK)
-    return pc_errf(e, PC_EINVAL, "--reference-render: unknown method '%s'", buf);
+  pc_err me = {0};
+  if (pc_study_method_parse(buf, &a->ref_method, &me) != PC_OK) return pc_errf(e, PC_EINVAL, "--reference-render: %s", me.msg);
   if (!pc_parse_f64(colon + 1, 1e-3, 1e7, &a->ref_seconds))
     return pc_errf(e, PC_EINVAL, "--reference-render: '%s' is not a number of seconds > 0", colon + 1);
   return PC_OK;
@@ -213,7 +218,7 @@ static int parse_args(study_args *a, int argc, char **argv, pc_err *e) {
     return pc_errf(e, PC_EINVAL, "--workers: the embedded farm has one worker (use --host for a farm)");
   if (a->host && a->threads) return pc_errf(e, PC_EINVAL, "--threads: the farm's workers choose their threads");
   a->req.method_set = true; /* the scene's integrator element does not choose the methods */
-  a->req.set.method = a->methods[0];
+  a->req.set.method = a->methods[0].method == PC_METHOD_AUTO ? PC_METHOD_PCBPT : a->methods[0].method;
   return 1;
 }
 
@@ -273,7 +278,10 @@ static int check_methods(const study_args *a, const pc_render_request *req, cons
   for (int m = 0; m <= a->nmethods; m++) {
     pc_render_settings set = req->set;
     if (m == a->nmethods && !(a->ref_seconds > 0)) break;
-    set.method = m < a->nmethods ? a->methods[m] : a->ref_method;
+    const pc_study_method *sm = m < a->nmethods ? &a->methods[m] : &a->ref_method;
+    set.method = sm->method;
+    if (sm->pcbpt_k > 0) set.pcbpt_k = sm->pcbpt_k;
+    if (set.method == PC_METHOD_AUTO) set.method = PC_METHOD_PCBPT; /* its candidates: bdpt and pcbpt */
     pc_renderer *r = NULL;
     int rc = pc_renderer_create(scene, &set, 1, &r, e);
     pc_renderer_destroy(r);
@@ -308,7 +316,7 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
   if (a->nreferences) {
     path = a->references[k];
   } else if (a->ref_seconds > 0) {
-    int n = snprintf(s->ref_path, sizeof s->ref_path, "%s/reference-%s-%gs.exr", s->dir, pc_method_name(a->ref_method),
+    int n = snprintf(s->ref_path, sizeof s->ref_path, "%s/reference-%s-%gs.exr", s->dir, a->ref_method.name,
                      a->ref_seconds);
     if (n < 0 || (size_t)n >= sizeof s->ref_path) return pc_errf(e, PC_EINVAL, "--out: path too long");
     path = s->ref_path;
@@ -323,7 +331,7 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
                           .seconds = a->ref_seconds, .workers = farm_size, .keep_dir = s->dir, .keep_path = path,
                           .label = label};
       dprintf(farm->log_fd, "%s: rendering the reference (%s, %g s on %d worker%s)\n", s->name,
-              pc_method_name(a->ref_method), a->ref_seconds, farm_size, farm_size > 1 ? "s" : "");
+              a->ref_method.name, a->ref_seconds, farm_size, farm_size > 1 ? "s" : "");
       int rc = pc_study_farm_group(farm, &g, &run, e);
       pc_study_run_free(&run);
       if (rc) return rc;
@@ -368,7 +376,7 @@ static void print_spread(FILE *f, const study_args *a, const scene_study *s, int
       pc_study_spread c;
       pc_study_spread_cell(runs, (int)a->runs, first, t->slot[row], t->target[row], false, &c);
       if (runs[0].layer_empty[t->slot[row]]) {
-        fprintf(f, "%-7s %-6s  (layer empty)\n", pc_study_layer_name(t->slot[row]), pc_method_name(a->methods[m]));
+        fprintf(f, "%-7s %-6s  (layer empty)\n", pc_study_layer_name(t->slot[row]), a->methods[m].name);
         continue;
       }
       char fin[64], tim[64], rat[64] = "-";
@@ -376,7 +384,7 @@ static void print_spread(FILE *f, const study_args *a, const scene_study *s, int
       if (c.reached) snprintf(tim, sizeof tim, "%.3g s [%.3g..%.3g] %d/%d", c.time_med, c.time_lo, c.time_hi, c.reached, c.n);
       else snprintf(tim, sizeof tim, "not reached");
       if (isfinite(c.ratio_med)) snprintf(rat, sizeof rat, "%.2fx [%.2f..%.2f]", c.ratio_med, c.ratio_lo, c.ratio_hi);
-      fprintf(f, "%-7s %-6s %30s %34s %24s\n", pc_study_layer_name(t->slot[row]), pc_method_name(a->methods[m]), fin, tim, rat);
+      fprintf(f, "%-7s %-6s %30s %34s %24s\n", pc_study_layer_name(t->slot[row]), a->methods[m].name, fin, tim, rat);
     }
 }
 
@@ -389,7 +397,7 @@ static void print_reruns(FILE *f, const study_args *a, scene_study *s) {
         if (run->ranges_rerun)
           fprintf(f, "%s, run %d on %d workers: %u range%s re-run after a worker went away; only the merged uploads' "
                      "worker-seconds count, so the lost slice is not charged to the method (its wall time is)\n",
-                  pc_method_name(run->method), r + 1, a->workers[size], run->ranges_rerun, run->ranges_rerun > 1 ? "s" : "");
+                  run->method.name, r + 1, a->workers[size], run->ranges_rerun, run->ranges_rerun > 1 ? "s" : "");
       }
 }
 
@@ -438,7 +446,7 @@ static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
       double busy_med = pc_study_median(busy, (int)a->runs, NULL, NULL), speed_med = pc_study_median(speed, (int)a->runs, NULL, NULL);
       fprintf(f, "  %-6s %3d worker%s: %.3g s [%.3g..%.3g] to relMSE %.3g; vs %d worker%s %.2fx (ideal %.2fx), speed-up %.2fx; "
                  "%.2f workers busy, %.3g iterations per worker-second\n",
-              pc_method_name(a->methods[m]), a->workers[size], a->workers[size] > 1 ? "s" : " ", c.time_med, c.time_lo,
+              a->methods[m].name, a->workers[size], a->workers[size] > 1 ? "s" : " ", c.time_med, c.time_lo,
               c.time_hi, target, a->workers[0], a->workers[0] > 1 ? "s" : "", c.time_med / t_base,
               (double)a->workers[0] / a->workers[size], t_base / c.time_med, busy_med, speed_med);
       double t_end = 0;
@@ -447,7 +455,7 @@ static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
       rc = pc_study_median_run(per[size], (int)a->runs, 2 * (int)a->snapshots, t_end, true, &med[ns], band[ns], e);
       if (rc) break;
       for (int i = 0; i < med[ns].nsnaps; i++) med[ns].snaps[i].wall = med[ns].snaps[i].seconds;
-      snprintf(names[ns], sizeof names[ns], "%s, %d worker%s", pc_method_name(a->methods[m]), a->workers[size],
+      snprintf(names[ns], sizeof names[ns], "%s, %d worker%s", a->methods[m].name, a->workers[size],
                a->workers[size] > 1 ? "s" : "");
       double *x = malloc((size_t)(med[ns].nsnaps + 1) * 2 * sizeof *x);
       if (!x) { rc = pc_errf(e, PC_ENOMEM, "out of memory for the chart"); ns++; break; }

@@ -56,12 +56,14 @@ typedef struct pc_job {
   double halt_seconds;       /* 0: none */
   double halt_noise;         /* 0: none; else halt once the estimated relMSE is at most this */
   double relmse_est;         /* the merged film's estimated relMSE, < 0 while it cannot tell */
+  char auto_report[1024];    /* Settings.auto_report (--method auto's choice), control chars replaced */
   uint64_t noise_check_at;   /* iterations merged before --halt-noise looks again */
   int priority;
   /* equal-time studies (docs/farm-study.md; from the settings, so a restart keeps them) */
   uint64_t study_group;      /* 0: none; else interleaved with the group's other jobs */
   uint32_t group_workers;    /* at most this many workers on the group at once (0: any) */
   double halt_worker_seconds;/* 0: none; else halt at this many merged worker-seconds */
+  uint64_t min_iterations;   /* ... but not before this many iterations are merged */
   uint32_t snapshots;        /* merged films kept at log-spaced worker-seconds (0: none) */
   uint32_t snaps_taken;      /* ... written so far (jobs/<id>/snap.<k>.exr, k = 1..) */
   uint32_t snaps_queued;     /* snapshot times passed (and queued for) so far */
@@ -186,9 +188,8 @@ int pc_store_load(pc_coord *c, pc_err *e);
 
 /* job.c: job lifecycle: films, checkpoints, images, halting. */
 #define PC_JOB_MAX_SNAPSHOTS 1000
+#define PC_JOB_MAX_MIN_ITERATIONS 1000000
 #define PC_JOB_SNAPSHOT_FIRST (1.0 / 64) /* the first snapshot's share of the budget */
-/* The study fields of a job's settings (Settings 19-22) into j. */
-void pc_job_study_settings(pc_job *j, const Pcbpt__Settings *s);
 /* Worker-seconds at which study job j keeps its snapshot k (0-based): with K snapshots,
  * budget * PC_JOB_SNAPSHOT_FIRST^((K - k) / K), so with the image at the budget the K + 1
  * points are evenly spaced in log time. */
@@ -207,6 +208,9 @@ void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out
 void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
                   uint64_t first, uint64_t count, bool final, const pc_render_stats *stats);
 void pc_job_free(pc_job *j);
+/* Takes what the coordinator keeps from a job's stored settings besides the render settings:
+ * --halt-noise, --method auto's report and the study fields (Settings 20-24). */
+void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s);
 
 /* sched.c: handing out ranges and taking them back. */
 void pc_sched_request(pc_coord *c, pc_peer *p);

@@ -141,7 +141,7 @@ static void check_study(pc_coord *c, pc_job *j) {
       pc_wire_log("job %llu: out of memory for a snapshot", (unsigned long long)j->id);
     }
   }
-  if (ws >= j->halt_worker_seconds) {
+  if (ws >= j->halt_worker_seconds && j->done >= j->min_iterations) {
     pc_wire_log("job %llu: %.2f worker-seconds merged (budget %.2f): halting", (unsigned long long)j->id, ws,
                 j->halt_worker_seconds);
     pc_job_halt(c, j);
@@ -154,10 +154,15 @@ double pc_job_snapshot_time(const pc_job *j, int k) {
   return j->halt_worker_seconds * pow(PC_JOB_SNAPSHOT_FIRST, (double)(n - k) / n);
 }
 
-void pc_job_study_settings(pc_job *j, const Pcbpt__Settings *s) {
+void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
+  j->halt_noise = s->halt_noise;
+  snprintf(j->auto_report, sizeof j->auto_report, "%s", s->auto_report ? s->auto_report : "");
+  for (char *q = j->auto_report; *q; q++) /* it reaches logs, JSON and image headers */
+    if ((unsigned char)*q < 0x20 || *q == 0x7f || *q == '"' || *q == '\\') *q = '?';
   j->study_group = s->study_group;
   j->group_workers = s->group_workers;
   j->halt_worker_seconds = s->halt_worker_seconds;
+  j->min_iterations = s->min_iterations;
   j->snapshots = s->snapshots <= PC_JOB_MAX_SNAPSHOTS ? s->snapshots : PC_JOB_MAX_SNAPSHOTS;
 }
 
@@ -255,8 +260,10 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
+    {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report}, /* last: only when set */
   };
-  return pc_film_write_exr(&j->film, img, attrs, (int)(sizeof attrs / sizeof attrs[0]), e);
+  int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - (j->auto_report[0] ? 0 : 1);
+  return pc_film_write_exr(&j->film, img, attrs, nattrs, e);
 }
 
 static void free_range_list_closed(pc_job *j) {
@@ -718,3 +725,4 @@ void pc_job_free(pc_job *j) {
   free(j->settings_blob);
   free(j);
 }
+

@@ -522,6 +522,9 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
     pc_errf(&e, PC_EINVAL, "submit: bad worker-seconds budget");
   else if (s->settings->snapshots > PC_JOB_MAX_SNAPSHOTS || (s->settings->snapshots && !(s->settings->halt_worker_seconds > 0)))
     pc_errf(&e, PC_EINVAL, "submit: snapshots need a worker-seconds budget and are at most %d", PC_JOB_MAX_SNAPSHOTS);
+  else if (s->settings->min_iterations > PC_JOB_MAX_MIN_ITERATIONS)
+    pc_errf(&e, PC_EINVAL, "submit: a floor of %llu iterations (at most %d)", (unsigned long long)s->settings->min_iterations,
+            PC_JOB_MAX_MIN_ITERATIONS);
   else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
   else if (!(s->settings->halt_noise >= 0 && s->settings->halt_noise <= 1e6)) pc_errf(&e, PC_EINVAL, "submit: bad --halt-noise");
   if (e.code) {
@@ -540,8 +543,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pcbpt__settings__pack(s->settings, j->settings_blob);
   j->halt_iterations = s->halt_iterations;
   j->halt_seconds = s->halt_seconds;
-  j->halt_noise = s->settings->halt_noise;
-  pc_job_study_settings(j, s->settings);
+  pc_job_take_stored_settings(j, s->settings);
   j->relmse_est = -1;
   j->priority = s->priority;
   j->state = PC_JOB_QUEUED;
@@ -558,6 +560,7 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   pc_wire_log("job %llu: submitted by %s: '%s' %s %dx%d, %llu iterations, %.1f s", (unsigned long long)j->id, p->name,
               j->name, pc_method_name(j->set.method), j->set.width, j->set.height,
               (unsigned long long)j->halt_iterations, j->halt_seconds);
+  if (j->auto_report[0]) pc_wire_log("job %llu: --method auto %s", (unsigned long long)j->id, j->auto_report);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
   Pcbpt__SubmitReply r = PCBPT__SUBMIT_REPLY__INIT;
   r.job_id = j->id;
@@ -592,6 +595,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->halt_seconds = j->halt_seconds;
     s->halt_noise = j->halt_noise;
     s->relmse_estimate = j->relmse_est;
+    s->auto_report = j->auto_report;
     s->worker_seconds = j->stats_merged.t_total;
     s->snapshots = j->snaps_taken;
     s->ranges_rerun = j->ranges_rerun;
@@ -859,7 +863,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_RUNNING && j->state != PC_JOB_STOPPING) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
-    if (s) { j->halt_noise = s->halt_noise; pc_job_study_settings(j, s); }
+    if (s) pc_job_take_stored_settings(j, s);
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0 || pc_job_activate(c, j, &je) != 0)
       pc_job_fail(c, j, s ? je.msg : "stored settings do not decode");
     else
@@ -871,7 +875,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
     if (j->state != PC_JOB_QUEUED) continue;
     pc_err je;
     Pcbpt__Settings *s = pcbpt__settings__unpack(NULL, j->settings_len, j->settings_blob);
-    if (s) { j->halt_noise = s->halt_noise; pc_job_study_settings(j, s); }
+    if (s) pc_job_take_stored_settings(j, s);
     if (!s || pc_wire_settings_from_proto(s, &j->set, &je) != 0) pc_job_fail(c, j, "stored settings do not decode");
     if (s) pcbpt__settings__free_unpacked(s, NULL);
   }

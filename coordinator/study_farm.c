@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "client.h"
+#include "pilot_farm.h"
 #include "wire_settings.h"
 
 static double now_s(void) {
@@ -62,15 +63,56 @@ int pc_study_farm_workers(pc_study_farm *f, int *n, pc_err *e) {
   return rc;
 }
 
-static int submit(pc_client *cl, const pc_study_group *g, pc_method method, uint64_t group, uint64_t *job, pc_err *e) {
+/* What method auto renders in a group: the pilot's choice, for what the pilot left of the budget. */
+typedef struct auto_choice {
+  pc_render_settings set;
+  double pilot_worker_seconds;
+  char report[1024];
+} auto_choice;
+
+/* Runs --method auto's pilot as farm jobs of the group's farm size, charged to auto's budget
+ * of worker-seconds (pilot_farm.h): the group's other methods start after it, so the pilot's
+ * jobs have the farm to themselves. */
+static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc_err *e) {
+  pc_render_settings base = g->req->set;
+  base.method = PC_METHOD_PCBPT;
+  base.seed = g->seed;
+  double slice;
+  uint64_t min_it;
+  pc_pilot_budget(g->seconds, 0, &slice, &min_it);
+  pc_pilot_farm fp = {.cl = cl, .hash = g->hash, .name = g->scene_path, .workers = g->workers};
+  pc_pilot pilot;
+  int rc = pc_pilot_run(&pilot, &base, slice, min_it, pc_pilot_farm_render, &fp, e);
+  if (rc) {
+    pc_pilot_free(&pilot);
+    return rc;
+  }
+  ac->set = pilot.c[pilot.best].set;
+  ac->set.seed = g->seed;
+  ac->pilot_worker_seconds = fp.worker_seconds;
+  pilot.seconds = fp.worker_seconds; /* the report gives the cost charged to the budget */
+  pc_pilot_report(&pilot, ac->report, sizeof ac->report);
+  pc_pilot_free(&pilot);
+  return PC_OK;
+}
+
+static int submit(pc_client *cl, const pc_study_group *g, const pc_study_method *method, const auto_choice *ac,
+                  uint64_t group, uint64_t *job, pc_err *e) {
   pc_render_settings set = g->req->set;
-  set.method = method;
+  set.method = method->method;
+  if (method->pcbpt_k > 0) set.pcbpt_k = method->pcbpt_k;
   set.seed = g->seed;
+  double budget = g->seconds * g->workers;
+  if (method->method == PC_METHOD_AUTO) {
+    set = ac->set;
+    budget = g->workers * pc_pilot_remaining(g->seconds, ac->pilot_worker_seconds / g->workers);
+  }
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&set, &ps, &psb);
+  if (method->method == PC_METHOD_AUTO) ps.auto_report = (char *)ac->report;
   ps.study_group = group;
-  ps.halt_worker_seconds = g->seconds * g->workers;
+  ps.halt_worker_seconds = budget;
   ps.snapshots = (uint32_t)g->snapshots;
   ps.group_workers = (uint32_t)g->workers;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
@@ -78,16 +120,7 @@ static int submit(pc_client *cl, const pc_study_group *g, pc_method method, uint
   sub.bundle_hash.data = (uint8_t *)g->hash;
   sub.bundle_hash.len = PC_BUNDLE_HASH;
   sub.settings = &ps;
-  Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
-  env.msg_case = PCBPT__ENVELOPE__MSG_SUBMIT;
-  env.submit = &sub;
-  int rc = pc_client_send(cl, &env, e);
-  if (!rc) rc = pc_client_recv(cl, 60, &in, e);
-  if (rc) return rc;
-  if (in->msg_case != PCBPT__ENVELOPE__MSG_SUBMIT_REPLY) rc = pc_errf(e, PC_EPARSE, "unexpected reply to submit");
-  else *job = in->submit_reply->job_id;
-  pcbpt__envelope__free_unpacked(in, NULL);
-  return rc;
+  return pc_client_submit(cl, &sub, job, e);
 }
 
 static const Pcbpt__JobStatus *find_job(const Pcbpt__StatusReply *r, uint64_t id) {
@@ -129,12 +162,12 @@ static int wait_group(pc_study_farm *f, pc_client *cl, const pc_study_group *g, 
         break;
       }
       if (strcmp(st->state, "failed") == 0 || strcmp(st->state, "cancelled") == 0)
-        rc = pc_errf(e, PC_EIO, "%s job %llu %s: %s", pc_method_name(g->methods[m]), (unsigned long long)jobs[m], st->state,
+        rc = pc_errf(e, PC_EIO, "%s job %llu %s: %s", g->methods[m].name, (unsigned long long)jobs[m], st->state,
                      st->error && *st->error ? st->error : "(no reason given)");
       all_done = all_done && strcmp(st->state, "done") == 0;
       rerun[m] = st->ranges_rerun;
       if (show)
-        dprintf(f->log_fd, " %s %.1f/%.0f worker-s (%u snapshots)", pc_method_name(g->methods[m]), st->worker_seconds,
+        dprintf(f->log_fd, " %s %.1f/%.0f worker-s (%u snapshots)", g->methods[m].name, st->worker_seconds,
                 budget, st->snapshots);
     }
     if (show) {
@@ -185,6 +218,13 @@ static int fetch_point(pc_client *cl, const pc_study_group *g, uint64_t job, uin
   return rc;
 }
 
+static int start_worker(pc_study_farm *f, pc_err *e) {
+  if (!f->embedded || f->worker_started) return PC_OK;
+  int rc = pc_embedded_start_worker(&f->emb, f->threads, e);
+  f->worker_started = rc == PC_OK;
+  return rc;
+}
+
 int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run *runs, pc_err *e) {
   uint64_t jobs[PC_STUDY_MAX_METHODS] = {0}, group;
   uint32_t rerun[PC_STUDY_MAX_METHODS] = {0};
@@ -195,12 +235,17 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
   randombytes_buf(&group, sizeof group);
   group |= 1; /* never 0 (no group) */
   rc = pc_client_send_bundle(&cl, g->blob, g->blob_n, g->hash, e);
-  for (int m = 0; !rc && m < g->nmethods; m++) rc = submit(&cl, g, g->methods[m], group, &jobs[m], e);
-  if (!rc && f->embedded && !f->worker_started) {
-    rc = pc_embedded_start_worker(&f->emb, f->threads, e);
-    f->worker_started = rc == PC_OK;
-  }
+  auto_choice ac = {0};
+  bool with_auto = false;
+  for (int m = 0; m < g->nmethods; m++) with_auto = with_auto || g->methods[m].method == PC_METHOD_AUTO;
   double t0 = now_s();
+  if (!rc && with_auto) {
+    rc = start_worker(f, e);
+    if (!rc) rc = run_pilot(&cl, g, &ac, e);
+    if (!rc) dprintf(f->log_fd, "  %s: auto %s\n", g->label, ac.report);
+  }
+  for (int m = 0; !rc && m < g->nmethods; m++) rc = submit(&cl, g, &g->methods[m], &ac, group, &jobs[m], e);
+  if (!rc) rc = start_worker(f, e);
   if (!rc) rc = wait_group(f, &cl, g, jobs, rerun, e);
   double group_wall = now_s() - t0;
   for (int m = 0; !rc && m < g->nmethods; m++) {
@@ -225,9 +270,17 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
     const char *dir = g->keep_dir ? g->keep_dir : ".";
     snprintf(tmp, sizeof tmp, "%s/.snapshot.%ld.exr", dir, (long)getpid());
     if (g->keep_path) snprintf(keep, sizeof keep, "%s", g->keep_path);
-    else if (g->keep_dir) snprintf(keep, sizeof keep, "%s/%s.exr", g->keep_dir, pc_method_name(run->method));
+    else if (g->keep_dir) snprintf(keep, sizeof keep, "%s/%s.exr", g->keep_dir, run->method.name);
     for (uint32_t k = 1; !rc && k <= nsnaps; k++) rc = fetch_point(&cl, g, jobs[m], k, tmp, false, run, e);
     if (!rc) rc = fetch_point(&cl, g, jobs[m], 0, keep[0] ? keep : tmp, keep[0] != 0, run, e);
+    if (!rc && run->method.method == PC_METHOD_AUTO) {
+      /* the pilot's cost counts: every point of auto's curve comes after it */
+      for (int k = 0; k < run->nsnaps; k++) {
+        run->snaps[k].worker_seconds += ac.pilot_worker_seconds;
+        run->snaps[k].seconds += ac.pilot_worker_seconds / g->workers;
+      }
+      snprintf(run->auto_report, sizeof run->auto_report, "%s", ac.report);
+    }
   }
   pc_client_close(&cl);
   return rc;

@@ -36,7 +36,7 @@ typedef struct pc_study_group {
   const uint8_t *blob, *hash;             /* the scene's bundle */
   size_t blob_n;
   const pc_render_request *req;           /* settings shared by every method */
-  const pc_method *methods;
+  const pc_study_method *methods;
   int nmethods;
   uint64_t seed;
   double seconds;                         /* per method, on a farm of `workers` */

@@ -129,7 +129,7 @@ static int crops(FILE *f, const pc_report_scene *s, pc_err *e) {
   char path[4400];
   int rc = PC_OK, n = s->nmethods < 8 ? s->nmethods : 8;
   for (int m = 0; m < n && !rc; m++) {
-    snprintf(path, sizeof path, "%s/%s.exr", s->dir, pc_method_name(s->methods[m]));
+    snprintf(path, sizeof path, "%s/%s.exr", s->dir, s->methods[m].name);
     rc = pc_exr_read_layers(path, &x[m], e);
     if (!rc && (!beauty_of(&x[m]) || x[m].w != s->w || x[m].h != s->h))
       rc = pc_errf(e, PC_EPARSE, "%s: no beauty, or not %dx%d", path, s->w, s->h);
@@ -157,12 +157,12 @@ static int crops(FILE *f, const pc_report_scene *s, pc_err *e) {
     }
     noisiest(err, s->w, s->h, size, &bx, &by);
     fprintf(f, "<h3>Zoomed crop of the noisiest region</h3>\n<p>%dx%d pixels at (%d, %d), where %s's %s is largest.</p>\n",
-            size, size, bx, by, pc_method_name(s->methods[0]),
+            size, size, bx, by, s->methods[0].name,
             s->reference ? "relative squared error against the reference" : "estimated relative variance");
   }
   for (int m = 0; m <= n && !rc; m++) {
     if (m == n && !s->reference) break;
-    const char *name = m < n ? pc_method_name(s->methods[m]) : "reference";
+    const char *name = m < n ? s->methods[m].name : "reference";
     char leaf[64];
     snprintf(leaf, sizeof leaf, "crop_%s.png", name);
     snprintf(path, sizeof path, "%s/%s", s->dir, leaf);
@@ -188,8 +188,8 @@ int pc_report_add_scene(pc_report *r, const pc_report_scene *s, pc_err *e) {
   if (!rc) fputs("<h3>Images at the end of the budget</h3>\n", f);
   for (int m = 0; m < s->nmethods && !rc; m++) {
     char leaf[64];
-    snprintf(leaf, sizeof leaf, "%s.png", pc_method_name(s->methods[m]));
-    rc = figure(f, s->dir, leaf, "image/png", pc_method_name(s->methods[m]), "px", s->w < 256 ? 256 : 0, e);
+    snprintf(leaf, sizeof leaf, "%s.png", s->methods[m].name);
+    rc = figure(f, s->dir, leaf, "image/png", s->methods[m].name, "px", s->w < 256 ? 256 : 0, e);
   }
   if (!rc && s->reference) {
     char path[4400];

@@ -10,6 +10,7 @@
 
 #include "error.h"
 #include "render.h"
+#include "study.h"
 
 typedef struct pc_report {
   FILE *f;
@@ -22,7 +23,7 @@ typedef struct pc_report_scene {
   const char *tables;          /* the printed tables */
   const float *reference;      /* the reference's beauty (w*h*3), NULL: estimated errors */
   int w, h;
-  const pc_method *methods;
+  const pc_study_method *methods;
   int nmethods;
   bool scaling, inner;         /* study_scaling.svg, study_inner.svg were written */
 } pc_report_scene;

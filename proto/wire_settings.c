@@ -37,6 +37,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   pc_render_settings_default(&s);
   if (!p) return pc_errf(e, PC_EINVAL, "settings: missing");
   if (pc_method_parse(p->method, &s.method) != 0) return pc_errf(e, PC_EINVAL, "settings: unknown method '%.32s'", p->method);
+  if (s.method == PC_METHOD_AUTO) return pc_errf(e, PC_EINVAL, "settings: method auto is chosen by the client's pilot, not sent");
   if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
       p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
       p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT)

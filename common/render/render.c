@@ -75,6 +75,7 @@ void pc_render_settings_default(pc_render_settings *s) {
 }
 
 int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
+  if (s->method == PC_METHOD_AUTO) return pc_errf(e, PC_EINVAL, "method: auto must be resolved by its pilot before rendering");
   if (s->method < PC_METHOD_PT || s->method > PC_METHOD_PCBPT) return pc_errf(e, PC_EINVAL, "method: unknown method %d", (int)s->method);
   if (s->width < 1 || s->width > PC_SCENE_MAX_FILM_DIM || s->height < 1 || s->height > PC_SCENE_MAX_FILM_DIM)
     return pc_errf(e, PC_EINVAL, "resolution %dx%d out of range 1..%d", s->width, s->height, PC_SCENE_MAX_FILM_DIM);

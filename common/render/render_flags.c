@@ -8,7 +8,9 @@
 #include <string.h>
 
 const char pc_render_flags_help[] =
-    "  --method M            pt, lt, bdpt, cbdpt or pcbpt (default: the scene's integrator)\n"
+    "  --method M            pt, lt, bdpt, cbdpt, pcbpt or auto (default: the scene's integrator;\n"
+    "                        auto for pcbpt): auto runs a short pilot of bdpt and pcbpt K=1,2,4,8\n"
+    "                        and renders with the most efficient (docs/auto.md)\n"
     "  --spp N               iterations to render, one sample per pixel each\n"
     "  --time SECONDS        render for this wall time (with --spp: whichever comes first)\n"
     "  --halt-noise E        stop once the image's estimated relMSE is at most E (--spp and\n"
@@ -74,8 +76,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   switch (which) {
   case 0:
     if (pc_method_parse(v, &s->method) != PC_OK)
-      return pc_errf(e, PC_EINVAL, "%s: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt)", flag, v);
+      return pc_errf(e, PC_EINVAL, "%s: unknown method '%s' (pt, lt, bdpt, cbdpt, pcbpt, auto)", flag, v);
     r->method_set = true;
+    r->method_auto = s->method == PC_METHOD_AUTO;
+    if (r->method_auto) s->method = PC_METHOD_PCBPT; /* the pilot's base settings */
     break;
   case 1:
     if (!pc_parse_u64(v, 1, UINT64_C(1) << 40, &r->spp)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a count >= 1", flag, v);
@@ -160,7 +164,10 @@ void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts 
 
 void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s) {
   if (r->spp == 0 && r->seconds == 0 && s->sample_count > 0) r->spp = (uint64_t)s->sample_count;
-  if (!r->method_set) r->set.method = s->method;
+  if (!r->method_set) {
+    r->set.method = s->method;
+    r->method_auto = s->method == PC_METHOD_PCBPT;
+  }
   if (!r->depth_set) r->set.max_depth = s->max_depth;
   if (!r->width_set) r->set.width = s->camera.width;
   if (!r->height_set) r->set.height = s->camera.height;

@@ -19,6 +19,9 @@ typedef struct pc_render_request {
   bool strict;       /* the loader's warnings are errors */
   const char *scene_root; /* folder confining the files the scene names (NULL: the scene's own) */
   double halt_noise; /* stop at this estimated relMSE (0: not given) */
+  /* --method auto, or no --method on a scene whose integrator is pcbpt: a pilot chooses the
+   * method and PCBPT parameters (pilot.h); set.method stays pcbpt until it has. */
+  bool method_auto;
 } pc_render_request;
 
 void pc_render_request_default(pc_render_request *r);

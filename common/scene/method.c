@@ -10,6 +10,7 @@ const char *pc_method_name(pc_method m) {
   case PC_METHOD_BDPT: return "bdpt";
   case PC_METHOD_CBDPT: return "cbdpt";
   case PC_METHOD_PCBPT: return "pcbpt";
+  case PC_METHOD_AUTO: return "auto";
   }
   return "unknown";
 }
@@ -18,6 +19,7 @@ int pc_method_parse(const char *name, pc_method *out) {
   static const struct { const char *name; pc_method m; } tab[] = {
       {"pt", PC_METHOD_PT},       {"path", PC_METHOD_PT},     {"lt", PC_METHOD_LT},
       {"bdpt", PC_METHOD_BDPT},   {"cbdpt", PC_METHOD_CBDPT}, {"pcbpt", PC_METHOD_PCBPT},
+      {"auto", PC_METHOD_AUTO},
   };
   if (!name) return PC_EINVAL;
   for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)

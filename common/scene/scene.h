@@ -28,7 +28,9 @@ typedef struct pc_shape {
   int light;             /* index into lights if this shape is an area emitter, else -1 */
 } pc_shape;
 
-typedef enum { PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT } pc_method;
+/* PC_METHOD_AUTO is a choice, not an estimator: a pilot resolves it to bdpt or pcbpt with
+ * parameters (common/render/pilot.h) before anything renders; the renderer refuses it. */
+typedef enum { PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT, PC_METHOD_AUTO } pc_method;
 
 /* Limits on what one scene may contain (untrusted input). */
 #define PC_SCENE_MAX_SHAPES 65536

@@ -16,7 +16,7 @@
 #include "render.h"
 #include "scene.h"
 
-#define PC_STUDY_MAX_METHODS 5
+#define PC_STUDY_MAX_METHODS 8
 #define PC_STUDY_MAX_SNAPSHOTS 1000
 /* The first snapshot is taken after this fraction of the budget (log spacing up to 1). */
 #define PC_STUDY_FIRST_FRACTION (1.0 / 64)
@@ -41,6 +41,17 @@ static inline bool pc_study_ref_has(const pc_study_ref *r, int slot) {
   return r->rgb[slot] || (r->estimated && slot == PC_STUDY_BEAUTY);
 }
 
+/* A method of a study: an estimator and, for pcbpt, optionally its own K ("pcbpt-k2"), so one
+ * study can compare K values side by side on the same workers. `name` is what the study's
+ * files, tables and charts call it. */
+typedef struct pc_study_method {
+  pc_method method;
+  int pcbpt_k;          /* > 0: --pcbpt-k for this method only; 0: the study's */
+  char name[16];
+} pc_study_method;
+/* "pt", "lt", "bdpt", "cbdpt", "pcbpt", "auto", or "pcbpt-kN" (1 <= N <= 64). */
+int pc_study_method_parse(const char *s, pc_study_method *out, pc_err *e);
+
 typedef struct pc_study_snap {
   double seconds;       /* render time when it was taken (metrics time excluded); on the
                            farm: worker_seconds / the farm size, the time the farm would
@@ -52,7 +63,7 @@ typedef struct pc_study_snap {
 } pc_study_snap;
 
 typedef struct pc_study_run {
-  pc_method method;
+  pc_study_method method;
   int threads;
   int workers;          /* farm size of the run (0: the one-machine study) */
   int run;              /* which of --runs (0-based) */
@@ -63,10 +74,10 @@ typedef struct pc_study_run {
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   pc_render_stats stats;
+  char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
 } pc_study_run;
 
 void pc_study_run_free(pc_study_run *run);
-
 /* One point of a farm study's curve from an image the farm wrote (study_measure.c): errors
  * against ref per layer (or the beauty's own estimate without one), its worker-seconds,
  * render time and iterations from the header; seconds is worker-seconds / workers. With
@@ -125,7 +136,7 @@ typedef struct pc_study_table {
   double target[PC_STUDY_NLAYERS];  /* target relMSE per row of slot[] */
   bool target_given[PC_STUDY_NLAYERS];
   int nmethods;
-  pc_method method[PC_STUDY_MAX_METHODS];
+  const char *name[PC_STUDY_MAX_METHODS]; /* the runs' method names */
   pc_study_cell cell[PC_STUDY_NLAYERS][PC_STUDY_MAX_METHODS];
   int headline;                     /* row of slot[] the headline sentences are about */
 } pc_study_table;

@@ -51,7 +51,7 @@ int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, co
       for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
         if (!pc_study_ref_has(ref, slot)) continue;
         const pc_study_snap *sn = &runs[r].snaps[s];
-        fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g,%d,%d,%.6f,%.6f\n", pc_method_name(runs[r].method), s,
+        fprintf(o.f, "%s,%d,%.6f,%llu,%s,%.9g,%.9g,%.9g,%d,%d,%.6f,%.6f\n", runs[r].method.name, s,
                 sn->seconds, (unsigned long long)sn->iterations, pc_study_layer_name(slot), sn->m[slot].relmse,
                 sn->m[slot].rmse, sn->m[slot].l1, runs[r].workers, runs[r].run + 1, sn->worker_seconds, sn->wall);
       }
@@ -91,14 +91,19 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
     const pc_study_snap *last = run->nsnaps ? &run->snaps[run->nsnaps - 1] : NULL;
     fprintf(f, "    {\"method\": \"%s\", \"workers\": %d, \"run\": %d, \"seed\": %llu, \"ranges_rerun\": %u, "
                "\"group_wall_seconds\": %.6f, \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
-            pc_method_name(run->method), run->workers, run->run + 1, (unsigned long long)run->seed, run->ranges_rerun,
+            run->method.name, run->workers, run->run + 1, (unsigned long long)run->seed, run->ranges_rerun,
             run->group_wall, run->threads, last ? (unsigned long long)last->iterations : 0ULL);
     json_number(f, last ? last->seconds : NAN);
     fprintf(f, ", \"rays\": %llu, \"exr\": \"%s.exr\", \"png\": \"%s.png\", \"empty_layers\": [",
-            (unsigned long long)run->stats.rays, pc_method_name(run->method), pc_method_name(run->method));
+            (unsigned long long)run->stats.rays, run->method.name, run->method.name);
     for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
       if (run->layer_empty[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
-    fputs("],\n     \"snapshots\": [\n", f);
+    fputs("]", f);
+    if (run->auto_report[0]) {
+      fputs(", \"auto\": ", f);
+      json_string(f, run->auto_report);
+    }
+    fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];
       fprintf(f, "       {\"seconds\": %.6f, \"worker_seconds\": %.6f, \"wall_seconds\": %.6f, \"iterations\": %llu, "
@@ -129,13 +134,13 @@ static void json_table(FILE *f, const pc_study_table *t) {
     fprintf(f, ", \"target_from\": \"%s\", \"rows\": [\n", t->target_given[row] ? "--target-error" : "worst final relmse");
     for (int m = 0; m < t->nmethods; m++) {
       const pc_study_cell *c = &t->cell[row][m];
-      fprintf(f, "      {\"method\": \"%s\", \"final_relmse\": ", pc_method_name(t->method[m]));
+      fprintf(f, "      {\"method\": \"%s\", \"final_relmse\": ", t->name[m]);
       json_number(f, c->final_relmse);
-      fprintf(f, ", \"relmse_ratio_to_%s\": ", pc_method_name(t->method[0]));
+      fprintf(f, ", \"relmse_ratio_to_%s\": ", t->name[0]);
       json_number(f, c->relmse_ratio);
       fputs(", \"time_to_target\": ", f);
       json_number(f, c->time);
-      fprintf(f, ", \"reached\": \"%s\", \"time_ratio_to_%s\": ", reach_name(c->reach), pc_method_name(t->method[0]));
+      fprintf(f, ", \"reached\": \"%s\", \"time_ratio_to_%s\": ", reach_name(c->reach), t->name[0]);
       json_number(f, c->time_ratio);
       fprintf(f, "}%s\n", m + 1 < t->nmethods ? "," : "");
     }
@@ -193,7 +198,7 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
       x[s] = runs[r].snaps[s].seconds;
       y[s] = runs[r].snaps[s].m[slot].relmse;
     }
-    series[ns] = (pc_chart_series){.name = pc_method_name(runs[r].method), .x = x, .y = y, .n = runs[r].nsnaps};
+    series[ns] = (pc_chart_series){.name = runs[r].method.name, .x = x, .y = y, .n = runs[r].nsnaps};
     /* the band's points are the median curve's (both leave out the times no run reached) */
     if (bands && bands[r] && bands[r][slot].n == runs[r].nsnaps) {
       series[ns].lo = bands[r][slot].lo;

@@ -37,7 +37,7 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
                           double target_error, pc_study_table *t) {
   memset(t, 0, sizeof *t);
   t->nmethods = nruns;
-  for (int m = 0; m < nruns; m++) t->method[m] = runs[m].method;
+  for (int m = 0; m < nruns; m++) t->name[m] = runs[m].method.name;
   for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++) {
     if (!pc_study_ref_has(ref, slot)) continue;
     int row = t->nlayers++;
@@ -64,7 +64,7 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
   }
 }
 
-static const char *method_name(const pc_study_table *t, int m) { return pc_method_name(t->method[m]); }
+static const char *method_name(const pc_study_table *t, int m) { return t->name[m]; }
 
 static bool is_bound(const pc_study_table *t, int row, int m) {
   return t->cell[row][m].reach == PC_REACH_BY_FIRST || t->cell[row][0].reach == PC_REACH_BY_FIRST;

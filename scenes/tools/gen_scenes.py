@@ -294,6 +294,90 @@ def glossy_glass():
     return s
 
 
+def glossy_floor():
+    """Room 8 x 3.5 x 8 whose floor is a near-mirror (rough silver, GGX 0.02) and whose walls are
+    glossy (rough plastic, GGX 0.08), under a large 4 x 4 m ceiling panel; two rows of pillars
+    and a few blocks stand on the floor. Most of the image is the light and the room seen in the
+    floor, so most paths carry glossy vertices, where PCBPT's records (interpolated at diffuse
+    vertices) predict the connection PMF badly."""
+    s = Scene("glossy-floor", "pcbpt", 8,
+              "Glossy-dominated: near-mirror floor, glossy walls, large ceiling light; a hall of pillars")
+    s.camera((0.0, 1.7, 3.6), (0.0, 0.9, -2.0), (0, 1, 0), 60)
+    s.bsdf("wall", ("roughplastic", '<string name="distribution" value="ggx"/><float name="alpha" value="0.08"/>'
+                    '<rgb name="diffuseReflectance" value="0.45, 0.45, 0.5"/>'))
+    s.bsdf("mirror", ("roughconductor", '<string name="distribution" value="ggx"/>'
+                      '<string name="material" value="Ag"/><float name="alpha" value="0.02"/>'))
+    lo, hi = (-4.0, 0.0, -4.0), (4.0, 3.5, 4.0)
+    shell(s, lo, hi, ref("wall"), skip=("y-",))
+    s.box((-4.1, -0.1, -4.1), (4.1, 0.0, 4.1), ref("mirror"))
+    s.rect((0.0, 3.49, -0.5), 2.0, 2.0, "-y", BLACK, emit=(6, 6, 6))
+    for i in range(5):  # two rows of pillars, diffuse, 0.3 m square, 3 m high
+        z = -3.0 + 1.4 * i
+        s.box((-2.3, 0.0, z), (-2.0, 3.0, z + 0.3), diffuse((0.7, 0.68, 0.6)))
+        s.box((2.0, 0.0, z), (2.3, 3.0, z + 0.3), diffuse((0.7, 0.68, 0.6)))
+    s.box((-0.9, 0.0, -2.2), (-0.1, 0.8, -1.4), diffuse((0.6, 0.25, 0.2)), rot_y=20)
+    s.box((0.4, 0.0, -1.2), (1.0, 1.2, -0.6), ref("wall"), rot_y=-25)
+    s.sphere((0.9, 0.5, -2.6), 0.5, diffuse((0.2, 0.35, 0.6)))
+    return s
+
+
+def glass_lamp():
+    """Room 6 x 3 x 6 lit only by a lamp whose small emitting sphere (r 5 cm) sits inside a
+    hollow glass bulb (outer r 0.25, inner r 0.22, IOR 1.5) hanging below the ceiling: every
+    light path leaves through two glass interfaces, so next-event estimation never reaches the
+    light and eye paths almost never hit it (a tiny emitter behind refraction). A solid glass
+    sphere on a table casts a caustic on it; a few boxes and shelves stand around. Only light
+    sub-paths (light tracing, and connections from their diffuse vertices) find the light."""
+    s = Scene("glass-lamp", "pcbpt", -1,
+              "Light only through glass: a small emitter inside a hollow glass bulb lights a room; a "
+              "glass ball casts a caustic on a table")
+    s.camera((-2.2, 1.6, 2.6), (0.3, 0.8, -0.6), (0, 1, 0), 60)
+    s.bsdf("wall", ("diffuse", '<rgb name="reflectance" value="0.7, 0.7, 0.7"/>'))
+    s.bsdf("glass", ("dielectric", '<float name="intIOR" value="1.5"/><float name="extIOR" value="1.0"/>'))
+    lo, hi = (-3.0, 0.0, -3.0), (3.0, 3.0, 3.0)
+    shell(s, lo, hi, ref("wall"))
+    lamp = (0.3, 1.9, -0.6)
+    s.sphere(lamp, 0.25, ref("glass"))
+    s.sphere(lamp, 0.22, ref("glass"), flip=True)   # the bulb's inner surface: glass behind it
+    s.sphere(lamp, 0.05, BLACK, emit=(800, 800, 800))
+    # table (top and four legs) under the lamp, glass ball on it
+    s.box((-0.6, 0.7, -1.4), (1.2, 0.76, 0.2), diffuse((0.65, 0.55, 0.4)))
+    for x, z in ((-0.55, -1.35), (1.1, -1.35), (-0.55, 0.1), (1.1, 0.1)):
+        s.box((x, 0.0, z), (x + 0.05, 0.7, z + 0.05), diffuse((0.3, 0.2, 0.1)))
+    s.sphere((0.5, 0.96, -0.3), 0.2, ref("glass"))
+    # shelves on the back wall, a cabinet, a box
+    for y in (0.9, 1.5, 2.1):
+        s.box((-2.5, y, -3.0), (-0.5, y + 0.04, -2.6), diffuse((0.6, 0.6, 0.55)))
+    s.box((1.6, 0.0, -2.9), (2.8, 1.4, -2.3), diffuse((0.3, 0.45, 0.3)))
+    s.box((-1.8, 0.0, 0.2), (-1.2, 0.6, 0.8), diffuse((0.6, 0.3, 0.2)), rot_y=30)
+    return s
+
+
+def outdoor():
+    """A 200 x 200 m ground with 24 buildings under a 60 x 60 m emitter 80 m up (a cloudy-sky
+    stand-in), seen through a narrow (12 degree) camera from 60 m: almost
+    every light path lands far outside the view, so light tracing and PCBPT's stored light
+    vertices are mostly wasted, while eye paths find the big light easily."""
+    s = Scene("outdoor", "pcbpt", -1,
+              "Outdoor: a large ground with buildings under a big distant light, seen through a narrow "
+              "camera (most light paths land outside the view)")
+    s.camera((3.0, 8.0, 60.0), (0.0, 3.0, 0.0), (0, 1, 0), 12)
+    s.rect((0.0, 0.0, 0.0), 100.0, 100.0, "+y", diffuse((0.35, 0.33, 0.3)))
+    s.rect((0.0, 80.0, 0.0), 30.0, 30.0, "-y", BLACK, emit=(3, 3, 3.3))
+    k = 0
+    for i in range(-2, 3):
+        for j in range(-2, 3):
+            if i == 0 and j == 0:
+                continue
+            h = 4.0 + 3.0 * ((i * 7 + j * 3) % 5)
+            x, z = 14.0 * i + 2.0 * j, 14.0 * j - 1.5 * i
+            s.box((x - 2.5, 0.0, z - 2.5), (x + 2.5, h, z + 2.5),
+                  diffuse((0.5 + 0.05 * (k % 4), 0.45, 0.4 - 0.05 * (k % 3))), rot_y=10.0 * ((k % 5) - 2))
+            k += 1
+    s.box((-1.5, 0.0, -1.5), (1.5, 6.0, 1.5), diffuse((0.7, 0.7, 0.7)), rot_y=15)
+    return s
+
+
 def write_png(path, w, h, pixel):
     """8-bit RGB PNG (standard library only); pixel(x, y) gives (r, g, b) in 0..255, row 0 at
     the top (Mitsuba reads 8-bit images as sRGB: 255 is exactly 1.0)."""
@@ -403,7 +487,8 @@ def check_door(preview, path):
     return 0 if xmax <= -0.0499 else 1
 
 
-SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, env_constant, env_white_map, env_objects, thin_glass]
+SCENES = [cornell_box, furnace, ajar_door, slit_room, open_room, glossy_glass, glossy_floor, glass_lamp, outdoor,
+          env_constant, env_white_map, env_objects, thin_glass]
 
 
 def main():

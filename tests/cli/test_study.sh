@@ -20,6 +20,7 @@ check spp-refused 2 "--spp" -- "$bin" study "$scene" "${ok[@]}" --spp 4
 check halt-noise-refused 2 "--halt-noise" -- "$bin" study "$scene" "${ok[@]}" --halt-noise 0.1
 check bad-methods 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --methods pt,magic
 check twice-methods 2 "twice" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pt
+check bad-k-method 2 "pcbpt-k0" -- "$bin" study "$scene" "${ok[@]}" --methods bdpt,pcbpt-k0
 check bad-seconds 2 "--seconds" -- "$bin" study "$scene" "${ok[@]}" --seconds 0
 check missing-value 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots
 check bad-snapshots 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots 0
@@ -74,4 +75,30 @@ if command -v python3 >/dev/null; then
     "$tmp/e/cornell-box/study.json" || { echo "FAIL estimated json"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study without a reference"
+# Method auto in a study: its pilot runs as farm jobs charged to its own budget, so its curve
+# starts after the pilot's worker-seconds and ends at the same budget as bdpt's; study.json
+# says what the pilot chose.
+check auto 0 "auto chose " -- "$bin" study "$scene" --methods bdpt,pcbpt-k2,auto --seconds 2 --out "$tmp/a" "${size[@]}" --threads 2
+if command -v python3 >/dev/null; then
+  python3 - "$tmp/a/cornell-box/study.json" <<'PY' || { echo "FAIL auto json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = {x["method"]: x for x in d["methods"]}
+a, b = m["auto"], m["bdpt"]
+assert m["pcbpt-k2"]["snapshots"], m["pcbpt-k2"]
+assert a["auto"].startswith("chose "), a["auto"]
+pilot = float(a["auto"].split("(pilot ")[1].split(" s)")[0])
+assert pilot > 0, pilot
+first, last = a["snapshots"][0], a["snapshots"][-1]
+# every point comes after the pilot; the whole budget (pilot included) is bdpt's, within one
+# upload of overrun
+assert first["worker_seconds"] > pilot, (first, pilot)
+assert abs(last["worker_seconds"] - b["snapshots"][-1]["worker_seconds"]) < 1.0, (last, b["snapshots"][-1])
+# every candidate's job ran at least the 2 iterations its variance needs, however small its
+# slice of worker-seconds (Settings.min_iterations)
+its = [int(part.split(" it ")[1]) for part in a["auto"].split("; ")[1:]]
+assert len(its) >= 4 and min(its) >= 2, a["auto"]
+PY
+fi
+[ $fail = 0 ] && echo "ok   study with auto"
 exit $fail

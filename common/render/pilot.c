@@ -1,0 +1,264 @@
+/* pilot.c: the pilot of `--method auto` (pilot.h, docs/auto.md): the candidate grid, the
+ * choice by efficiency, its one-line report, and the in-process renderer of candidates. */
+#include "pilot.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+static double clock_s(clockid_t id) {
+  struct timespec ts;
+  if (clock_gettime(id, &ts) != 0) return 0;
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double now_s(void) { return clock_s(CLOCK_MONOTONIC); }
+
+/* Stage 1 has at most 5 candidates and stage 2 at most 1: the budget is split over 6. */
+#define PILOT_SLICES 6
+/* The estimate needs 2 iterations (1 degree of freedom per pixel, averaged over the image). */
+#define PILOT_MIN_ITERATIONS 2
+
+void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64_t *min_iterations) {
+  *min_iterations = PILOT_MIN_ITERATIONS;
+  *slice_seconds = 0;
+  if (seconds > 0) *slice_seconds = seconds * PC_PILOT_FRACTION / PILOT_SLICES;
+  else if (spp > 0) {
+    uint64_t n = (uint64_t)((double)spp * PC_PILOT_FRACTION / PILOT_SLICES);
+    if (n > *min_iterations) *min_iterations = n;
+  } else {
+    *min_iterations = 8; /* --halt-noise alone: no budget to take a share of */
+  }
+}
+
+double pc_pilot_remaining(double seconds, double pilot_seconds) {
+  double rest = seconds - pilot_seconds;
+  return rest > 0.1 * seconds ? rest : 0.1 * seconds;
+}
+
+uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
+
+static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k, float mix) {
+  pc_pilot_candidate *c = &p->c[p->n++];
+  memset(c, 0, sizeof *c);
+  c->set = *base;
+  c->set.method = m;
+  c->set.seed = pc_pilot_seed(base->seed);
+  c->relmse = c->own_relmse = -1;
+  if (m == PC_METHOD_PCBPT) {
+    c->set.pcbpt_k = k;
+    c->set.uniform_mix = mix;
+    if (mix != base->uniform_mix) snprintf(c->label, sizeof c->label, "pcbpt K=%d mix=%.2g", k, (double)mix);
+    else snprintf(c->label, sizeof c->label, "pcbpt K=%d", k);
+  } else {
+    snprintf(c->label, sizeof c->label, "%s", pc_method_name(m));
+  }
+}
+
+void pc_pilot_free(pc_pilot *p) {
+  for (int i = 0; i < p->n; i++) {
+    free(p->c[i].mean);
+    free(p->c[i].var);
+    p->c[i].mean = p->c[i].var = NULL;
+    p->c[i].npix = 0;
+  }
+}
+
+int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, const float *var, pc_err *e) {
+  free(c->mean);
+  free(c->var);
+  c->mean = c->var = NULL;
+  c->npix = 0;
+  if (!var || w < 1 || h < 1) return PC_OK; /* it cannot tell its variance: no image */
+  int step = 1;
+  while ((size_t)((w + step - 1) / step) * (size_t)((h + step - 1) / step) > PC_PILOT_MAX_PIXELS) step++;
+  int nx = (w + step - 1) / step, ny = (h + step - 1) / step;
+  size_t n = (size_t)nx * (size_t)ny * 3;
+  c->mean = malloc(n * sizeof *c->mean);
+  c->var = malloc(n * sizeof *c->var);
+  if (!c->mean || !c->var) {
+    free(c->mean);
+    free(c->var);
+    c->mean = c->var = NULL;
+    return pc_errf(e, PC_ENOMEM, "auto pilot: out of memory for a %dx%d image", nx, ny);
+  }
+  size_t k = 0;
+  for (int y = 0; y < h; y += step)
+    for (int x = 0; x < w; x += step)
+      for (int ch = 0; ch < 3; ch++, k++) {
+        size_t j = ((size_t)y * (size_t)w + (size_t)x) * 3 + (size_t)ch;
+        c->mean[k] = mean[j];
+        c->var[k] = var[j];
+      }
+  c->npix = nx * ny;
+  return PC_OK;
+}
+
+/* relMSE of every candidate with an image against the pooled mean m of all of them, weighted
+ * by iterations: v_c / (max(m^2 - v_m, 0) + eps) averaged over the kept values, with v_c the
+ * variance of c's mean and v_m that of the pooled mean (E[m^2] = exact^2 + v_m, as in
+ * pc_film_relmse_estimate). The same denominator for all keeps their ranking free of the
+ * noise of each one's own mean. */
+static void pooled_relmse(pc_pilot *p) {
+  int npix = 0;
+  double n_all = 0;
+  for (int i = 0; i < p->n; i++) {
+    pc_pilot_candidate *c = &p->c[i];
+    c->relmse = c->own_relmse;
+    if (!c->npix || c->iterations < 2) continue;
+    if (npix && c->npix != npix) return; /* not the same image: own estimates only */
+    npix = c->npix;
+    n_all += (double)c->iterations;
+  }
+  if (!npix) return;
+  double sum[PC_PILOT_MAX] = {0};
+  size_t nv = (size_t)npix * 3;
+  for (size_t k = 0; k < nv; k++) {
+    double m = 0, vm = 0;
+    for (int i = 0; i < p->n; i++) {
+      const pc_pilot_candidate *c = &p->c[i];
+      if (!c->npix || c->iterations < 2) continue;
+      double w = (double)c->iterations / n_all;
+      m += w * c->mean[k];
+      vm += w * w * c->var[k];
+    }
+    double den = fmax(m * m - vm, 0.0) + PC_RELMSE_EPS;
+    for (int i = 0; i < p->n; i++)
+      if (p->c[i].npix && p->c[i].iterations >= 2) sum[i] += p->c[i].var[k] / den;
+  }
+  for (int i = 0; i < p->n; i++)
+    if (p->c[i].npix && p->c[i].iterations >= 2) p->c[i].relmse = sum[i] / (double)nv;
+}
+
+void pc_pilot_choose(pc_pilot *p) {
+  pooled_relmse(p);
+  p->best = -1;
+  for (int i = 0; i < p->n; i++) {
+    pc_pilot_candidate *c = &p->c[i];
+    c->efficiency = c->relmse > 0 && c->seconds > 0 ? 1.0 / (c->relmse * c->seconds) : 0;
+    /* an image without noise (all black, or exact) is infinitely efficient */
+    if (c->relmse == 0 && c->iterations >= 2) c->efficiency = INFINITY;
+  }
+  int bdpt = -1;
+  for (int i = 0; i < p->n; i++) {
+    if (p->c[i].set.method == PC_METHOD_BDPT && bdpt < 0) bdpt = i;
+    if (p->c[i].efficiency > 0 && (p->best < 0 || p->c[i].efficiency > p->c[p->best].efficiency)) p->best = i;
+  }
+  if (bdpt >= 0 && p->best >= 0 && p->best != bdpt && p->c[bdpt].efficiency > 0 &&
+      p->c[p->best].efficiency < PC_PILOT_BDPT_MARGIN * p->c[bdpt].efficiency)
+    p->best = bdpt;
+  if (p->best < 0) p->best = bdpt >= 0 ? bdpt : 0; /* nothing could tell: BDPT, the safe default */
+}
+
+static int render_from(pc_pilot *p, int from, double slice, uint64_t min_it, pc_pilot_render_fn render, void *user,
+                       pc_err *e) {
+  if (from >= p->n) return PC_OK;
+  int rc = render(user, &p->c[from], p->n - from, slice, min_it, e);
+  if (!rc) pc_pilot_choose(p);
+  return rc;
+}
+
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint64_t min_it, pc_pilot_render_fn render,
+                 void *user, pc_err *e) {
+  memset(p, 0, sizeof *p);
+  double t0 = now_s();
+  add_candidate(p, base, PC_METHOD_BDPT, 0, 0);
+  for (int k = 1; k <= 4; k *= 2) add_candidate(p, base, PC_METHOD_PCBPT, k, base->uniform_mix);
+  int rc = render_from(p, 0, slice, min_it, render, user, e);
+  if (rc) return rc;
+  /* efficiency over K has one peak (more connections cost linearly and gain less each), so K=8
+   * only while doubling K still paid */
+  int n = p->n;
+  if (p->c[3].efficiency >= p->c[2].efficiency) add_candidate(p, base, PC_METHOD_PCBPT, 8, base->uniform_mix);
+  if (p->c[p->best].set.method == PC_METHOD_PCBPT)
+    add_candidate(p, base, PC_METHOD_PCBPT, p->c[p->best].set.pcbpt_k, base->uniform_mix >= 0.35f ? 0.2f : 0.5f);
+  if ((rc = render_from(p, n, slice, min_it, render, user, e)) != 0) return rc;
+  p->seconds = now_s() - t0;
+  return PC_OK;
+}
+
+void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
+  size_t n = (size_t)snprintf(buf, size, "chose %s (pilot %.2f s)", p->c[p->best].label, p->seconds);
+  for (int i = 0; i < p->n && n < size; i++) {
+    const pc_pilot_candidate *c = &p->c[i];
+    double ms = c->iterations ? 1e3 * c->seconds / (double)c->iterations : 0;
+    n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g cost ms/it %.1f it %llu", c->label, c->efficiency,
+                          c->relmse, ms, (unsigned long long)c->iterations);
+  }
+}
+
+/* One candidate of pc_pilot_local_render. */
+typedef struct local_run {
+  pc_film film;
+  pc_renderer *r;
+  pc_render_stats st;
+  double cpu, cpu_first, wall;
+  bool done;
+} local_run;
+
+static int local_finish(pc_pilot_candidate *c, local_run *lr, pc_err *e) {
+  double cpu = lr->cpu;
+  uint64_t it = c->iterations;
+  /* the first iteration also warms caches and allocators: the cost per iteration comes from
+   * the others when there are any */
+  if (it >= 2 && cpu > lr->cpu_first) cpu = (cpu - lr->cpu_first) * (double)it / (double)(it - 1);
+  c->seconds = cpu;
+  if (!pc_film_relmse_estimate(&lr->film, &c->own_relmse)) c->own_relmse = -1;
+  size_t n = (size_t)lr->film.w * lr->film.h * 3;
+  float *mean = malloc(n * sizeof *mean), *var = malloc(n * sizeof *var);
+  int rc = PC_OK;
+  if (!mean || !var) rc = pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
+  if (!rc) {
+    pc_film_beauty(&lr->film, mean);
+    rc = pc_pilot_keep_image(c, lr->film.w, lr->film.h, mean, pc_film_variance(&lr->film, var) ? var : NULL, e);
+  }
+  free(mean);
+  free(var);
+  return rc;
+}
+
+int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e) {
+  const pc_pilot_local *l = user;
+  local_run *runs = calloc((size_t)n, sizeof *runs);
+  if (!runs) return pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
+  int rc = PC_OK, made = 0;
+  while (made < n) {
+    pc_render_settings s = c[made].set;
+    s.strategy_layers = 0;
+    if ((rc = pc_film_init(&runs[made].film, s.width, s.height, 0, e)) != 0) break;
+    if ((rc = pc_renderer_create(l->scene, &s, l->threads, &runs[made].r, e)) != 0) {
+      pc_film_free(&runs[made].film);
+      break;
+    }
+    made++;
+  }
+  /* round robin, one iteration at a time: a slow candidate overruns its slice by one iteration
+   * at most, and the machine's load falls on every candidate alike. The cost is the process's
+   * CPU time, not wall time: on a shared machine the wall time of a few iterations mostly
+   * measures the other processes (the renderer's phases all run on its pool, so on an idle
+   * machine CPU time / threads is the wall time) */
+  for (bool busy = true; busy && !rc;) {
+    busy = false;
+    for (int i = 0; i < n && !rc; i++) {
+      local_run *lr = &runs[i];
+      if (lr->done) continue;
+      double t0 = now_s(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+      rc = pc_render_iterations(lr->r, c[i].iterations, 1, &lr->film, &lr->st, NULL, NULL, NULL, e);
+      lr->cpu += clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
+      lr->wall += now_s() - t0;
+      if (c[i].iterations == 0) lr->cpu_first = lr->cpu;
+      c[i].iterations++;
+      lr->done = c[i].iterations >= min_iterations && lr->wall >= seconds;
+      busy = busy || !lr->done;
+    }
+  }
+  for (int i = 0; i < n && !rc; i++) rc = local_finish(&c[i], &runs[i], e);
+  for (int i = 0; i < made; i++) {
+    pc_renderer_destroy(runs[i].r);
+    pc_film_free(&runs[i].film);
+  }
+  free(runs);
+  return rc;
+}

@@ -1,0 +1,107 @@
+/* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
+ * (BDPT, PCBPT with K in 1, 2, 4, 8, then the best K with another uniform mix) for a slice of
+ * the budget, measures its efficiency 1 / (estimated relMSE x render time) from the spread of
+ * its own iterations (docs/variance.md), and picks the most efficient. The pilot renders with
+ * a seed of its own and none of its iterations reach the image: the image is rendered afterwards
+ * with the winner's fixed settings, so conditioned on the choice it is the winner's unbiased
+ * estimate, hence unbiased. How a candidate is rendered is the caller's: in this process
+ * (pc_pilot_local, for `render` and `study`) or as short farm jobs (`submit`). */
+#ifndef PC_PILOT_H
+#define PC_PILOT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "render.h"
+#include "scene.h"
+
+#define PC_PILOT_MAX 8
+/* Share of a --time budget the pilot may spend, over all candidates. Its cost is certain and
+ * its gain is only where candidates differ: where they are within a few percent the choice
+ * hardly matters and the pilot is pure loss, where they differ by 2x a few iterations each
+ * already rank them. 2.5% leaves half of the 5% by which auto may trail the best fixed choice
+ * for choosing between near-equals. */
+#define PC_PILOT_FRACTION 0.025
+/* A PCBPT candidate is chosen over BDPT only if its efficiency is higher by this factor: the
+ * pilot's few iterations see heavy tails (PCBPT's fireflies) less often than a long render does,
+ * so its estimate of a heavy-tailed method is more often low than high. */
+#define PC_PILOT_BDPT_MARGIN 1.05
+
+/* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every
+ * candidate's error is measured against the same denominator: the mean of all candidates'
+ * images, which estimates the exact image far better than any one candidate's few iterations
+ * (a candidate's own relMSE estimate divides by its own noisy mean, which on a heavy-tailed
+ * scene makes two iterations' figures differ by 10x between candidates of equal merit). */
+#define PC_PILOT_MAX_PIXELS (1 << 18)
+
+typedef struct pc_pilot_candidate {
+  pc_render_settings set;
+  char label[40];       /* "bdpt", "pcbpt K=2", "pcbpt K=2 mix=0.2" */
+  uint64_t iterations;  /* rendered by the pilot */
+  double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), worker-
+                           seconds of the candidate's job on a farm */
+  double own_relmse;    /* the image's own relMSE estimate (< 0: could not tell) */
+  double relmse;        /* relMSE against the candidates' pooled mean (pc_pilot_choose; the
+                           own estimate when no image was kept); < 0: could not tell */
+  double efficiency;    /* 1 / (relmse * seconds); 0 when it could not tell */
+  int npix;             /* pixels kept (0: none) */
+  float *mean, *var;    /* npix * 3: the image and the variance of each value's mean */
+} pc_pilot_candidate;
+
+typedef struct pc_pilot {
+  int n, best;
+  pc_pilot_candidate c[PC_PILOT_MAX];
+  double seconds;       /* wall time of the whole pilot (its cost) */
+} pc_pilot;
+
+void pc_pilot_free(pc_pilot *p);
+
+/* Keeps candidate c's image: mean and variance of the mean (w*h*3 each, var NULL when the
+ * image cannot tell), subsampled on a fixed grid to at most PC_PILOT_MAX_PIXELS pixels. */
+int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, const float *var, pc_err *e);
+
+/* Renders the n candidates side by side (interleaved, so a change of the machine's load
+ * falls on all of them alike), each for about `seconds` of its own cost and at least
+ * `min_iterations` iterations, and fills iterations, seconds, own_relmse and (if it can) the
+ * image of each. */
+typedef int (*pc_pilot_render_fn)(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations,
+                                  pc_err *e);
+
+/* What the pilot spends per candidate for a job bound by seconds (0: none) and iterations
+ * (0: none): seconds * PC_PILOT_FRACTION / candidates with --time, else enough for min
+ * iterations only (an iteration-bound job pays the pilot on top). */
+void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64_t *min_iterations);
+
+/* What is left of a --time budget of `seconds` after a pilot that took `pilot_seconds`: the rest,
+ * but at least a tenth of the budget, so a pilot that overran a tiny budget (each candidate
+ * renders at least 2 iterations) still leaves the job time for an image; the overrun is
+ * reported with the pilot's time. */
+double pc_pilot_remaining(double seconds, double pilot_seconds);
+
+/* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
+uint64_t pc_pilot_seed(uint64_t job_seed);
+
+/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1, 2, 4 side by side (the other settings
+ * of base); stage 2 renders K = 8 if doubling K from 2 to 4 still paid, and, if PCBPT leads,
+ * its best K with the other uniform mix (0.2, or 0.5 when base's is below 0.35). Picks the most
+ * efficient (BDPT on a tie within PC_PILOT_BDPT_MARGIN). Free with pc_pilot_free, also after
+ * a failure. */
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
+                 pc_pilot_render_fn render, void *user, pc_err *e);
+/* Measures every candidate against the pooled mean of their images (candidates without an
+ * image keep their own estimate) and picks p->best (used by pc_pilot_run; exposed for the
+ * tests). */
+void pc_pilot_choose(pc_pilot *p);
+
+/* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */
+void pc_pilot_report(const pc_pilot *p, char *buf, size_t size);
+
+/* The in-process renderer of candidates: renders on a built scene with `threads` threads. */
+typedef struct pc_pilot_local {
+  const pc_scene *scene;
+  int threads;
+} pc_pilot_local;
+int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
+
+#endif

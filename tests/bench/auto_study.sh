@@ -1,0 +1,50 @@
+#!/bin/sh
+# auto_study.sh (benchmark, not a test): issue 14's acceptance table as equal-time farm studies.
+# Per scene, one study renders BDPT, PCBPT with K = 1, 2, 4, 8 and auto (its pilot charged to
+# its budget) interleaved on the same farm, RUNS seeds, SECONDS each, so the machine's other
+# load falls on every configuration alike. Prints per scene the median final beauty relMSE
+# of each configuration, auto's ratio to the best fixed one and to BDPT, and what auto chose.
+# Errors are against REFS_DIR/ref-<scene>.exr when that exists at the study's size, else each
+# image's own estimate (docs/variance.md).
+#   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN from the environment)
+set -eu
+BIN=${BIN:-build/pcbpt-coord}
+T=${1:?seconds}; S=${2:?size}; RUNS=${3:?runs}
+shift 3
+SCENES=${*:-"cornell-box furnace ajar-door slit-room open-room glossy-glass glossy-floor glass-lamp outdoor env-constant env-white-map env-objects thin-glass"}
+OUT=${OUT:-$(mktemp -d)}
+mkdir -p "$OUT"
+far=""
+[ -n "${HOST:-}" ] && far="--host $HOST --token-file $TOKEN"
+for sc in $SCENES; do
+  ref=""
+  [ -n "${REFS_DIR:-}" ] && [ -f "$REFS_DIR/ref-$sc.exr" ] && ref="--reference $REFS_DIR/ref-$sc.exr"
+  # shellcheck disable=SC2086
+  "$BIN" study "scenes/$sc/scene.xml" --methods bdpt,pcbpt-k1,pcbpt-k2,pcbpt-k4,pcbpt-k8,auto --seconds "$T" \
+    --runs "$RUNS" --width "$S" --height "$S" --out "$OUT/$sc" $ref $far > "$OUT/$sc.log" 2>&1 ||
+    { echo "$sc: study failed: $(tail -3 "$OUT/$sc.log")"; continue; }
+done
+python3 - "$OUT" $SCENES <<'PY'
+import json, os, statistics, sys
+out, scenes = sys.argv[1], sys.argv[2:]
+cfgs = ("bdpt", "pcbpt-k1", "pcbpt-k2", "pcbpt-k4", "pcbpt-k8", "auto")
+print("scene          " + "".join("%-11s" % c.replace("pcbpt-", "") for c in cfgs) + "auto/best auto/bdpt errors     auto chose")
+for sc in scenes:
+    p = os.path.join(out, sc, sc, "study.json")
+    if not os.path.exists(p):
+        print("%-15s (no study)" % sc); continue
+    d = json.load(open(p))
+    med, chose = {}, []
+    for c in cfgs:
+        v = [r["snapshots"][-1]["layers"]["beauty"]["relmse"] for r in d["methods"] if r["method"] == c and r["snapshots"]]
+        v = [x for x in v if x is not None]
+        med[c] = statistics.median(v) if v else float("nan")
+    for r in d["methods"]:
+        if r["method"] == "auto" and r.get("auto"):
+            chose.append(r["auto"].split(" (pilot")[0].replace("chose ", ""))
+    best = min(med[c] for c in cfgs[:-1])
+    kind = "reference" if d.get("reference") else "estimated"
+    print("%-15s" % sc + "".join("%-11.4g" % med[c] for c in cfgs) +
+          "%-9.3f %-9.3f %-10s %s" % (med["auto"] / best, med["auto"] / med["bdpt"], kind, "; ".join(chose)))
+PY
+echo "(studies in $OUT)"

@@ -1,0 +1,36 @@
+# auto_farm.sh: `submit --method auto` on a two-worker farm: the pilot's candidates run as
+# short jobs of their own that both workers render, the final job carries the winner's
+# settings (BDPT or PCBPT) and the pilot's report in `status --json` ("auto") and in the EXR
+# header (pcbpt.auto), and the pilot's iterations are not in the final image (its iteration
+# count is the final job's own).
+. "$(dirname "$0")/lib.inc"
+start_coord
+for w in w1 w2; do start_worker $w; done
+J=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method auto --spp 64 --width 32 --height 32 $H 2>"$T/submit.err" | tail -1) \
+  || fail "submit: $(cat "$T/submit.err")"
+grep -q "auto: chose " "$T/submit.err" || fail "submit did not report the pilot's choice: $(cat "$T/submit.err")"
+timeout 60 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "wait"
+"$B/pcbpt-coord" status "$J" $H --json > "$T/st.json"
+python3 - "$T/st.json" <<'PY' || fail "status --json of the final job: $(cat "$T/st.json")"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert j["auto"] and j["auto"].startswith("chose "), j
+assert j["method"] in ("bdpt", "pcbpt"), j
+assert j["iterations"] == 64, j
+PY
+"$B/pcbpt-coord" list $H --json > "$T/list.json"
+python3 - "$T/list.json" "$J" <<'PY' || fail "pilot jobs: $(cat "$T/list.json")"
+import json, sys
+jobs = json.load(open(sys.argv[1]))
+pilots = [j for j in jobs if "[auto pilot: " in j["name"]]
+assert len(pilots) >= 3, pilots            # bdpt, pcbpt K=1, K=2 at least
+assert all(j["state"] == "done" and j["id" if "id" in j else "job"] < int(sys.argv[2]) for j in pilots), pilots
+assert any(j["name"].endswith("[auto pilot: bdpt]") for j in pilots), pilots
+PY
+for p in $(python3 -c "import json,sys; print(' '.join(str(j['job']) for j in json.load(open('$T/list.json')) if '[auto pilot' in j['name']))"); do
+  grep -q "job $p: range .* -> w" "$T/coord.log" || fail "pilot job $p was not rendered by a worker"
+done
+"$B/pcbpt-coord" fetch "$J" --out "$T/out.exr" $H >/dev/null || fail "fetch"
+grep -aq "pcbpt.auto" "$T/out.exr" || fail "no pcbpt.auto in the image header"
+grep -q "job $J: --method auto chose " "$T/coord.log" || fail "the coordinator's log does not say what auto chose"
+echo PASS
