@@ -63,7 +63,6 @@ typedef struct pc_job {
   uint64_t study_group;      /* 0: none; else interleaved with the group's other jobs */
   uint32_t group_workers;    /* at most this many workers on the group at once (0: any) */
   double halt_worker_seconds;/* 0: none; else halt at this many merged worker-seconds */
-  uint64_t min_iterations;   /* ... but not before this many iterations are merged */
   uint32_t snapshots;        /* merged films kept at log-spaced worker-seconds (0: none) */
   uint32_t snaps_taken;      /* ... written so far (jobs/<id>/snap.<k>.exr, k = 1..) */
   uint32_t snaps_queued;     /* snapshot times passed (and queued for) so far */
@@ -164,6 +163,7 @@ struct pc_coord {
   double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
   int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
   bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
+  bool one_worker;           /* only one worker will ever come (embedded render): ranges keep nothing back */
   bool trim_due;             /* peers went: return freed memory to the system at the next tick */
   double last_refusal_log;   /* refused handshakes are logged at most every 10 s */
 };
@@ -188,7 +188,6 @@ int pc_store_load(pc_coord *c, pc_err *e);
 
 /* job.c: job lifecycle: films, checkpoints, images, halting. */
 #define PC_JOB_MAX_SNAPSHOTS 1000
-#define PC_JOB_MAX_MIN_ITERATIONS 1000000
 #define PC_JOB_SNAPSHOT_FIRST (1.0 / 64) /* the first snapshot's share of the budget */
 /* Worker-seconds at which study job j keeps its snapshot k (0-based): with K snapshots,
  * budget * PC_JOB_SNAPSHOT_FIRST^((K - k) / K), so with the image at the budget the K + 1

@@ -94,9 +94,12 @@ int pc_embedded_start(pc_embedded *f, pc_err *e) {
   int r = uv_loop_init(&f->loop);
   if (r) { rc = pc_errf(e, PC_EIO, "embedded farm: loop: %s", uv_strerror(r)); goto fail; }
   f->loop_ready = true;
-  /* a short tick so the end of a short render is noticed at once; no EXR until the end */
+  /* a short tick so the end of a short render is noticed at once; no EXR until the end; long
+   * ranges of the one worker, each ending in an upload (a --seconds budget or --halt-noise
+   * stops a range early, and uploads within one are spaced by their cost: upload_share) */
   f->coord.tick_ms = 20;
-  f->coord.range_seconds = 3;
+  f->coord.range_seconds = PC_WORKER_UPLOAD_MAX_INTERVAL;
+  f->coord.one_worker = true;
   f->coord.exr_interval = 1e9;
   f->coord.volatile_store = true;
   if ((rc = pc_coord_start(&f->coord, &f->loop, "127.0.0.1", 0, data, key, e)) != 0) goto fail;
@@ -116,7 +119,7 @@ int pc_embedded_start_worker(pc_embedded *f, int threads, pc_err *e) {
   char cache[300];
   snprintf(cache, sizeof cache, "%s/cache", f->dir);
   pc_worker_opts o = {.host = "127.0.0.1", .port = f->coord.bound_port, .key = f->key, .threads = threads,
-                      .name = "local", .cache_dir = cache};
+                      .name = "local", .cache_dir = cache, .upload_share = 0.01};
   int rc = pc_worker_create(&o, &f->worker, e);
   if (rc) return rc;
   int r = uv_thread_create(&f->worker_thread, worker_main, f->worker);

@@ -141,7 +141,7 @@ static void check_study(pc_coord *c, pc_job *j) {
       pc_wire_log("job %llu: out of memory for a snapshot", (unsigned long long)j->id);
     }
   }
-  if (ws >= j->halt_worker_seconds && j->done >= j->min_iterations) {
+  if (ws >= j->halt_worker_seconds) {
     pc_wire_log("job %llu: %.2f worker-seconds merged (budget %.2f): halting", (unsigned long long)j->id, ws,
                 j->halt_worker_seconds);
     pc_job_halt(c, j);
@@ -162,7 +162,6 @@ void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
   j->study_group = s->study_group;
   j->group_workers = s->group_workers;
   j->halt_worker_seconds = s->halt_worker_seconds;
-  j->min_iterations = s->min_iterations;
   j->snapshots = s->snapshots <= PC_JOB_MAX_SNAPSHOTS ? s->snapshots : PC_JOB_MAX_SNAPSHOTS;
 }
 

@@ -9,7 +9,7 @@ uint64_t pc_range_size(const pc_range_size_in *in) {
     double left = (double)in->unassigned + (in->outstanding > 0 ? in->outstanding : 0);
     double share = left * in->rate / (in->rate + others);
     double floor_n = in->rate * PC_RANGE_MIN_SECONDS;
-    double want = 0.5 * share;
+    double want = in->alone ? share : 0.5 * share;
     if (want < floor_n) want = floor_n < share ? floor_n : share;
     if (n > want) n = want;
   }

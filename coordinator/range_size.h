@@ -18,6 +18,7 @@ typedef struct pc_range_size_in {
   uint64_t unassigned;    /* bounded: fresh iterations nobody holds yet */
   double outstanding;     /* bounded: iterations held by the others (or orphaned) not yet rendered */
   double range_seconds;   /* target length of a range in the asking worker's time */
+  bool alone;             /* no other worker will share the job: nothing to keep back */
 } pc_range_size_in;
 
 /* The size of the next fresh range, >= 1 and (bounded) <= unassigned; the caller checks
@@ -25,7 +26,8 @@ typedef struct pc_range_size_in {
  * it. Otherwise a range is range_seconds of the worker's rate, and near the end of a
  * bounded job half of the worker's fair share of the work left (unassigned + outstanding,
  * in proportion to its rate, so all would finish together): the ranges shrink as the job
- * ends, and the half kept back evens out wrong rate estimates on later requests. Not under
+ * ends, and the half kept back evens out wrong rate estimates on later requests; alone, the
+ * whole share (every range ends in an upload of a whole film). Not under
  * PC_RANGE_MIN_SECONDS of work unless the whole share is less. */
 uint64_t pc_range_size(const pc_range_size_in *in);
 

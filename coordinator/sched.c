@@ -151,7 +151,7 @@ static double study_range_seconds(const pc_coord *c, const pc_job *j, double now
 }
 
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
-  pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds};
+  pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds, .alone = c->one_worker};
   if (j->halt_worker_seconds > 0) {
     in.range_seconds = study_range_seconds(c, j, now);
     /* a study's worker-seconds are counted per upload: a range sized on a one-iteration probe

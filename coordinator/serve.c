@@ -522,9 +522,6 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
     pc_errf(&e, PC_EINVAL, "submit: bad worker-seconds budget");
   else if (s->settings->snapshots > PC_JOB_MAX_SNAPSHOTS || (s->settings->snapshots && !(s->settings->halt_worker_seconds > 0)))
     pc_errf(&e, PC_EINVAL, "submit: snapshots need a worker-seconds budget and are at most %d", PC_JOB_MAX_SNAPSHOTS);
-  else if (s->settings->min_iterations > PC_JOB_MAX_MIN_ITERATIONS)
-    pc_errf(&e, PC_EINVAL, "submit: a floor of %llu iterations (at most %d)", (unsigned long long)s->settings->min_iterations,
-            PC_JOB_MAX_MIN_ITERATIONS);
   else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
   else if (!(s->settings->halt_noise >= 0 && s->settings->halt_noise <= 1e6)) pc_errf(&e, PC_EINVAL, "submit: bad --halt-noise");
   if (e.code) {

@@ -124,10 +124,13 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   uint8_t *z = NULL;
   size_t zn = 0;
   pc_err e = {0};
+  double t0 = now_s();
   int rc = count && c->loaded ? pc_wire_film_zip(&c->pending, &z, &zn, &e) : 0;
+  double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);
   w->take = false;
+  if (z) w->zip_seconds = dt;
   if (z && w->range_id == range && w->pend_count == count) {
     w->zip = z;
     w->zip_len = zn;

@@ -35,6 +35,7 @@ struct pc_worker {
   pc_conn *conn;
   bool connected, challenged, authed, waiting_work;
   double backoff, last_upload, next_request;
+  double upload_share; /* pc_worker_opts */
   char host[256];
   int port;
   char name[64], cache[1024];
@@ -163,6 +164,12 @@ static void finish_range(worker *w) {
   request_work(w);
 }
 
+/* Seconds between uploads within a range (pc_worker_opts.upload_share). */
+static double upload_interval(const worker *w, double zip_seconds) {
+  double t = w->upload_share > 0 ? zip_seconds / w->upload_share : 0;
+  return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t > PC_WORKER_UPLOAD_MAX_INTERVAL ? PC_WORKER_UPLOAD_MAX_INTERVAL : t;
+}
+
 /* Takes the pending delta for upload when due; finishes the range when all is acknowledged. */
 static void pump(worker *w) {
   uv_mutex_lock(&w->r.mu);
@@ -174,7 +181,7 @@ static void pump(worker *w) {
   }
   bool done = w->r.range_done, failed = w->r.failed;
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
-  double rate = w->r.rate;
+  double rate = w->r.rate, interval = upload_interval(w, w->r.zip_seconds);
   uv_mutex_unlock(&w->r.mu);
   if (!w->busy) return;
   if (done && failed) {
@@ -219,11 +226,11 @@ static void pump(worker *w) {
   }
   if (!w->authed) return;
   if (!done) {
-    if (now_s() - w->last_upload < PC_WIRE_UPLOAD_INTERVAL) return;
+    if (now_s() - w->last_upload < interval) return;
     /* the range's final upload is due within an interval anyway: every upload costs a whole
      * film on both sides whatever it holds, and this keeps a range of up to two intervals
      * to one upload (at most about two intervals of work unacknowledged) */
-    if (rate > 0 && (double)(w->count - rendered) / rate < PC_WIRE_UPLOAD_INTERVAL) return;
+    if (rate > 0 && (double)(w->count - rendered) / rate < interval) return;
   }
   pc_wrender_take(&w->r);
 }
@@ -576,6 +583,7 @@ int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e) {
   memcpy(w->key, o->key, PC_AUTH_KEY);
   w->threads = o->threads;
   w->handle_signals = o->handle_signals;
+  w->upload_share = o->upload_share;
   snprintf(w->cache, sizeof w->cache, "%s", o->cache_dir);
   if (o->name) snprintf(w->name, sizeof w->name, "%s", o->name);
   else {

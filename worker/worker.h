@@ -40,6 +40,7 @@ typedef struct pc_wrender {
   bool zip_ready;
   uint8_t *zip;
   size_t zip_len, zip_raw;
+  double zip_seconds;      /* the last compression's wall time */
   uint64_t zip_range, zip_first, zip_count;
   pc_render_stats zip_stats;
 } pc_wrender;
@@ -64,7 +65,15 @@ typedef struct pc_worker_opts {
   const char *name;        /* NULL: host-pid */
   const char *cache_dir;   /* scene bundles by hash (created) */
   bool handle_signals;     /* SIGINT/SIGTERM stop the worker (the standalone process) */
+  /* > 0: uploads are spaced so that compressing them takes at most about this share of the
+   * render thread's time (up to PC_WORKER_UPLOAD_MAX_INTERVAL apart). The embedded farm sets
+   * it: its coordinator and worker share the machine, so every upload's compression,
+   * sealing, decompression and merge are the render's own cost, and a crash loses the whole
+   * render anyway. 0: every PC_WIRE_UPLOAD_INTERVAL (a farm: little work is lost with a
+   * worker). */
+  double upload_share;
 } pc_worker_opts;
+#define PC_WORKER_UPLOAD_MAX_INTERVAL 30.0
 
 int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);
 /* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals); an error

@@ -8,11 +8,20 @@
 
 void pc_material_prepare(pc_material *m) {
   if (m->type == PC_MAT_PLASTIC || m->type == PC_MAT_ROUGHPLASTIC) pc_plastic_prepare(m);
-  if (m->type == PC_MAT_WARD) m->spec_sampling_weight = pc_spec_weight(m);
+  if (m->type == PC_MAT_WARD || m->type == PC_MAT_PHONG) m->spec_sampling_weight = pc_spec_weight(m);
+  if (m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING) pc_coating_prepare(m);
 }
 
 bool pc_bsdf_is_delta(const pc_material *m) {
-  return m->type == PC_MAT_CONDUCTOR || m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
+  switch (m->type) {
+  case PC_MAT_CONDUCTOR:
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_THINDIELECTRIC: return true;
+  case PC_MAT_BUMPMAP:
+  case PC_MAT_COATING: /* its own lobe is a delta; all are if the wrapped ones are */
+    return m->inner && pc_bsdf_is_delta(m->inner);
+  default: return false;
+  }
 }
 
 static bool is_dielectric(const pc_material *m) {
@@ -46,9 +55,14 @@ static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_eval(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_eval(c, wo, wi);
   case PC_MAT_WARD: return pc_ward_eval(c, wo, wi);
+  case PC_MAT_PHONG: return pc_phong_eval(c, wo, wi);
+  case PC_MAT_ROUGHDIFFUSE: return pc_roughdiffuse_eval(c, wo, wi);
+  case PC_MAT_COATING: return pc_coating_eval(c, wo, wi);
+  case PC_MAT_ROUGHCOATING: return pc_roughcoating_eval(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
-  case PC_MAT_THINDIELECTRIC: break;
+  case PC_MAT_THINDIELECTRIC:
+  case PC_MAT_BUMPMAP: break;
   }
   return v3s(0.f);
 }
@@ -61,9 +75,14 @@ static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHPLASTIC: return pc_roughplastic_pdf(c, wo, wi);
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_pdf(c, wo, wi);
   case PC_MAT_WARD: return pc_ward_pdf(c, wo, wi);
+  case PC_MAT_PHONG: return pc_phong_pdf(c, wo, wi);
+  case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_pdf(c, wo, wi); /* Mitsuba samples it as Lambertian */
+  case PC_MAT_COATING: return pc_coating_pdf(c, wo, wi);
+  case PC_MAT_ROUGHCOATING: return pc_roughcoating_pdf(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
-  case PC_MAT_THINDIELECTRIC: break;
+  case PC_MAT_THINDIELECTRIC:
+  case PC_MAT_BUMPMAP: break;
   }
   return 0.f;
 }
@@ -79,8 +98,45 @@ static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float
   case PC_MAT_ROUGHDIELECTRIC: return pc_roughdielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_THINDIELECTRIC: return pc_thindielectric_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_WARD: return pc_ward_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_PHONG: return pc_phong_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_COATING: return pc_coating_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_ROUGHCOATING: return pc_roughcoating_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_BUMPMAP: break;
   }
   return false;
+}
+
+/* A wrapped material's lobes, as its wrapper sees them (local directions of the shared frame):
+ * turned over if it is twosided and wo is behind. */
+static pc_lobe_ctx nested_ctx(const pc_lobe_ctx *c, const pc_material *inner) {
+  pc_lobe_ctx n = *c;
+  n.m = inner;
+  return n;
+}
+
+vec3 pc_nested_eval(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, vec3 wi) {
+  pc_lobe_ctx n = nested_ctx(c, inner);
+  if (pc_bsdf_is_delta(inner)) return v3s(0.f);
+  if (flips(inner, wo.z)) wo.z = -wo.z, wi.z = -wi.z;
+  return lobe_eval(&n, wo, wi);
+}
+
+float pc_nested_pdf(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, vec3 wi) {
+  pc_lobe_ctx n = nested_ctx(c, inner);
+  if (pc_bsdf_is_delta(inner)) return 0.f;
+  if (flips(inner, wo.z)) wo.z = -wo.z, wi.z = -wi.z;
+  return lobe_pdf(&n, wo, wi);
+}
+
+bool pc_nested_sample(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, float u0, float u1, float u2,
+                      pc_lobe_sample *s) {
+  pc_lobe_ctx n = nested_ctx(c, inner);
+  float zsign = flips(inner, wo.z) ? -1.f : 1.f;
+  wo.z *= zsign;
+  if (!lobe_sample(&n, wo, u0, u1, u2, s)) return false;
+  s->wi.z *= zsign;
+  return true;
 }
 
 /* Local directions of a query, in the frame turned over if twosided says so. */
@@ -124,9 +180,25 @@ static float pdf_local(const pc_material *m, const pc_texture *texs, const pc_sh
   return (isfinite(pdf) && pdf > 0.f) ? pdf : 0.f;
 }
 
+/* Mitsuba's bumpmap answers zero for a direction on different sides of the frame before and
+ * after bump mapping. Mitsuba tests only the direction its queries sample; here both directions
+ * are tested, which keeps the BSDF reciprocal (so light tracing and the bidirectional methods
+ * converge to the path tracer's image). The two differ only where the camera-side direction
+ * crosses between the two frames, grazing to the bumped surface. */
+static bool bump_side(const pc_shading *sh, vec3 w) { return v3_dot(w, sh->nb) * v3_dot(w, sh->sh.n) > 0.f; }
+
+/* The material a query of (wo, wi) evaluates: a bumpmap's wrapped one (the shading frame is
+ * already the bumped one, see pc_shading_make), or NULL where the query is zero. */
+static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec3 wo, const vec3 *wi) {
+  if (m->type != PC_MAT_BUMPMAP) return m; /* (a twosided bumpmap's frame is on wo's side already) */
+  if (!m->inner || m->inner->type == PC_MAT_BUMPMAP || !bump_side(sh, wo) || (wi && !bump_side(sh, *wi))) return NULL;
+  return m->inner;
+}
+
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi, pc_transport mode) {
   local_pair p;
+  if (!(m = unwrap(m, sh, wo, &wi))) return v3s(0.f);
   if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return v3s(0.f);
   return eval_local(m, texs, sh, oriented(m, p), mode);
 }
@@ -134,6 +206,7 @@ vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi) {
   local_pair p;
+  if (!(m = unwrap(m, sh, wo, &wi))) return 0.f;
   if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return 0.f;
   return pdf_local(m, texs, sh, oriented(m, p));
 }
@@ -142,6 +215,7 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
 static bool pdfs_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
                        local_pair *p, float *pdf, float *pdf_rev) {
   *pdf = *pdf_rev = 0.f;
+  if (!(m = unwrap(m, sh, wo, &wi))) return false;
   if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, p)) return false;
   *pdf = pdf_local(m, texs, sh, oriented(m, *p));
   *pdf_rev = pdf_local(m, texs, sh, oriented(m, swapped(*p)));
@@ -158,12 +232,15 @@ vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_sh
                        vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
   local_pair p;
   if (!pdfs_local(m, texs, sh, wo, wi, &p, pdf, pdf_rev)) return v3s(0.f);
+  m = unwrap(m, sh, wo, &wi);
   return eval_local(m, texs, sh, oriented(m, p), mode);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
+  const pc_material *m_top = m;
   *out = (pc_bsdf_sampled){0};
+  if (!(m = unwrap(m, sh, wo, NULL))) return false;
   vec3 lo = frame_to_local(&sh->sh, wo);
   float go = v3_dot(wo, sh->ng);
   float zsign = flips(m, lo.z) ? -1.f : 1.f;
@@ -177,7 +254,7 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
    * last bit. */
   s.wi = frame_to_local(&sh->sh, wi);
   s.wi.z *= zsign;
-  if (!sides_agree(lo.z, s.wi.z, go, gi)) return false;
+  if (!sides_agree(lo.z, s.wi.z, go, gi) || (m != m_top && !bump_side(sh, wi))) return false;
   vec3 f;
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
@@ -205,8 +282,10 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh) {
   vec2 uv = sh->uv;
   float q = 0.f;
+  if (m->type == PC_MAT_BUMPMAP) return m->inner ? pc_bsdf_continuation(m->inner, texs, sh) : 0.f;
   switch (m->type) {
-  case PC_MAT_DIFFUSE: q = v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)); break;
+  case PC_MAT_DIFFUSE:
+  case PC_MAT_ROUGHDIFFUSE: q = v3_maxc(pc_slot_eval(&m->reflectance, texs, uv)); break;
   case PC_MAT_CONDUCTOR:
   case PC_MAT_ROUGHCONDUCTOR: q = v3_maxc(pc_slot_eval(&m->specular, texs, uv)); break;
   case PC_MAT_PLASTIC:
@@ -223,6 +302,14 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
   case PC_MAT_WARD: /* the two lobes add */
     q = v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
     break;
+  case PC_MAT_PHONG:
+    q = m->lobe_scale * v3_maxc(v3_add(pc_slot_eval(&m->specular, texs, uv), pc_slot_eval(&m->reflectance, texs, uv)));
+    break;
+  case PC_MAT_COATING:
+  case PC_MAT_ROUGHCOATING: /* Fresnel splits between the layer's reflection and what it covers */
+    q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)), m->inner ? pc_bsdf_continuation(m->inner, texs, sh) : 0.f);
+    break;
+  case PC_MAT_BUMPMAP: break;
   }
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;
 }

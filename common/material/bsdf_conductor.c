@@ -23,7 +23,7 @@ bool pc_conductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, floa
 vec3 pc_roughconductor_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
   const pc_material *m = c->m;
-  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(m->distribution, m->alpha, m->alpha_v);
   vec3 h = v3_norm(v3_add(wo, wi));
   float d = pc_mf_d(&mf, h);
   if (d == 0.f) return v3s(0.f);
@@ -34,7 +34,7 @@ vec3 pc_roughconductor_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 
 float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
-  pc_microfacet mf = pc_mf_make(c->m->distribution, c->m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(c->m->distribution, c->m->alpha, c->m->alpha_v);
   vec3 h = v3_norm(v3_add(wo, wi));
   float dot = v3_dot(wo, h);
   if (!(dot > 0.f)) return 0.f;
@@ -45,7 +45,7 @@ float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 bool pc_roughconductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   (void)u0;
   if (!(wo.z > 0.f)) return false;
-  pc_microfacet mf = pc_mf_make(c->m->distribution, c->m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(c->m->distribution, c->m->alpha, c->m->alpha_v);
   vec3 h = pc_mf_sample(&mf, wo, u1, u2);
   s->wi = v3_sub(v3_scale(h, 2.f * v3_dot(wo, h)), wo);
   s->is_delta = false;

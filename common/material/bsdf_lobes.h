@@ -48,6 +48,14 @@ static inline float pc_spec_weight(const pc_material *m) {
   return (s + d > 0.f && isfinite(s + d)) ? s / (s + d) : 0.5f;
 }
 
+/* Mitsuba's reallocation of the specular-lobe probability (plastic, coating): the reflectance
+ * refl toward wo, reweighted by spec_sampling_weight. */
+static inline float pc_spec_prob(const pc_material *m, float refl) {
+  float w = m->spec_sampling_weight;
+  float num = refl * w, den = num + (1.f - refl) * (1.f - w);
+  return den > 0.f ? num / den : 0.f;
+}
+
 /* Cosine-weighted hemisphere (Shirley-Chiu concentric map, as Mitsuba). */
 vec3 pc_sample_cosine_hemisphere(float u1, float u2);
 
@@ -74,8 +82,34 @@ vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
+/* Rough dielectric transmittance into a layer seen from outside at cos theta (the
+ * roughplastic table of pc_plastic_prepare, filled for m's distribution, alpha and index). */
+void pc_rough_trans_prepare(pc_material *m);
+float pc_rough_trans_in(const pc_material *m, float cos_theta);
+
+/* A wrapper's view of the material it wraps (bsdf.c): the same lobes, turned over first if the
+ * wrapped material is twosided and wo is behind. Delta lobes only from sample, as above. */
+vec3 pc_nested_eval(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, vec3 wi);
+float pc_nested_pdf(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, vec3 wi);
+bool pc_nested_sample(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, float u0, float u1, float u2,
+                      pc_lobe_sample *s);
+
+void pc_coating_prepare(pc_material *m);
+vec3 pc_coating_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_coating_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_coating_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_roughcoating_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_roughcoating_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_roughcoating_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
 vec3 pc_ward_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_ward_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 bool pc_ward_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_phong_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_phong_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_phong_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
+vec3 pc_roughdiffuse_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 
 #endif

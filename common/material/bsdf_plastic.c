@@ -9,13 +9,6 @@
 #include "fresnel.h"
 #include "microfacet.h"
 
-/* Mitsuba's reallocation of the specular-lobe probability. */
-static float spec_prob(const pc_material *m, float refl) {
-  float w = m->spec_sampling_weight;
-  float num = refl * w, den = num + (1.f - refl) * (1.f - w);
-  return den > 0.f ? num / den : 0.f;
-}
-
 /* The diffuse base with its internal multiple reflections summed (Mitsuba's `nonlinear` keeps
  * the per-channel geometric series; otherwise the linear approximation). */
 static vec3 base_albedo(const pc_lobe_ctx *c, float fdr) {
@@ -35,7 +28,7 @@ vec3 pc_plastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 
 float pc_plastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
-  float ps = spec_prob(c->m, pc_fresnel_dielectric(wo.z, pc_rel_eta(c->m), NULL));
+  float ps = pc_spec_prob(c->m, pc_fresnel_dielectric(wo.z, pc_rel_eta(c->m), NULL));
   return (1.f - ps) * wi.z * PC_INV_PI;
 }
 
@@ -43,12 +36,12 @@ bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float 
   if (!(wo.z > 0.f)) return false;
   float eta = pc_rel_eta(c->m);
   float fi = pc_fresnel_dielectric(wo.z, eta, NULL);
-  float ps = spec_prob(c->m, fi);
+  float ps = pc_spec_prob(c->m, fi);
   if (u0 < ps) {
     s->wi = v3(-wo.x, -wo.y, wo.z);
     s->is_delta = true;
     s->pdf = ps;
-    s->pdf_rev = spec_prob(c->m, pc_fresnel_dielectric(s->wi.z, eta, NULL));
+    s->pdf_rev = pc_spec_prob(c->m, pc_fresnel_dielectric(s->wi.z, eta, NULL));
     s->f_cos = v3_scale(pc_tex(c, &c->m->specular), fi);
     return true;
   }
@@ -65,7 +58,7 @@ static float table_cos(int i) {
 }
 
 /* Linear interpolation in the table of rough transmittance vs cos theta. */
-static float trans_in(const pc_material *m, float cos_theta) {
+float pc_rough_trans_in(const pc_material *m, float cos_theta) {
   float x = sqrtf(fminf(fmaxf(cos_theta, 0.f), 1.f)) * (PC_PLASTIC_TABLE - 1);
   int i = (int)x;
   if (i >= PC_PLASTIC_TABLE - 1) return m->rough_trans_in[PC_PLASTIC_TABLE - 1];
@@ -84,7 +77,7 @@ vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
     float g = pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h);
     spec = pc_fresnel_dielectric(v3_dot(wo, h), eta, NULL) * d * g / (4.f * wo.z * wi.z);
   }
-  float diff = trans_in(m, wo.z) * trans_in(m, wi.z) * PC_INV_PI / (eta * eta);
+  float diff = pc_rough_trans_in(m, wo.z) * pc_rough_trans_in(m, wi.z) * PC_INV_PI / (eta * eta);
   vec3 base = base_albedo(c, 1.f - m->rough_trans_avg_int);
   return v3_add(v3_scale(pc_tex(c, &m->specular), spec), v3_scale(base, diff));
 }
@@ -92,7 +85,7 @@ vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
   const pc_material *m = c->m;
-  float ps = spec_prob(m, 1.f - trans_in(m, wo.z));
+  float ps = pc_spec_prob(m, 1.f - pc_rough_trans_in(m, wo.z));
   vec3 h = v3_norm(v3_add(wo, wi));
   float dot = v3_dot(wo, h), spec = 0.f;
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
@@ -103,7 +96,7 @@ float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   if (!(wo.z > 0.f)) return false;
   const pc_material *m = c->m;
-  if (u0 < spec_prob(m, 1.f - trans_in(m, wo.z))) {
+  if (u0 < pc_spec_prob(m, 1.f - pc_rough_trans_in(m, wo.z))) {
     pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
     vec3 h = pc_mf_sample(&mf, wo, u1, u2);
     s->wi = v3_sub(v3_scale(h, 2.f * v3_dot(wo, h)), wo);
@@ -145,7 +138,11 @@ void pc_plastic_prepare(pc_material *m) {
   float eta = pc_rel_eta(m);
   m->fdr_int = pc_fresnel_diffuse_reflectance(1.f / eta);
   m->spec_sampling_weight = pc_spec_weight(m);
-  if (m->type != PC_MAT_ROUGHPLASTIC) return;
+  if (m->type == PC_MAT_ROUGHPLASTIC) pc_rough_trans_prepare(m);
+}
+
+void pc_rough_trans_prepare(pc_material *m) {
+  float eta = pc_rel_eta(m);
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   for (int i = 0; i < PC_PLASTIC_TABLE; i++)
     m->rough_trans_in[i] = rough_transmittance(&mf, eta, table_cos(i));

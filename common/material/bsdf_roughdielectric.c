@@ -40,7 +40,7 @@ vec3 pc_roughdielectric_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   float eta;
   vec3 h;
   if (!half_vector(m, wo, wi, &reflect, &eta, &h)) return v3s(0.f);
-  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(m->distribution, m->alpha, m->alpha_v);
   float d = pc_mf_d(&mf, h);
   if (d == 0.f) return v3s(0.f);
   float g = pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h);
@@ -59,7 +59,7 @@ float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   float eta;
   vec3 h;
   if (!half_vector(m, wo, wi, &reflect, &eta, &h)) return 0.f;
-  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(m->distribution, m->alpha, m->alpha_v);
   vec3 v = wo.z > 0.f ? wo : v3_neg(wo);
   float dot_o = v3_dot(wo, h), dot_i = v3_dot(wi, h);
   float f = fresnel_at(m, reflect, wo, dot_o, dot_i);
@@ -77,7 +77,7 @@ float pc_roughdielectric_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
 bool pc_roughdielectric_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {
   const pc_material *m = c->m;
   if (!(wo.z != 0.f)) return false;
-  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  pc_microfacet mf = pc_mf_make_aniso(m->distribution, m->alpha, m->alpha_v);
   vec3 v = wo.z > 0.f ? wo : v3_neg(wo);
   vec3 h = pc_mf_sample(&mf, v, u1, u2);
   float dot_o = v3_dot(wo, h);

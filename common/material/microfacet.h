@@ -1,5 +1,6 @@
-/* microfacet.h: the isotropic microfacet distributions of Mitsuba 0.6 (beckmann, its default,
- * and ggx) in a local frame (normal = +z): D, Smith's masking G1 (Mitsuba's forms, with its
+/* microfacet.h: the microfacet distributions of Mitsuba 0.6 (beckmann, its default, ggx and phong;
+ * isotropic, or anisotropic with alphaU along the frame's s and alphaV along t) in a local
+ * frame (normal = +z): D, Smith's masking G1 (Mitsuba's forms, with its
  * back-facing check: the exact one for GGX, Walter's rational approximation for Beckmann), and
  * sampling of microfacet normals with its density: GGX samples the distribution of visible
  * normals (Heitz 2018), Beckmann samples D(m) cos(theta_m) (Mitsuba's sampleVisible=false
@@ -9,19 +10,26 @@
 
 #include "vecmath.h"
 
-typedef enum { PC_MF_GGX = 0, PC_MF_BECKMANN = 1 } pc_mf_type;
+/* PC_MF_PHONG: Mitsuba's "phong" (or "as"): the Phong distribution with exponent 2/alpha^2 - 2,
+ * Ashikhmin-Shirley's when anisotropic; Beckmann's masking; sampled by D(m) cos(theta_m). */
+typedef enum { PC_MF_GGX = 0, PC_MF_BECKMANN = 1, PC_MF_PHONG = 2 } pc_mf_type;
 
 /* Mitsuba clamps roughness to this so that D stays finite. */
 #define PC_MF_MIN_ALPHA 1e-4f
 
 typedef struct pc_microfacet {
   pc_mf_type type;
-  float alpha; /* clamped to PC_MF_MIN_ALPHA */
+  float alpha;   /* alphaU: roughness along the frame's first tangent; clamped to PC_MF_MIN_ALPHA */
+  float alpha_v; /* alphaV: along the second (== alpha when isotropic) */
 } pc_microfacet;
 
-static inline pc_microfacet pc_mf_make(pc_mf_type type, float alpha) {
-  return (pc_microfacet){type, alpha > PC_MF_MIN_ALPHA ? alpha : PC_MF_MIN_ALPHA};
+/* Mitsuba's anisotropic distributions (alphaU != alphaV); alpha_v <= 0 means isotropic. */
+static inline pc_microfacet pc_mf_make_aniso(pc_mf_type type, float alpha_u, float alpha_v) {
+  float u = alpha_u > PC_MF_MIN_ALPHA ? alpha_u : PC_MF_MIN_ALPHA;
+  float v = alpha_v > 0.f ? (alpha_v > PC_MF_MIN_ALPHA ? alpha_v : PC_MF_MIN_ALPHA) : u;
+  return (pc_microfacet){type, u, v};
 }
+static inline pc_microfacet pc_mf_make(pc_mf_type type, float alpha) { return pc_mf_make_aniso(type, alpha, 0.f); }
 
 /* Normal distribution D(m); 0 for m below the horizon. */
 float pc_mf_d(const pc_microfacet *d, vec3 m);

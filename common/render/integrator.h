@@ -40,13 +40,11 @@ static inline float pc_mis_term(const pc_render_settings *s, float p) {
   return s->mis_heuristic == PC_MIS_POWER ? p * p : p;
 }
 
-/* Per-pixel shading point setup shared by integrators. */
-static inline pc_shading pc_shading_from_hit(const pc_hit *h) {
-  pc_shading sh;
-  sh.ng = h->ng;
-  sh.sh = frame_from_normal(h->ns);
-  sh.uv = h->uv;
-  return sh;
+/* The shading point of a hit reached from direction wo, shared by integrators (its material's
+ * bump map applied). */
+static inline pc_shading pc_shading_from_hit(const pc_scene *s, const pc_hit *h, vec3 wo) {
+  const pc_material *m = &s->materials[s->shapes[h->shape].material];
+  return pc_shading_make(m, s->textures, h->ng, h->ns, h->dpdu, h->dpdv, h->uv, wo);
 }
 
 /* Unidirectional path tracer with next-event estimation (strategies s=0 and s=1). */

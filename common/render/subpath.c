@@ -81,7 +81,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->kind = PC_VTX_SURFACE;
     cur->p = h.p;
     cur->ng = h.ng;
-    cur->sh = pc_shading_from_hit(&h);
+    cur->sh = pc_shading_from_hit(s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
     cur->beta = beta;
     cur->material = shape->material;

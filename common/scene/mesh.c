@@ -15,6 +15,24 @@ void pc_mesh_free(pc_mesh *m) {
   memset(m, 0, sizeof *m);
 }
 
+int pc_mesh_copy(const pc_mesh *src, pc_mesh *dst) {
+  memset(dst, 0, sizeof *dst);
+  dst->nverts = src->nverts;
+  dst->ntris = src->ntris;
+  size_t nv = src->nverts, ni = 3 * (size_t)src->ntris;
+  bool ok = (dst->p = malloc(nv * sizeof *dst->p)) && (dst->idx = malloc(ni * sizeof *dst->idx)) &&
+            (!src->n || (dst->n = malloc(nv * sizeof *dst->n))) && (!src->uv || (dst->uv = malloc(nv * sizeof *dst->uv)));
+  if (!ok) {
+    pc_mesh_free(dst);
+    return -1;
+  }
+  memcpy(dst->p, src->p, nv * sizeof *dst->p);
+  memcpy(dst->idx, src->idx, ni * sizeof *dst->idx);
+  if (src->n) memcpy(dst->n, src->n, nv * sizeof *dst->n);
+  if (src->uv) memcpy(dst->uv, src->uv, nv * sizeof *dst->uv);
+  return 0;
+}
+
 void pc_mesh_transform(pc_mesh *m, const mat4 *xf) {
   const double(*a)[4] = xf->m;
   /* Normals use the cofactor matrix (det * inverse transpose): no inverse needed and the

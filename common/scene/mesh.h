@@ -22,6 +22,8 @@ typedef struct pc_mesh {
 } pc_mesh;
 
 void pc_mesh_free(pc_mesh *m);
+/* A deep copy into *dst; -1 (dst empty) when out of memory. */
+int pc_mesh_copy(const pc_mesh *src, pc_mesh *dst);
 /* Applies a transform (and its inverse transpose to normals) in place. */
 void pc_mesh_transform(pc_mesh *m, const mat4 *xf);
 /* Reverses every triangle's winding and negates shading normals (Mitsuba's flipNormals). */

@@ -110,6 +110,8 @@ typedef struct pc_hit {
   vec3 ng;          /* geometric normal, front side */
   vec3 ns;          /* interpolated shading normal (== ng when the mesh has none) */
   vec2 uv;
+  vec3 dpdu, dpdv;  /* position derivatives along uv, as Mitsuba's: a triangle's from its texture
+                       coordinates (its edges p1-p0, p2-p0 without them), a sphere's analytic */
   float t;
   int shape, prim;
 } pc_hit;

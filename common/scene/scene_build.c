@@ -135,8 +135,16 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
     pc_material *m = &s->materials[i];
     /* Derived quantities (plastic's lobe choice) use a slot's constant; for a textured slot
      * that is the texture's average, as Mitsuba's getAverage(). */
-    pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance};
-    for (int k = 0; k < 3; k++) {
+    pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance, &m->sigma_a};
+    /* A wrapper's material comes before it (so wrapping cannot loop), and is prepared first. */
+    bool wraps = m->type == PC_MAT_BUMPMAP || m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING;
+    if (wraps && !(m->nested >= 0 && m->nested < i))
+      return pc_errf(e, PC_EINVAL, "%s: material %d wraps material %d", s->path, i, m->nested);
+    if (m->type == PC_MAT_BUMPMAP && !(m->bump_tex >= 0 && m->bump_tex < s->ntextures))
+      return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, m->bump_tex, s->ntextures);
+    m->inner = wraps ? &s->materials[m->nested] : NULL;
+    bool coating = m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING;
+    for (int k = 0; k < (coating ? 4 : 3); k++) {
       if (slots[k]->tex >= s->ntextures)
         return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, slots[k]->tex, s->ntextures);
       if (slots[k]->tex >= 0) slots[k]->value = pc_texture_average(&s->textures[slots[k]->tex]);
@@ -192,7 +200,12 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
     hit->p = v3_madd(sh->center, n, sh->radius);
     float phi = atan2f(n.y, n.x);
     if (phi < 0.f) phi += 2.f * PC_PI;
-    hit->uv = (vec2){phi * (0.5f * PC_INV_PI), acosf(fminf(1.f, fmaxf(-1.f, n.z))) * PC_INV_PI};
+    float theta = acosf(fminf(1.f, fmaxf(-1.f, n.z)));
+    hit->uv = (vec2){phi * (0.5f * PC_INV_PI), theta * PC_INV_PI};
+    /* Mitsuba's sphere: p(u, v) = r (sin v pi cos u 2pi, sin v pi sin u 2pi, cos v pi). */
+    vec3 l = v3_scale(n, sh->radius);
+    hit->dpdu = v3(-l.y * 2.f * PC_PI, l.x * 2.f * PC_PI, 0.f);
+    hit->dpdv = v3_scale(v3(l.z * cosf(phi), l.z * sinf(phi), -sh->radius * sinf(theta)), PC_PI);
     if (sh->flip_normals) n = v3_neg(n);
     hit->ng = hit->ns = n;
     return;
@@ -218,9 +231,25 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   }
   hit->ng = ng;
   hit->ns = ns;
+  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+  hit->dpdu = e1;
+  hit->dpdv = e2;
   if (m->uv) {
     vec2 t0 = m->uv[ix[0]], t1 = m->uv[ix[1]], t2 = m->uv[ix[2]];
     hit->uv = (vec2){b0 * t0.x + b1 * t1.x + b2 * t2.x, b0 * t0.y + b1 * t1.y + b2 * t2.y};
+    /* Mitsuba's computeUVTangents: solve the edges for dp/du and dp/dv; an arbitrary tangent
+     * pair of the plane when the texture coordinates are degenerate. */
+    float du1 = t1.x - t0.x, dv1 = t1.y - t0.y, du2 = t2.x - t0.x, dv2 = t2.y - t0.y;
+    float det = du1 * dv2 - dv1 * du2;
+    if (det != 0.f && isfinite(det)) {
+      float inv = 1.f / det;
+      hit->dpdu = v3_scale(v3_sub(v3_scale(e1, dv2), v3_scale(e2, dv1)), inv);
+      hit->dpdv = v3_scale(v3_sub(v3_scale(e2, du1), v3_scale(e1, du2)), inv);
+    } else {
+      frame f = frame_from_normal(ng);
+      hit->dpdu = f.s;
+      hit->dpdv = f.t;
+    }
   } else {
     hit->uv = (vec2){b1, b2};
   }

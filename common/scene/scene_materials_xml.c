@@ -9,13 +9,6 @@
 
 static pc_tex_slot konst(float v) { return (pc_tex_slot){.tex = -1, .value = v3s(v)}; }
 
-/* Reads a plugin's parameters and refuses any other child element. */
-static int params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np) {
-  int rc = pc_sx_params(c, n, what, p, np);
-  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next)
-    if (!pc_sx_is_param(ch, p, np)) rc = pc_sx_unexpected(c, ch, what);
-  return rc;
-}
 
 static int what_of(const pc_xml_node *n, const char *type, char *buf) {
   snprintf(buf, PC_SX_WHAT_MAX, "%s '%.60s'", n->name, type);
@@ -38,16 +31,21 @@ static int check_max1(pc_sx *c, const pc_param *p, const pc_tex_slot *s, const c
   return 0;
 }
 
-/* alpha, or alphaU and alphaV (equal: pcbpt's rough models are isotropic), into m->alpha. */
+/* alpha, or alphaU and alphaV, into m->alpha (and m->alpha_v when they differ: anisotropic
+ * roughness, which Mitsuba's roughconductor and roughdielectric have; the others refuse it). */
 static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
                            float a, float u, float v, pc_material *m) {
   if (au->set != av->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both alphaU and alphaV or neither", c->file, n->line, what);
   if (au->set) {
     if (alpha->set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give alpha or alphaU/alphaV, not both", c->file, n->line, what);
-    if (u != v)
+    bool aniso_ok = m->type == PC_MAT_ROUGHCONDUCTOR || m->type == PC_MAT_ROUGHDIELECTRIC;
+    if (u != v && !aniso_ok)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: anisotropic roughness (alphaU != alphaV) unsupported", c->file, n->line, what);
+    if (u != v && !(v > 0.f && v <= 1.f))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alphaV must lie in (0, 1]", c->file, n->line, what);
     a = u;
+    m->alpha_v = u != v ? v : 0.f;
   }
   if (!(a > 0.f && a <= 1.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: roughness alpha must lie in (0, 1]", c->file, n->line, what);
@@ -58,11 +56,9 @@ static int check_roughness(pc_sx *c, const pc_xml_node *n, const char *what, pc_
 static int check_alpha(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *alpha, pc_param *au, pc_param *av,
                        float a, float u, float v, const char *dist, pc_material *m) {
   /* Mitsuba's default when no distribution is given is beckmann. */
-  if (strcmp(dist, "beckmann") == 0) m->distribution = PC_MF_BECKMANN;
-  else if (strcmp(dist, "ggx") == 0) m->distribution = PC_MF_GGX;
-  else
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: distribution '%s' not modelled by pcbpt (beckmann or ggx)", c->file,
-                   n->line, what, dist);
+  if (pc_sx_distribution(dist, &m->distribution) != 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: distribution '%s' unknown (beckmann, ggx, phong or as)", c->file, n->line,
+                   what, dist);
   return check_roughness(c, n, what, alpha, au, av, a, u, v, m);
 }
 
@@ -84,7 +80,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
   if (strcmp(type, "diffuse") == 0) {
     pc_param p[] = {{"reflectance", PC_P_SLOT, &m->reflectance, 0, 0}};
     m->type = PC_MAT_DIFFUSE;
-    if ((rc = params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
   } else if (strcmp(type, "conductor") == 0 || strcmp(type, "roughconductor") == 0) {
     bool rough = type[0] == 'r';
     const char *material = "Cu", *dist = "beckmann";
@@ -96,7 +92,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
     m->type = rough ? PC_MAT_ROUGHCONDUCTOR : PC_MAT_CONDUCTOR;
-    if ((rc = params_only(c, n, what, p, rough ? 9 : 5))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 9 : 5))) return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], alpha, au, av, dist, m))) return rc;
     if (p[1].set != p[2].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give both eta and k or neither", c->file, n->line, what);
     if (p[1].set && p[0].set)
@@ -120,7 +116,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"nonlinear", PC_P_BOOL, &m->nonlinear, 0, 0}, {"distribution", PC_P_STRING, &dist, 0, 0},
                     {"alpha", PC_P_FLOAT, &m->alpha, 0, 0}, {"alphaU", PC_P_FLOAT, &au, 0, 0},
                     {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 9 : 5)) || (rc = check_max1(c, &p[3], &m->reflectance, what)) ||
         (rc = check_ior(c, n, what, "intIOR", m->int_ior)) || (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[6], &p[7], &p[8], m->alpha, au, av, dist, m))) return rc;
@@ -138,7 +134,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
                     {"specularTransmittance", PC_P_SLOT, &m->transmittance, 0, 0},
                     {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
+    if ((rc = pc_sx_params_only(c, n, what, p, rough ? 8 : 4)) || (rc = check_ior(c, n, what, "intIOR", m->int_ior)) ||
         (rc = check_ior(c, n, what, "extIOR", m->ext_ior)))
       return rc;
     if (rough && (rc = check_alpha(c, n, what, &p[5], &p[6], &p[7], m->alpha, au, av, dist, m))) return rc;
@@ -154,7 +150,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     pc_param p[] = {{"variant", PC_P_STRING, &variant, 0, 0}, {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
                     {"diffuseReflectance", PC_P_SLOT, &m->reflectance, 0, 0}, {"alpha", PC_P_FLOAT, &m->alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
+    if ((rc = pc_sx_params_only(c, n, what, p, 6)) || (rc = check_roughness(c, n, what, &p[3], &p[4], &p[5], m->alpha, au, av, m)))
       return rc;
     if (strcmp(variant, "balanced") == 0) m->ward = PC_WARD_BALANCED;
     else if (strcmp(variant, "ward") == 0) m->ward = PC_WARD_ORIGINAL;
@@ -166,6 +162,8 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if (m->specular.tex < 0 && m->reflectance.tex < 0 && v3_maxc(v3_add(m->specular.value, m->reflectance.value)) > 1.f)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: specularReflectance + diffuseReflectance above 1 would create energy",
                      c->file, n->line, what);
+  } else if (strcmp(type, "bumpmap") == 0 || strcmp(type, "coating") == 0 || strcmp(type, "roughcoating") == 0) {
+    return pc_sx_bsdf_wrapper(c, n, type, what, m);
   } else if (strcmp(type, "twosided") == 0) {
     if ((rc = pc_sx_params(c, n, what, NULL, 0))) return rc;
     const pc_xml_node *inner = NULL;
@@ -201,7 +199,7 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->twosided = true;
     return 0;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt", c->file, n->line, type);
+    return pc_sx_bsdf_more(c, n, type, what, m);
   }
   return 0;
 }
@@ -232,6 +230,12 @@ int pc_sx_default_material(pc_sx *c, const pc_xml_node *n, int *index) {
   return 0;
 }
 
+/* Mitsuba's Texture2D: uscale and vscale default to uvscale. p: the common parameters as read. */
+static void uv_defaults(const pc_param *p, float uvscale, pc_texture *t) {
+  if (!p[0].set) t->uscale = uvscale;
+  if (!p[1].set) t->vscale = uvscale;
+}
+
 int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
   const char *type;
   char what[PC_SX_WHAT_MAX];
@@ -241,18 +245,21 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
   pc_texture t;
   memset(&t, 0, sizeof t);
   t.uscale = t.vscale = 1.f;
+  float uvscale = 1.f;
   pc_param common[] = {{"uscale", PC_P_FLOAT, &t.uscale, 0, 0}, {"vscale", PC_P_FLOAT, &t.vscale, 0, 0},
-                       {"uoffset", PC_P_FLOAT, &t.uoffset, 0, 0}, {"voffset", PC_P_FLOAT, &t.voffset, 0, 0}};
+                       {"uoffset", PC_P_FLOAT, &t.uoffset, 0, 0}, {"voffset", PC_P_FLOAT, &t.voffset, 0, 0},
+                       {"uvscale", PC_P_FLOAT, &uvscale, 0, 0}};
   if (strcmp(type, "bitmap") == 0) {
     const char *filename = NULL, *filter = "ewa", *wrap = "repeat", *wrapu = "repeat", *wrapv = "repeat";
     float gamma = 0; /* Mitsuba: 0 the file's own (sRGB for 8-bit), -1 sRGB, else v^gamma */
-    pc_param p[] = {common[0], common[1], common[2], common[3],
+    pc_param p[] = {{"gamma", PC_P_FLOAT, &gamma, 0, 0},
                     {"filename", PC_P_STRING, &filename, 0, 0}, {"filterType", PC_P_STRING, &filter, 0, 0},
                     {"wrapMode", PC_P_STRING, &wrap, 0, 0}, {"wrapModeU", PC_P_STRING, &wrapu, 0, 0},
-                    {"wrapModeV", PC_P_STRING, &wrapv, 0, 0}, {"gamma", PC_P_FLOAT, &gamma, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 10))) return rc;
+                    {"wrapModeV", PC_P_STRING, &wrapv, 0, 0}, common[0], common[1], common[2], common[3], common[4]};
+    if ((rc = pc_sx_params_only(c, n, what, p, 11))) return rc;
+    uv_defaults(&p[6], uvscale, &t);
     if (!(gamma == 0 || gamma == -1 || (gamma > 0 && gamma <= 10)))
-      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: gamma must be -1 (sRGB) or in (0, 10]", c->file, p[9].line, what);
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: gamma must be -1 (sRGB) or in (0, 10]", c->file, p[0].line, what);
     if (!filename) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
     /* pcbpt filters bilinearly whatever Mitsuba's filter; the difference is only blur. */
     if (strcmp(filter, "ewa") != 0 && strcmp(filter, "trilinear") != 0 && strcmp(filter, "nearest") != 0)
@@ -262,6 +269,7 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
     char *path;
     if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
     t.type = PC_TEX_BITMAP;
+    t.nearest = strcmp(filter, "nearest") == 0;
     /* 8-bit images are sRGB-encoded as Mitsuba assumes; the reader ignores the flag for EXR. */
     rc = pc_image_read(path, gamma <= 0, &t.img, c->e);
     free(path);
@@ -272,9 +280,12 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
     t.type = PC_TEX_CHECKER;
     t.color0 = v3s(0.4f);
     t.color1 = v3s(0.2f);
-    pc_param p[] = {common[0], common[1], common[2], common[3],
-                    {"color0", PC_P_COLOR, &t.color0, 0, 0}, {"color1", PC_P_COLOR, &t.color1, 0, 0}};
-    if ((rc = params_only(c, n, what, p, 6))) return rc;
+    pc_param p[] = {{"color0", PC_P_COLOR, &t.color0, 0, 0}, {"color1", PC_P_COLOR, &t.color1, 0, 0},
+                    common[0], common[1], common[2], common[3], common[4]};
+    if ((rc = pc_sx_params_only(c, n, what, p, 7))) return rc;
+    uv_defaults(&p[2], uvscale, &t);
+  } else if (strcmp(type, "scale") == 0) {
+    if ((rc = pc_sx_scale_texture(c, n, what, &t))) return rc;
   } else {
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: texture '%s': not modelled by pcbpt", c->file, n->line, type);
   }

@@ -41,8 +41,15 @@ bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np) {
   return p && p->kind == PC_P_SLOT;
 }
 
+int pc_sx_params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np) {
+  int rc = pc_sx_params(c, n, what, p, np);
+  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next)
+    if (!pc_sx_is_param(ch, p, np)) rc = pc_sx_unexpected(c, ch, what);
+  return rc;
+}
+
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
-  static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", NULL};
+  static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", "sensor", NULL};
   const char *type = pc_xml_attr(ch, "type");
   if (strcmp(ch->name, "animation") == 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: animation (motion blur): not modelled by pcbpt (in %s)", c->file, ch->line, what);

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "scene_xml_ctx.h"
 #include "xml_values.h"
@@ -218,7 +219,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   return 0;
 }
 
-static int add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
+int pc_sx_add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
   if (c->s->nshapes >= PC_SCENE_MAX_SHAPES)
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d shapes", c->file, n->line, PC_SCENE_MAX_SHAPES);
   int rc = pc_sx_grow(c, (void **)&c->s->shapes, &c->cap_shapes, c->s->nshapes + 1, sizeof *sh);
@@ -262,7 +263,7 @@ static int area_emitter(pc_sx *c, const pc_xml_node *n, vec3 *radiance, float *w
 }
 
 /* A similarity transform (rotation, translation, uniform scale, possibly mirrored): sets s. */
-static bool is_similarity(const mat4 *m, double *s) {
+bool pc_sx_is_similarity(const mat4 *m, double *s) {
   double s2 = 0;
   for (int k = 0; k < 3; k++) s2 += m->m[k][0] * m->m[k][0];
   for (int i = 0; i < 3; i++)
@@ -293,10 +294,13 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
   return rc ? pc_errf(c->e, rc, "%s:%d: %s: out of memory", c->file, n->line, what) : 0;
 }
 
-static int shape(pc_sx *c, const pc_xml_node *n) {
+int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
+  /* Mitsuba lowercases plugin names: scenes write shapeGroup */
+  if (strcasecmp(type, "shapegroup") == 0) return pc_sx_shapegroup(c, n);
+  if (strcmp(type, "instance") == 0) return pc_sx_instance(c, n);
   bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "serialized") == 0;
   bool is_sphere = strcmp(type, "sphere") == 0;
   if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
@@ -359,7 +363,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
   sh.light = -1;
   if (is_sphere) {
     double s;
-    if (!is_similarity(&xf, &s))
+    if (!pc_sx_is_similarity(&xf, &s))
       return pc_errf(c->e, PC_EUNSUPPORTED,
                      "%s:%d: %s: toWorld may only translate, rotate and scale uniformly (a sphere must stay a sphere)",
                      c->file, n->line, what);
@@ -390,7 +394,7 @@ static int shape(pc_sx *c, const pc_xml_node *n) {
       return rc;
     }
   }
-  if ((rc = add_shape(c, n, &sh))) {
+  if ((rc = pc_sx_add_shape(c, n, &sh))) {
     pc_mesh_free(&sh.mesh);
     return rc;
   }
@@ -531,7 +535,7 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
       have_sensor = true;
       rc = sensor(c, ch);
     } else if (strcmp(el, "shape") == 0) {
-      rc = shape(c, ch);
+      rc = pc_sx_shape(c, ch);
     } else if (strcmp(el, "bsdf") == 0) {
       rc = pc_sx_bsdf(c, ch, &idx);
     } else if (strcmp(el, "texture") == 0) {
@@ -589,6 +593,7 @@ int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scen
   if (!rc) rc = pc_sx_substitute(&c, root);
   if (!rc) rc = scene_root(&c, root);
   pc_xml_free(root);
+  pc_sx_groups_free(&c);
   free(c.dir);
   if (c.incl_depth == 0) free((char *)c.incl_stack[0]); /* its name could not be allocated */
   while (c.incl_depth > 0) {

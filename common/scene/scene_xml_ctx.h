@@ -10,7 +10,7 @@
 #include "scene.h"
 #include "xml_tree.h"
 
-typedef enum { PC_ID_BSDF, PC_ID_TEXTURE, PC_ID_OTHER } pc_id_kind;
+typedef enum { PC_ID_BSDF, PC_ID_TEXTURE, PC_ID_OTHER, PC_ID_SHAPEGROUP } pc_id_kind;
 
 typedef struct pc_sx_id {
   char *id;
@@ -44,6 +44,13 @@ typedef struct pc_sx {
   bool have_env;            /* an environment emitter was declared (Mitsuba allows one) */
   int cap_shapes, cap_materials, cap_textures, cap_lights;
   unsigned long long file_bytes; /* sizes of the files noted so far, against opts->max_file_bytes */
+  /* shapegroups (scene_instance_xml.c): their shapes in object space, kept out of the scene,
+   * group g being group_first[g] .. group_first[g + 1] - 1 (ngroups + 1 entries) */
+  pc_shape *group_shapes;
+  int ngroup_shapes, cap_group_shapes;
+  int *group_first;
+  int ngroups, cap_group_first;
+  unsigned long long instanced_tris; /* triangles copied by instances, against PC_SX_MAX_INSTANCED_TRIS */
 } pc_sx;
 
 /* Parameter kinds a plugin declares. */
@@ -78,6 +85,8 @@ typedef struct pc_param {
 int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np);
 /* True if pc_sx_params consumed this child. */
 bool pc_sx_is_param(const pc_xml_node *ch, const pc_param *params, int np);
+/* pc_sx_params, refusing any other child element. */
+int pc_sx_params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np);
 /* Error for a child element the caller does not accept. */
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what);
 
@@ -121,7 +130,26 @@ int pc_sx_wrap(pc_sx *c, const pc_xml_node *n, const char *what, int rc);
 
 /* BSDF and texture elements (scene_materials_xml.c). */
 int pc_sx_bsdf(pc_sx *c, const pc_xml_node *n, int *index);
+/* A <shape> appended to the scene (scene_xml.c), and a shape appended as is. */
+int pc_sx_shape(pc_sx *c, const pc_xml_node *n);
+int pc_sx_add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh);
+/* True if m is a rotation, uniform scale and translation; *s the scale. */
+bool pc_sx_is_similarity(const mat4 *m, double *s);
+/* Mitsuba's `shapegroup` (kept aside) and `instance` (its shapes copied into the scene through
+ * the instance's toWorld); pc_sx_groups_free releases what the groups hold. */
+int pc_sx_shapegroup(pc_sx *c, const pc_xml_node *n);
+int pc_sx_instance(pc_sx *c, const pc_xml_node *n);
+void pc_sx_groups_free(pc_sx *c);
 int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index);
+/* The BSDFs of scene_bsdf_lambertian_xml.c (phong, roughdiffuse) into *m, or the one-line
+ * refusal of a plugin pcbpt does not model. */
+int pc_sx_bsdf_more(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m);
 int pc_sx_default_material(pc_sx *c, const pc_xml_node *n, int *index);
+/* The wrappers bumpmap, coating and roughcoating into *m (whose slots hold their defaults), and
+ * the `scale` texture into *t (scene_layers_xml.c). */
+int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m);
+int pc_sx_scale_texture(pc_sx *c, const pc_xml_node *n, const char *what, pc_texture *t);
+/* Mitsuba's microfacet distribution names (beckmann, ggx, phong or its alias as); -1 if none. */
+int pc_sx_distribution(const char *name, pc_mf_type *out);
 
 #endif

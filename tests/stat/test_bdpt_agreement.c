@@ -218,6 +218,99 @@ static void test_agree_thin_glass(void **state) {
   agree("thin-glass", 96, false, true);
 }
 
+/* The Cornell box dressed in Mitsuba's wrappers: the floor and the tall box (twosided) bump-mapped
+ * (a smooth height field, so the bumped frames vary across every triangle), the back wall under a
+ * rough coating, the right wall an anisotropic rough conductor (alphaU 0.05, alphaV 0.4 along the
+ * Mitsuba frame's tangents) bump-mapped too, and, when `smooth`, the short box under an absorbing
+ * smooth coating (a delta lobe in view: no light tracing then). */
+static bool with_smooth_coating;
+static int append_material(pc_scene *s, pc_material m) {
+  pc_material *q = realloc(s->materials, sizeof *q * (size_t)(s->nmaterials + 1));
+  assert_non_null(q);
+  s->materials = q;
+  s->materials[s->nmaterials] = m;
+  return s->nmaterials++;
+}
+static pc_material wrapper(pc_mat_type type, int nested) {
+  pc_material m;
+  memset(&m, 0, sizeof m);
+  m.type = type;
+  m.nested = nested;
+  m.bump_tex = 0;
+  m.specular = (pc_tex_slot){-1, v3s(1.f)};
+  m.sigma_a = (pc_tex_slot){-1, v3s(0.f)};
+  m.int_ior = 1.5f;
+  m.ext_ior = 1.f;
+  m.thickness = 1.f;
+  m.alpha = 0.2f;
+  m.distribution = PC_MF_GGX;
+  return m;
+}
+static void layered_cornell(pc_scene *s) {
+  enum { N = 32 };
+  pc_texture t;
+  memset(&t, 0, sizeof t);
+  t.type = PC_TEX_BITMAP;
+  t.uscale = t.vscale = 1.f;
+  t.img = (pc_image){N, N, malloc(sizeof(float) * 3 * N * N)};
+  assert_non_null(t.img.rgb);
+  for (int y = 0; y < N; y++)
+    for (int x = 0; x < N; x++)
+      for (int c = 0; c < 3; c++)
+        t.img.rgb[3 * (y * N + x) + c] = 0.05f * (sinf(2 * PC_PI * 2 * x / N) + cosf(2 * PC_PI * 3 * y / N));
+  pc_texture *q = realloc(s->textures, sizeof *q * (size_t)(s->ntextures + 1));
+  assert_non_null(q);
+  s->textures = q;
+  s->textures[s->ntextures++] = t;
+  assert_int_equal(s->ntextures, 1);
+  int floor = s->shapes[0].material, back = s->shapes[2].material, right = s->shapes[3].material;
+  int tall = s->shapes[6].material, shortbox = s->shapes[5].material;
+  s->shapes[0].material = append_material(s, wrapper(PC_MAT_BUMPMAP, floor));
+  /* the tall box: Mitsuba's twosided around the bumpmap (its frame mirrored behind) */
+  s->materials[tall].twosided = false;
+  pc_material tb = wrapper(PC_MAT_BUMPMAP, tall);
+  tb.twosided = true;
+  s->shapes[6].material = append_material(s, tb);
+  s->shapes[2].material = append_material(s, wrapper(PC_MAT_ROUGHCOATING, back));
+  pc_material *r = &s->materials[right];
+  r->type = PC_MAT_ROUGHCONDUCTOR;
+  r->distribution = PC_MF_BECKMANN;
+  r->alpha = 0.05f;
+  r->alpha_v = 0.4f;
+  assert_true(pc_conductor_ior("Cu", &r->eta, &r->k));
+  s->shapes[3].material = append_material(s, wrapper(PC_MAT_BUMPMAP, right));
+  if (with_smooth_coating) {
+    pc_material c = wrapper(PC_MAT_COATING, shortbox);
+    c.sigma_a = (pc_tex_slot){-1, v3(0.1f, 0.3f, 0.6f)};
+    s->shapes[5].material = append_material(s, c);
+  }
+}
+
+static void test_agree_layered(void **state) {
+  (void)state;
+  int beauty = -1;
+  for (int smooth = 0; smooth < 2; smooth++) {
+    with_smooth_coating = smooth;
+    multi *pt = malloc(sizeof *pt), *bd = malloc(sizeof *bd), *l = malloc(sizeof *l);
+    render_multi("cornell-box", settings(PC_METHOD_PT, 64, 6, 31), 256, &beauty, 1, 8, layered_cornell, pt);
+    render_multi("cornell-box", settings(PC_METHOD_BDPT, 64, 6, 42), 64, &beauty, 1, 8, layered_cornell, bd);
+    compare_blocks(smooth ? "cornell layered+coating pt vs bdpt" : "cornell layered pt vs bdpt", pt, 0, bd, 0, 5.0);
+    if (!smooth) {
+      render_multi("cornell-box", settings(PC_METHOD_LT, 64, 6, 43), 64, &beauty, 1, 8, layered_cornell, l);
+      compare_blocks("cornell layered lt vs bdpt", l, 0, bd, 0, 5.0);
+    }
+    pc_render_settings set = settings(PC_METHOD_PCBPT, 64, 6, 34);
+    set.pcbpt_m = 50;
+    set.pcbpt_k = 2;
+    set.cache_fraction = 0.02f;
+    render_multi("cornell-box", set, 64, &beauty, 1, 8, layered_cornell, l);
+    compare_blocks(smooth ? "cornell layered+coating pcbpt vs bdpt" : "cornell layered pcbpt vs bdpt", l, 0, bd, 0, 5.0);
+    free(pt);
+    free(bd);
+    free(l);
+  }
+}
+
 /* Totals of every strategy of path lengths 2 and 3 (segments) on a scene. */
 static void strategies(const char *scene) {
   pc_render_settings set = settings(PC_METHOD_BDPT, 32, 3, 21);
@@ -335,6 +428,7 @@ int main(void) {
       cmocka_unit_test(test_agree_open_room), cmocka_unit_test(test_agree_ajar_door),
       cmocka_unit_test(test_agree_slit_room), cmocka_unit_test(test_agree_env_objects),
       cmocka_unit_test(test_agree_thin_glass), cmocka_unit_test(test_agree_near_specular),
+      cmocka_unit_test(test_agree_layered),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -33,6 +33,15 @@ static void single_requests(void **st) {
   in.range_seconds = 0.1;
   in.unassigned = 100;
   assert_int_equal(pc_range_size(&in), 2); /* the cap wins over the floor */
+  in.range_seconds = 3;
+  in.others_rate = 0;
+  in.outstanding = 0;
+  in.unassigned = 40;
+  assert_int_equal(pc_range_size(&in), 20); /* one worker so far: half kept back for any other */
+  in.alone = true;
+  assert_int_equal(pc_range_size(&in), 40); /* nobody else will come: all that is left */
+  in.unassigned = 100;
+  assert_int_equal(pc_range_size(&in), 60); /* still the cap */
 }
 
 #define NW 3

@@ -318,7 +318,8 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>\n<float name=\"samplingWeight\" value=\"-1\"/></emitter></shape>", 3, "samplingWeight"},
     {"\n<shape type=\"hair\"/>", 3, "shape 'hair': not modelled by pcbpt"},
     /* BSDFs */
-    {"<bsdf type=\"phong\"/>", 2, "phong"},
+    {"<bsdf type=\"hk\"/>", 2, "hk"},
+    {"<shape type=\"disk\">\n<sensor type=\"irradiancemeter\"/></shape>", 3, "irradiancemeter': not modelled"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"1.5, 0.5, 0.5\"/></bsdf>", 3, "above 1"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"-0.5\"/></bsdf>", 3, "negative"},
     {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.1, 0.2\"/></bsdf>", 3, "1 or 3"},
@@ -333,8 +334,24 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
     {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
     {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
-    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"phong\"/></bsdf>", 2, "phong"},
-    {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"walter\"/></bsdf>", 2, "distribution 'walter' unknown"},
+    {"<bsdf type=\"roughplastic\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"roughconductor\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"1.2\"/></bsdf>", 2, "alphaV"},
+    {"<bsdf type=\"bumpmap\">\n<bsdf type=\"diffuse\"/></bsdf>", 2, "displacement texture"},
+    {"<bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/>\n<texture type=\"bitmap\"><string name=\"filename\" value=\"tex.png\"/></texture></bsdf>", 3, "gamma"},
+    {"<bsdf type=\"bumpmap\">\n<texture type=\"checkerboard\"/></bsdf>", 2, "wraps no BSDF"},
+    {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
+    {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/>\n<float name=\"x\" value=\"1\"/></bsdf>", 3, "x"},
+    {"<bsdf type=\"coating\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 2, "bumpmap inside another BSDF: not modelled"},
+    {"<bsdf type=\"coating\"><float name=\"intIOR\" value=\"1.2\"/><float name=\"extIOR\" value=\"1.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "differ"},
+    {"<bsdf type=\"coating\"><float name=\"thickness\" value=\"-1\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "thickness"},
+    {"<bsdf type=\"coating\"><rgb name=\"specularReflectance\" value=\"1.5\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "above 1"},
+    {"<bsdf type=\"coating\"/>", 2, "wraps no BSDF"},
+    {"<bsdf type=\"roughcoating\"><string name=\"distribution\" value=\"blinn\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "'blinn' unknown"},
+    {"<bsdf type=\"roughcoating\"><float name=\"alphaU\" value=\"0.1\"/><float name=\"alphaV\" value=\"0.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "anisotropic"},
+    {"<bsdf type=\"roughcoating\"><float name=\"alpha\" value=\"0\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "alpha"},
+    {"<texture type=\"scale\" id=\"t\">\n<float name=\"scale\" value=\"-1\"/><texture type=\"checkerboard\"/></texture>", 2, "positive"},
+    {"<texture type=\"scale\" id=\"t\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/></texture>", 3, "unexpected"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0\"/></bsdf>", 2, "alpha"},
     {"<bsdf type=\"conductor\"><string name=\"material\" value=\"Xx\"/></bsdf>", 2, "Xx"},
     {"<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"1\"/></bsdf>", 2, "eta and k"},
@@ -708,6 +725,104 @@ static void test_ward(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's phong (defaults: exponent 30, specular 0.2, diffuse 0.5; a sum above 1 scaled by
+ * 0.99/max unless ensureEnergyConservation is false) and roughdiffuse (alpha 0.2, either
+ * reflectance name). */
+static void test_phong_roughdiffuse(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"phong\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"phong\"><float name=\"exponent\" value=\"50\"/>"
+                            "<rgb name=\"specularReflectance\" value=\"0.5 0.5 0.5\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.9 0.1 0.1\"/></bsdf></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"phong\"><boolean name=\"ensureEnergyConservation\" value=\"false\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.9 0.1 0.1\"/></bsdf></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"/></shape>\n"
+                            "<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"><float name=\"alpha\" value=\"0.7\"/>"
+                            "<boolean name=\"useFastApprox\" value=\"true\"/>"
+                            "<rgb name=\"diffuseReflectance\" value=\"0.3 0.2 0.1\"/></bsdf></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *m = s.materials;
+  assert_int_equal(m[0].type, PC_MAT_PHONG);
+  assert_true(m[0].exponent == 30.f && m[0].lobe_scale == 1.f);
+  near3(m[0].specular.value, v3s(0.2f), 0);
+  near3(m[0].reflectance.value, v3s(0.5f), 0);
+  assert_true(m[1].exponent == 50.f);
+  assert_true(fabsf(m[1].lobe_scale - 0.99f / 1.4f) < 1e-6f);
+  assert_true(m[2].lobe_scale == 1.f);
+  assert_int_equal(m[3].type, PC_MAT_ROUGHDIFFUSE);
+  assert_true(m[3].alpha == 0.2f && !m[3].fast_approx);
+  near3(m[3].reflectance.value, v3s(0.5f), 0);
+  assert_true(m[4].alpha == 0.7f && m[4].fast_approx);
+  near3(m[4].reflectance.value, v3(0.3f, 0.2f, 0.1f), 1e-6f);
+  pc_scene_free(&s);
+  /* the scaling is a warning, an error under --strict; both names at once are refused */
+  pc_scene_load_opts strict = {.strict = true};
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"phong\"><spectrum name=\"diffuseReflectance\" value=\"0.95\"/>"
+                "</bsdf></shape>\n";
+  assert_int_not_equal(load_body_opts(&t, body, &strict, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "ensureEnergyConservation"));
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"roughdiffuse\"><spectrum name=\"reflectance\" value=\"0.5\"/>"
+                "<spectrum name=\"diffuseReflectance\" value=\"0.5\"/></bsdf></shape>\n";
+  assert_int_not_equal(load_body(&t, body, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "not both"));
+  th_rm_rf(t.root);
+}
+
+/* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
+ * instance's toWorld after their own; the group itself is not rendered. */
+static void test_instances(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"shapeGroup\" id=\"g\"><shape type=\"rectangle\">"
+                            "<transform name=\"toWorld\"><translate x=\"1\"/></transform>"
+                            "<bsdf type=\"diffuse\"/></shape><shape type=\"sphere\"><float name=\"radius\" value=\"0.5\"/></shape></shape>\n"
+                            "<shape type=\"instance\"><ref id=\"g\"/></shape>\n"
+                            "<shape type=\"instance\"><ref id=\"g\"/><transform name=\"toWorld\"><scale value=\"2\"/>"
+                            "<translate z=\"5\"/></transform></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 4);
+  assert_int_equal(s.shapes[0].kind, PC_SHAPE_MESH);
+  assert_int_equal(s.shapes[1].kind, PC_SHAPE_SPHERE);
+  assert_int_equal(s.shapes[0].material, s.shapes[2].material);
+  /* rectangle corner (-1,-1,0) -> (0,-1,0) -> scaled (0,-2,0) -> (0,-2,5) */
+  bool found = false;
+  for (uint32_t i = 0; i < s.shapes[2].mesh.nverts; i++) {
+    vec3 p = s.shapes[2].mesh.p[i];
+    found |= fabsf(p.x) < 1e-6f && fabsf(p.y + 2) < 1e-6f && fabsf(p.z - 5) < 1e-6f;
+  }
+  assert_true(found);
+  near3(s.shapes[3].center, v3(0, 0, 5), 1e-6f);
+  assert_true(fabsf(s.shapes[3].radius - 1.f) < 1e-6f);
+  pc_scene_free(&s);
+  const struct { const char *body, *want; } bad[] = {
+      {"<shape type=\"instance\"><ref id=\"nope\"/></shape>", "not a shapegroup"},
+      {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"rectangle\"><emitter type=\"area\">"
+       "<rgb name=\"radiance\" value=\"1 1 1\"/></emitter></shape></shape>", "emitter in a group: not modelled"},
+      {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"sphere\"/></shape><shape type=\"instance\"><ref id=\"g\"/>"
+       "<transform name=\"toWorld\"><scale x=\"2\"/></transform></shape>", "holds a sphere"},
+      {"<shape type=\"shapegroup\"><shape type=\"sphere\"/></shape>", "needs an id"},
+  };
+  char buf[1024];
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    snprintf(buf, sizeof buf, SENSOR "%s", bad[i].body);
+    assert_int_not_equal(load_body(&t, buf, &s, &e), 0);
+    if (!strstr(e.msg, bad[i].want)) print_error("%s\n", e.msg);
+    assert_non_null(strstr(e.msg, bad[i].want));
+  }
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -752,6 +867,58 @@ static void test_bitmap_texture(void **state) {
     assert_true(fabsf(v - want) < 3e-3f);
     pc_scene_free(&s);
   }
+  th_rm_rf(t.root);
+}
+
+/* Mitsuba's wrappers: a bump map through a scaled bitmap (uvscale), coatings, anisotropic
+ * roughness; an id inside a wrapper names the wrapped BSDF alone (as in Mitsuba). */
+static void test_layers(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_err e = {0};
+  pc_scene s;
+  char png[512];
+  snprintf(png, sizeof png, "%s/bump.png", t.dir);
+  const float rgb[6] = {1, 1, 1, 0, 0, 0};
+  assert_int_equal(pc_png_write_preview(png, 2, 1, rgb, 0.f, &e), 0);
+  const char *body =
+      SENSOR "\n<bsdf type=\"bumpmap\" id=\"bumped\"><texture type=\"scale\"><float name=\"scale\" value=\"0.5\"/>"
+      "<texture type=\"bitmap\"><string name=\"filename\" value=\"bump.png\"/><float name=\"uvscale\" value=\"3\"/>"
+      "<float name=\"vscale\" value=\"2\"/></texture></texture>"
+      "<bsdf type=\"twosided\" id=\"inner\"><bsdf type=\"roughconductor\"><float name=\"alphaU\" value=\"0.1\"/>"
+      "<float name=\"alphaV\" value=\"0.3\"/></bsdf></bsdf></bsdf>\n"
+      "<bsdf type=\"coating\" id=\"coat\"><float name=\"intIOR\" value=\"1.075\"/><rgb name=\"sigmaA\" value=\"0.1 0.2 0.3\"/>"
+      "<float name=\"thickness\" value=\"2\"/><ref id=\"inner\"/></bsdf>\n"
+      "<bsdf type=\"roughcoating\" id=\"rc\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alphaU\" value=\"0.3\"/><float name=\"alphaV\" value=\"0.3\"/>"
+      "<bsdf type=\"diffuse\"/></bsdf>\n"
+      "<shape type=\"rectangle\"><ref id=\"bumped\"/></shape><shape type=\"rectangle\"><ref id=\"inner\"/></shape>"
+      "<shape type=\"rectangle\"><ref id=\"coat\"/></shape><shape type=\"sphere\"><ref id=\"rc\"/></shape>"
+      "<emitter type=\"constant\"/>";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *bm = &s.materials[s.shapes[0].material], *in = &s.materials[s.shapes[1].material];
+  assert_int_equal(bm->type, PC_MAT_BUMPMAP);
+  assert_int_equal(in->type, PC_MAT_ROUGHCONDUCTOR);
+  assert_true(in->twosided && in->alpha == 0.1f && in->alpha_v == 0.3f);
+  assert_int_equal(bm->nested, s.shapes[1].material);
+  /* the nested bitmap is taken over by the scale texture: one texture */
+  assert_int_equal(s.ntextures, 1);
+  const pc_texture *tx = &s.textures[bm->bump_tex];
+  assert_true(tx->type == PC_TEX_BITMAP && tx->scaled && tx->scale.x == 0.5f && tx->uscale == 3.f && tx->vscale == 2.f);
+  const pc_material *coat = &s.materials[s.shapes[2].material];
+  assert_int_equal(coat->type, PC_MAT_COATING);
+  assert_true(coat->int_ior == 1.075f && coat->thickness == 2.f && coat->nested == s.shapes[1].material);
+  near3(coat->sigma_a.value, v3(0.1f, 0.2f, 0.3f), 1e-6f);
+  const pc_material *rcm = &s.materials[s.shapes[3].material];
+  assert_true(rcm->type == PC_MAT_ROUGHCOATING && rcm->distribution == PC_MF_GGX && rcm->alpha == 0.3f);
+  rc = pc_scene_build(&s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_ptr_equal(bm->inner, in);
+  assert_true(coat->spec_sampling_weight > 0.5f && coat->spec_sampling_weight < 1.f);
+  pc_scene_free(&s);
   th_rm_rf(t.root);
 }
 
@@ -824,7 +991,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
       cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward),
+      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances), cmocka_unit_test(test_layers),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

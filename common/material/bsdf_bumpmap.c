@@ -1,0 +1,72 @@
+/* bsdf_bumpmap.c: the shading frame of a surface point, and Mitsuba 0.6's `bumpmap`, which
+ * perturbs it. The frame is Mitsuba's computeShadingFrame: normal ns, first tangent along dp/du
+ * projected into the tangent plane (anisotropic models read it). A bumpmap material replaces
+ * it, once per hit, by the frame its displacement texture h defines, as Mitsuba's
+ * BumpMap::getFrame does (ignoring the normal's own derivative, so a constant offset of h
+ * changes nothing):
+ *   dpdu' = dpdu + ns (dh/du - ns.dpdu),  dpdv' = dpdv + ns (dh/dv - ns.dpdv)
+ *   n' = normalize(dpdu' x dpdv') turned to the geometric normal's side,
+ *   s' = dpdu' projected into the plane of n'
+ * with dh/du, dh/dv the luminance of the texture's gradient (texture_gradient.c). The wrapped
+ * material is then evaluated in that frame by bsdf.c, so integrators' cosines and the adjoint
+ * correction of importance transport use the bumped normal too (what makes light tracing the
+ * adjoint of path tracing; Mitsuba's own particle tracer corrects with the unbumped normal). */
+#include "bsdf.h"
+
+/* Mitsuba's computeShadingFrame; an arbitrary tangent where dpdu is degenerate. */
+static frame shading_frame(vec3 n, vec3 dpdu) {
+  vec3 s = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
+  float len = v3_len(s);
+  if (!(len > 1e-12f * v3_len(dpdu)) || !isfinite(len)) return frame_from_normal(n);
+  frame f;
+  f.n = n;
+  f.s = v3_scale(s, 1.f / len);
+  f.t = v3_cross(n, f.s);
+  return f;
+}
+
+/* The bumped frame, or the unbumped one where the texture's slopes give no valid frame. */
+static frame bumped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, vec3 dpdv, vec2 uv) {
+  vec3 grad[2];
+  pc_texture_gradient(tex, uv, grad);
+  float du = v3_luminance(grad[0]), dv = v3_luminance(grad[1]);
+  vec3 n = f.n;
+  vec3 pu = v3_add(dpdu, v3_scale(n, du - v3_dot(n, dpdu)));
+  vec3 pv = v3_add(dpdv, v3_scale(n, dv - v3_dot(n, dpdv)));
+  vec3 c = v3_cross(pu, pv);
+  float len = v3_len(c);
+  if (!(len > 0.f) || !isfinite(len)) return f;
+  vec3 nb = v3_scale(c, 1.f / len);
+  if (v3_dot(nb, ng) < 0.f) nb = v3_neg(nb);
+  frame r = shading_frame(nb, pu);
+  return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
+}
+
+/* Mitsuba's twosided around a bumpmap, queried from behind, turns the directions over the
+ * unbumped tangent plane and evaluates the bumped material in front. The same, with the
+ * directions kept: the bumped frame mirrored through that plane to the back (made right-handed
+ * again, which no model can tell), and the unbumped normal flipped to the back too. */
+static vec3 mirror(vec3 v, vec3 nb) { return v3_sub(v, v3_scale(nb, 2.f * v3_dot(v, nb))); }
+
+static void to_back(pc_shading *sh) {
+  vec3 nb = sh->nb;
+  frame f = sh->sh;
+  sh->sh.n = mirror(f.n, nb);
+  sh->sh.s = mirror(f.s, nb);
+  sh->sh.t = v3_cross(sh->sh.n, sh->sh.s);
+  sh->nb = v3_neg(nb);
+}
+
+pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu, vec3 dpdv,
+                           vec2 uv, vec3 wo) {
+  pc_shading sh;
+  sh.ng = ng;
+  sh.uv = uv;
+  sh.sh = shading_frame(ns, dpdu);
+  sh.nb = ns;
+  if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
+    sh.sh = bumped_frame(&texs[m->bump_tex], ng, sh.sh, dpdu, dpdv, uv);
+    if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(&sh);
+  }
+  return sh;
+}
