@@ -14,6 +14,7 @@
 #include "auth.h"
 #include "bundle.h"
 #include "wire_conn.h"
+#include "wire_settings.h"
 
 int pc_client_send(pc_client *cl, const Pcbpt__Envelope *env, pc_err *e) {
   uint8_t *buf;
@@ -208,6 +209,24 @@ int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_
   else *job = in->submit_reply->job_id;
   pcbpt__envelope__free_unpacked(in, NULL);
   return rc;
+}
+
+int pc_client_submit_request(pc_client *cl, const char *name, const uint8_t *hash, const pc_render_request *req,
+                             const char *auto_report, int priority, uint64_t *job, pc_err *e) {
+  Pcbpt__Settings ps;
+  pc_wire_settings_buf psb;
+  pc_wire_settings_to_proto(&req->set, &ps, &psb);
+  ps.halt_noise = req->halt_noise;
+  ps.auto_report = (char *)auto_report;
+  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
+  sub.name = (char *)name;
+  sub.bundle_hash.data = (uint8_t *)hash;
+  sub.bundle_hash.len = PC_BUNDLE_HASH;
+  sub.settings = &ps;
+  sub.halt_iterations = req->spp;
+  sub.halt_seconds = req->seconds;
+  sub.priority = priority;
+  return pc_client_submit(cl, &sub, job, e);
 }
 
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e) {

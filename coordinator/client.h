@@ -3,6 +3,7 @@
 #define PC_CLIENT_H
 
 #include "error.h"
+#include "render_flags.h"
 #include "wire_frame.h"
 
 typedef struct pc_client {
@@ -27,6 +28,10 @@ int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const ui
 /* Sends a Submit of an uploaded bundle (the caller fills name, bundle hash, settings, halts and
  * priority) and waits for its reply: *job is the new job's id. */
 int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_err *e);
+/* A render job of an uploaded bundle: req's settings, --spp, --time and --halt-noise, with
+ * --method auto's report (may be ""). */
+int pc_client_submit_request(pc_client *cl, const char *name, const uint8_t *hash, const pc_render_request *req,
+                             const char *auto_report, int priority, uint64_t *job, pc_err *e);
 /* Asks for the status of `job` (0: every job); *out is a STATUS_REPLY envelope the caller frees
  * with pcbpt__envelope__free_unpacked. */
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e);

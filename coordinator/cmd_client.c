@@ -57,25 +57,6 @@ static int connect_or_say(const char *verb, const common_opts *o, pc_client *cl)
 
 static int parse_job_id(const char *s, uint64_t *id) { return pc_parse_u64(s, 1, UINT64_MAX, id) ? 0 : -1; }
 
-/* Submits one job of the uploaded bundle. */
-static int submit_one(pc_client *cl, const uint8_t *hash, const pc_render_settings *set, const char *name, uint64_t spp,
-                      double seconds, double halt_noise, int priority, const char *auto_report, uint64_t *job, pc_err *e) {
-  Pcbpt__Settings ps;
-  pc_wire_settings_buf psb;
-  pc_wire_settings_to_proto(set, &ps, &psb);
-  ps.halt_noise = halt_noise;
-  ps.auto_report = (char *)auto_report;
-  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
-  sub.name = (char *)name;
-  sub.bundle_hash.data = (uint8_t *)hash;
-  sub.bundle_hash.len = PC_BUNDLE_HASH;
-  sub.settings = &ps;
-  sub.halt_iterations = spp;
-  sub.halt_seconds = seconds;
-  sub.priority = priority;
-  return pc_client_submit(cl, &sub, job, e);
-}
-
 int pc_cmd_submit(int argc, char **argv) {
   common_opts o;
   opts_default(&o);
@@ -138,7 +119,7 @@ int pc_cmd_submit(int argc, char **argv) {
     pc_pilot_free(&pilot);
   }
   uint64_t job = 0;
-  if (!rc) rc = submit_one(&cl, hash, &req.set, fp.name, req.spp, req.seconds, req.halt_noise, fp.priority, report, &job, &e);
+  if (!rc) rc = pc_client_submit_request(&cl, fp.name, hash, &req, report, fp.priority, &job, &e);
   pc_client_close(&cl);
   if (rc) {
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);

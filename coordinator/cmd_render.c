@@ -131,19 +131,7 @@ static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob
                       const pc_render_request *req, const char *auto_report, uint64_t *job, pc_err *e) {
   int rc = pc_client_send_bundle(cl, blob, n, hash, e);
   if (rc) return rc;
-  Pcbpt__Settings ps;
-  pc_wire_settings_buf psb;
-  pc_wire_settings_to_proto(&req->set, &ps, &psb);
-  ps.halt_noise = req->halt_noise;
-  ps.auto_report = (char *)auto_report;
-  Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
-  sub.name = (char *)scene_path;
-  sub.bundle_hash.data = (uint8_t *)hash;
-  sub.bundle_hash.len = PC_BUNDLE_HASH;
-  sub.settings = &ps;
-  sub.halt_iterations = req->spp;
-  sub.halt_seconds = req->seconds;
-  return pc_client_submit(cl, &sub, job, e);
+  return pc_client_submit_request(cl, scene_path, hash, req, auto_report, 0, job, e);
 }
 
 /* Asks the coordinator to finish the job with what is rendered (Ctrl-C). */
