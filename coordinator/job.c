@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "coord.h"
+#include "render_flags.h"
 #include "file_read.h"
 #include "wire_film.h"
 #include "wire_log.h"
@@ -238,7 +239,8 @@ static void snap_work(uv_work_t *w) {
 /* The same header as a standalone `render` writes, plus the job id and, for studies, the
  * worker-seconds behind the film. */
 static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, pc_err *e) {
-  char idbuf[32], seed[32], version[64];
+  char idbuf[32], seed[32], version[64], pcbpt_flags[320];
+  pc_render_settings_pcbpt_flags(&j->set, pcbpt_flags, sizeof pcbpt_flags);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
   snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
@@ -259,9 +261,12 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
-    {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report}, /* last: only when set */
+    {.name = "pcbpt.pcbpt_flags", .type = PC_ATTR_STRING, .s = pcbpt_flags}, /* only when set */
+    {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report},     /* only when set */
   };
-  int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - (j->auto_report[0] ? 0 : 1);
+  int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - 2;
+  if (pcbpt_flags[0]) attrs[nattrs++] = attrs[sizeof attrs / sizeof attrs[0] - 2];
+  if (j->auto_report[0]) attrs[nattrs++] = attrs[sizeof attrs / sizeof attrs[0] - 1];
   return pc_film_write_exr(&j->film, img, attrs, nattrs, e);
 }
 

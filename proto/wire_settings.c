@@ -16,6 +16,7 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->pcbpt_m = (uint32_t)s->pcbpt_m;
   out->pcbpt_k = (uint32_t)s->pcbpt_k;
   out->pcbpt_candidates = (uint32_t)s->pcbpt_candidates;
+  out->pcbpt_candidate_visibility = (uint32_t)s->candidate_visibility;
   out->cache_fraction = s->cache_fraction;
   out->knn = (uint32_t)s->knn;
   out->uniform_mix = s->uniform_mix;
@@ -40,7 +41,8 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   if (s.method == PC_METHOD_AUTO) return pc_errf(e, PC_EINVAL, "settings: method auto is chosen by the client's pilot, not sent");
   if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
       p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
-      p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT)
+      p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT ||
+      p->pcbpt_candidate_visibility > PC_CANDVIS_TRACED)
     return pc_errf(e, PC_EINVAL, "settings: a value is out of range (size %ux%u)", p->width, p->height);
   s.width = (int)p->width;
   s.height = (int)p->height;
@@ -52,6 +54,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.pcbpt_m = (int)p->pcbpt_m;
   s.pcbpt_k = (int)p->pcbpt_k;
   s.pcbpt_candidates = (int)p->pcbpt_candidates;
+  s.candidate_visibility = (pc_candidate_visibility)p->pcbpt_candidate_visibility;
   s.cache_fraction = p->cache_fraction;
   s.knn = (int)p->knn;
   s.uniform_mix = p->uniform_mix;

@@ -18,39 +18,58 @@ static void add_inner(pc_tctx *c, int x, int y, const pc_path_vertex *lv, const 
                          v3_scale(k.f, k.weight * scale));
 }
 
-/* A resampling candidate's unoccluded connection, kept for the shadow ray of the selected. */
+/* A resampling candidate's unoccluded connection, and its visibility when the target traced
+ * it (so the selected candidate does not trace it again). */
 typedef struct candidates {
   pc_tctx *c;
   const pc_path_vertex *ev;
   const pc_irec_lookup *L;
   int v[PC_IREC_MAX_CANDIDATES];
+  signed char visible[PC_IREC_MAX_CANDIDATES]; /* 1 visible, 0 occluded, -1 not traced */
   pc_connection k[PC_IREC_MAX_CANDIDATES];
 } candidates;
 
+/* Whether the target traces this candidate's shadow ray (--pcbpt-candidate-visibility):
+ * always, or only where the interpolated records disagree about it (some see the light
+ * vertex, some do not). Where they agree, their verdict is usually right. */
+static bool traces_candidate(pc_candidate_visibility mode, double seen) {
+  if (mode == PC_CANDVIS_TRACED) return true;
+  return mode == PC_CANDVIS_UNCERTAIN && seen > 0.0 && seen < 1.0;
+}
+
 /* Target of the resampling: the luminance of the weighted contribution without visibility,
- * times the share of the interpolated records that see the light vertex (their PMF is > 0
- * there), floored at RESAMPLE_UNSEEN: > 0 wherever the contribution is non-zero, so the
- * resampled estimate stays unbiased. Measured on ajar-door at 128x128 (inner relMSE after 64
- * iterations, K = 1, 4 candidates; plain cache 0.237, exact PMF 0.131): the unoccluded
- * contribution alone 0.231 (geometry is not what the cache blurs; visibility is), times an
- * unseen floor of 0.01 / 0.05 / 0.1 / 0.2: 0.239 / 0.188 / 0.181 / 0.185 (too low a floor
- * starves light vertices the records miss, as a uniform mix that is too small does). */
+ * times the candidate's visibility: its own shadow ray's where it is traced (the target is
+ * then the contribution's luminance itself), elsewhere the share of the interpolated records
+ * that see the light vertex (their PMF is > 0 there), floored at RESAMPLE_UNSEEN. Either way
+ * > 0 wherever the contribution is non-zero, so the resampled estimate stays unbiased.
+ * Measured on ajar-door at 128x128 (inner relMSE after 64 iterations, K = 1, 4 candidates;
+ * plain cache 0.237, exact PMF 0.131): the unoccluded contribution alone 0.231 (geometry is
+ * not what the cache blurs; visibility is), times an unseen floor of 0.01 / 0.05 / 0.1 / 0.2:
+ * 0.239 / 0.188 / 0.181 / 0.185 (too low a floor starves light vertices the records miss, as
+ * a uniform mix that is too small does); with every candidate traced, 0.153. */
 #define RESAMPLE_UNSEEN 0.1
 static float candidate_target(void *user, int slot, int v) {
   candidates *cs = user;
   pc_tctx *c = cs->c;
   const pc_path_vertex *lv = &c->pcbpt->lv[v];
   cs->v[slot] = v;
+  cs->visible[slot] = -1;
   if (lv->depth + cs->ev->depth - 1 > c->max_segments) return 0.f;
   pc_connection *k = &cs->k[slot];
   if (!pc_connect_unoccluded(c, &c->counts, lv, cs->ev, c->weighted, k)) return 0.f;
   float h = v3_luminance(k->f) * k->weight;
-  /* The records know visibility, blurred; the candidate's own h knows geometry, sharply. */
-  h *= (float)(RESAMPLE_UNSEEN + (1.0 - RESAMPLE_UNSEEN) * pc_irec_interp_seen(cs->L, v));
+  double seen = pc_irec_interp_seen(cs->L, v);
+  if (traces_candidate(c->set->candidate_visibility, seen)) {
+    cs->visible[slot] = pc_connect_visible(c, lv, cs->ev);
+    if (!cs->visible[slot]) return 0.f;
+  } else {
+    /* The records know visibility, blurred; the candidate's own h knows geometry, sharply. */
+    h *= (float)(RESAMPLE_UNSEEN + (1.0 - RESAMPLE_UNSEEN) * seen);
+  }
   return h > 0.f ? h : FLT_MIN; /* non-zero contribution whose luminance underflowed */
 }
 
-/* K connections resampled from `candidates` draws of p_conn by their unoccluded contribution
+/* K connections resampled from `candidates` draws of p_conn by the target above
  * (pc_irec_resample): the shadow rays go to the connections that matter most at this eye
  * vertex, which the records only know up to their interpolation blur. The MIS weights are the
  * strategies' (they do not involve p_conn), so only this estimate of the sum over the stored
@@ -65,7 +84,8 @@ static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_pat
   for (int k = 0; k < n; k++) {
     const pc_connection *con = &cs.k[slot[k]];
     const pc_path_vertex *lv = &c->pcbpt->lv[cs.v[slot[k]]];
-    if (!pc_connect_visible(c, lv, ev)) continue;
+    int visible = cs.visible[slot[k]];
+    if (visible == 0 || (visible < 0 && !pc_connect_visible(c, lv, ev))) continue;
     float scale = (float)(factor[k] / ((double)n * c->pcbpt->m));
     pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
                          v3_scale(con->f, con->weight * scale));

@@ -51,6 +51,7 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_m = 100;
   s->pcbpt_k = 1;
   s->pcbpt_candidates = 1;
+  s->candidate_visibility = PC_CANDVIS_RECORDS;
   s->cache_fraction = 0.004f;
   s->knn = 6;
   /* Defensive mixing (Popov et al. sect. 6, after Georgiev et al. 2012): p_conn >= u/V for
@@ -90,6 +91,8 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (s->pcbpt_candidates > 1 && s->pcbpt_k > PC_IREC_MAX_CANDIDATES)
     return pc_errf(e, PC_EINVAL, "pcbpt-k %d with resampling (pcbpt-candidates %d) out of range 1..%d", s->pcbpt_k,
                    s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
+  if (s->candidate_visibility < PC_CANDVIS_RECORDS || s->candidate_visibility > PC_CANDVIS_TRACED)
+    return pc_errf(e, PC_EINVAL, "pcbpt-candidate-visibility %d unknown", (int)s->candidate_visibility);
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);

@@ -16,6 +16,10 @@
 typedef enum { PC_MIS_BALANCE, PC_MIS_POWER } pc_mis_heuristic;
 typedef enum { PC_MIS_UPPER_BOUND, PC_MIS_STANDARD } pc_mis_mode;   /* PCBPT correlated MIS */
 typedef enum { PC_PMF_CACHED, PC_PMF_EXACT } pc_pmf_mode;
+/* What the resampling target knows of a candidate connection's visibility: the records'
+ * blurred estimate only, its own shadow ray where the records disagree, or its own shadow ray
+ * always (the selected candidate then reuses it). */
+typedef enum { PC_CANDVIS_RECORDS, PC_CANDVIS_UNCERTAIN, PC_CANDVIS_TRACED } pc_candidate_visibility;
 
 typedef struct pc_render_settings {
   pc_method method;
@@ -29,6 +33,7 @@ typedef struct pc_render_settings {
   int pcbpt_m;             /* stored light paths per iteration (default 100) */
   int pcbpt_k;             /* connections per eye vertex */
   int pcbpt_candidates;    /* candidates drawn from p_conn and resampled per eye vertex (1: none) */
+  pc_candidate_visibility candidate_visibility;
   float cache_fraction;    /* importance-record eye paths as a fraction of W*H (0.004) */
   int knn;                 /* records interpolated per lookup (6) */
   float uniform_mix;       /* weight of the uniform PMF blended into p_conn */

@@ -4,6 +4,7 @@
 #include "irec.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,7 +25,11 @@ const char pc_render_flags_help[] =
     "  --pcbpt-m M           PCBPT stored light paths per iteration (default 100)\n"
     "  --pcbpt-k K           PCBPT connections per eye vertex (default 1)\n"
     "  --pcbpt-candidates N  PCBPT candidates drawn from p_conn per eye vertex, K of them\n"
-    "                        resampled by their unoccluded contribution (1: no resampling)\n"
+    "                        resampled by their contribution (1: no resampling)\n"
+    "  --pcbpt-candidate-visibility V  what the resampling knows of a candidate's visibility:\n"
+    "                        traced (its own shadow ray, reused by the selected one), uncertain\n"
+    "                        (its shadow ray only where the records disagree) or records (the\n"
+    "                        records' estimate only, no extra rays)\n"
     "  --cache-fraction F    PCBPT importance-record paths as a fraction of W*H (0.004)\n"
     "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
     "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.5)\n"
@@ -43,7 +48,7 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
                                       "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
-                                      "--pcbpt-candidates", NULL};
+                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -151,8 +156,25 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
     s->pcbpt_candidates = (int)ll;
     break;
+  case 19:
+    if (strcmp(v, "records") == 0) s->candidate_visibility = PC_CANDVIS_RECORDS;
+    else if (strcmp(v, "uncertain") == 0) s->candidate_visibility = PC_CANDVIS_UNCERTAIN;
+    else if (strcmp(v, "traced") == 0) s->candidate_visibility = PC_CANDVIS_TRACED;
+    else return pc_errf(e, PC_EINVAL, "%s: '%s' is not traced, uncertain or records", flag, v);
+    break;
   }
   return 1;
+}
+
+int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_t size) {
+  static const char *const visibility[] = {"records", "uncertain", "traced"};
+  if (s->method != PC_METHOD_PCBPT && s->method != PC_METHOD_CBDPT) return snprintf(buf, size, "%s", "");
+  return snprintf(buf, size,
+                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
+                  " --knn %d --uniform-mix %g --mis %s --pmf %s",
+                  s->pcbpt_m, s->pcbpt_k, s->pcbpt_candidates, visibility[s->candidate_visibility],
+                  (double)s->cache_fraction, s->knn, (double)s->uniform_mix,
+                  s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound", s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
 }
 
 void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts *o) {

@@ -39,6 +39,10 @@ void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts 
  * scene's camera the final film size. Call between pc_scene_load and pc_scene_build. */
 void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s);
 
+/* The PCBPT and CBDPT settings as the flags that give them ("--pcbpt-m 100 --pcbpt-k 1 ..."),
+ * for the image header; "" for the other methods. Returns the length snprintf would write. */
+int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_t size);
+
 /* Help text for the render flags (one flag per line). */
 extern const char pc_render_flags_help[];
 

@@ -2,7 +2,9 @@
 # Benchmark (not a test): error per iteration and CPU time per iteration of PCBPT settings, for
 # the cached-versus-exact connection PMF (issue 17). Error after a fixed number of iterations
 # is deterministic for a seed, so unlike equal-time studies it is not disturbed by other load;
-# CPU time (user + sys of the whole render, 1 thread) is less disturbed than wall time. Usage:
+# CPU time (user + sys of the whole render, 1 thread) is less disturbed than wall time; the
+# render's own wall time per iteration per phase (paths, light tracing, PMF build, connections)
+# is printed too. Usage:
 #   tests/bench/pmf_ceiling.sh REFS_DIR SCENE ITERATIONS "SEEDS" 'FLAGS' ['FLAGS' ...]
 # e.g. tests/bench/pmf_ceiling.sh refs ajar-door 64 "11 12 13" '' '--pmf exact' '--pcbpt-candidates 4'
 # prints, per FLAGS, one line per seed (inner and beauty relMSE against REFS_DIR/SCENE.exr,
@@ -28,12 +30,13 @@ for flags in "$@"; do
   for seed in $seeds; do
     /usr/bin/time -f "%U %S" -o "$tmp/time" "$build/pcbpt-coord" render "$top/scenes/$scene/scene.xml" \
       --method "${METHOD:-pcbpt}" --spp "$its" --threads 1 --width "${size%x*}" --height "${size#*x}" --seed "$seed" \
-      --quiet --out "$tmp/a.exr" ${extra[@]+"${extra[@]}"} >/dev/null
+      --out "$tmp/a.exr" ${extra[@]+"${extra[@]}"} >"$tmp/log"
+    phases=$(sed -n 's/^per iteration (ms): path generation \([0-9.]*\), light tracing \([0-9.]*\), PMF build \([0-9.]*\), sample+connect \([0-9.]*\).*/paths \1 lt \2 pmf \3 connect \4/p' "$tmp/log")
     cmp=$("$build/pcbpt-coord" compare "$tmp/a.exr" "$ref")
     inner=$(echo "$cmp" | awk '$1 == "inner" { print $3 }')
     beauty=$(echo "$cmp" | awk '$1 == "beauty" { print $3 }')
     ms=$(awk -v n="$its" '{ printf "%.1f", ($1 + $2) * 1000 / n }' "$tmp/time")
-    echo "$scene [$flags] seed $seed: inner $inner beauty $beauty cpu_ms/it $ms"
+    echo "$scene [$flags] seed $seed: inner $inner beauty $beauty cpu_ms/it $ms wall_ms/it: $phases"
     read -r sum_i sum_b sum_t n < <(awk -v a="$sum_i" -v b="$sum_b" -v c="$sum_t" -v k="$n" -v i="$inner" -v e="$beauty" -v t="$ms" \
       'BEGIN { print a + i, b + e, c + t, k + 1 }')
   done

@@ -2,7 +2,8 @@
  * every BDPT strategy on its own estimates the same thing. Standard errors come from the spread
  * of independent iterations (fixed seeds: the test is deterministic):
  *  - per 8x8-pixel block means of the beauty, PT vs BDPT on every scene and LT vs BDPT where
- *    light tracing sees everything the camera sees (no delta surface in view);
+ *    light tracing sees everything the camera sees (no delta surface in view), and PCBPT vs
+ *    BDPT on a few (on ajar-door with resampled connections whose target traces visibility);
  *  - with the debug switch `unweighted`, each strategy (s,t) of path lengths 2 and 3 alone
  *    estimates the whole path-length term, so their image totals agree; and the weighted
  *    strategies of one length add up to the same total;
@@ -124,7 +125,9 @@ static void compare_blocks(const char *what, const multi *a, int la, const multi
   assert_true(nz == 0 || z2 / nz < 2.0);
 }
 
-static void agree(const char *scene, int iters, bool lt, bool pcbpt) {
+/* pcbpt: 0 none, 1 PCBPT with its defaults, 2 PCBPT with resampled connections whose target
+ * traces the candidates' shadow rays (what matters behind the ajar door). */
+static void agree(const char *scene, int iters, bool lt, int pcbpt) {
   int beauty = -1;
   multi *pt = malloc(sizeof *pt), *bd = malloc(sizeof *bd), *l = malloc(sizeof *l);
   /* PT is cheaper and its caustics (s=0 only) heavy-tailed: 4x the iterations keep its
@@ -144,8 +147,12 @@ static void agree(const char *scene, int iters, bool lt, bool pcbpt) {
     set.pcbpt_m = 50;
     set.pcbpt_k = 2;
     set.cache_fraction = 0.02f;
+    if (pcbpt == 2) {
+      set.pcbpt_candidates = 4;
+      set.candidate_visibility = PC_CANDVIS_TRACED;
+    }
     render_multi(scene, set, iters, &beauty, 1, 8, NULL, l);
-    snprintf(what, sizeof what, "%s pcbpt vs bdpt", scene);
+    snprintf(what, sizeof what, "%s pcbpt%s vs bdpt", scene, pcbpt == 2 ? " traced" : "");
     compare_blocks(what, l, 0, bd, 0, 5.0);
   }
   free(pt);
@@ -155,30 +162,30 @@ static void agree(const char *scene, int iters, bool lt, bool pcbpt) {
 
 static void test_agree_cornell(void **state) {
   (void)state;
-  agree("cornell-box", 128, true, false);
+  agree("cornell-box", 128, true, 0);
 }
 static void test_agree_glossy_glass(void **state) {
   (void)state;
-  agree("glossy-glass", 128, false, false); /* the glass sphere in view: light tracing cannot see it */
+  agree("glossy-glass", 128, false, 0); /* the glass sphere in view: light tracing cannot see it */
 }
 static void test_agree_open_room(void **state) {
   (void)state;
-  agree("open-room", 96, true, false);
+  agree("open-room", 96, true, 0);
 }
 static void test_agree_slit_room(void **state) {
   (void)state;
-  agree("slit-room", 96, false, false);
+  agree("slit-room", 96, false, 0);
 }
 static void test_agree_ajar_door(void **state) {
   (void)state;
-  agree("ajar-door", 96, false, false);
+  agree("ajar-door", 96, false, 2);
 }
 
 /* The environment (a sky envmap with a sun) seen directly and lighting Beckmann rough
  * conductor and plastic: PT, LT, BDPT and PCBPT agree. */
 static void test_agree_env_objects(void **state) {
   (void)state;
-  agree("env-objects", 128, true, true);
+  agree("env-objects", 128, true, 1);
 }
 
 /* env-objects with its rough glass made near-specular (alpha 1e-4, as published scenes write
@@ -215,7 +222,7 @@ static void test_agree_near_specular(void **state) {
  * Ward sphere. */
 static void test_agree_thin_glass(void **state) {
   (void)state;
-  agree("thin-glass", 96, false, true);
+  agree("thin-glass", 96, false, 1);
 }
 
 /* The Cornell box dressed in Mitsuba's wrappers: the floor and the tall box (twosided) bump-mapped

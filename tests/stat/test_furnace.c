@@ -1,6 +1,7 @@
 /* test_furnace.c: the white furnace (scenes/furnace: a closed sphere emitting Le inward with
  * diffuse albedo a) has the exact radiance Le * sum_{k<d} a^k everywhere for maxDepth d.
- * Every method (PCBPT with cached and exact PMF, both MIS modes, and resampled connections) must reproduce it for
+ * Every method (PCBPT with cached and exact PMF, both MIS modes, and resampled connections with
+ * each candidate-visibility mode) must reproduce it for
  * d = 1..5 and infinite: the image mean
  * of each independent iteration is one sample, the tolerance is 4 standard errors measured
  * from those samples (and the estimate must be within 1.5% in any case). */
@@ -22,6 +23,7 @@ typedef struct variant {
   pc_mis_mode mis;
   int iterations;
   int candidates; /* PCBPT resampling candidates (1: none) */
+  pc_candidate_visibility vis;
 } variant;
 
 static void check(variant v) {
@@ -44,6 +46,7 @@ static void check(variant v) {
     req.set.pcbpt_k = 2;
     req.set.cache_fraction = 0.05f;
     req.set.pcbpt_candidates = v.candidates;
+    req.set.candidate_visibility = v.vis;
     pc_scene scene = {0};
     assert_int_equal(stat_load("furnace", &req, &scene), 0);
     assert_true(scene.nlights == 1 && scene.lights[0].type == PC_LIGHT_AREA);
@@ -59,9 +62,9 @@ static void check(variant v) {
     assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, v.iterations, -1, RES, &st), 0);
     double mean = stat_mean(&st, 0), se = stat_se(&st, 0);
     double err = fabs(mean - exact);
-    printf("furnace %-5s pmf %-6s mis %-11s cand %d maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
+    printf("furnace %-5s pmf %-6s mis %-11s cand %d vis %d maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
            pc_method_name(v.method), v.pmf == PC_PMF_EXACT ? "exact" : "cached",
-           v.mis == PC_MIS_STANDARD ? "standard" : "upper-bound", v.candidates, depths[k], mean, exact, err, se, 100 * err / exact);
+           v.mis == PC_MIS_STANDARD ? "standard" : "upper-bound", v.candidates, (int)v.vis, depths[k], mean, exact, err, se, 100 * err / exact);
     assert_true(err <= fmax(4 * se, 1e-5 * exact));
     assert_true(err <= 0.015 * exact);
     stat_free(&st);
@@ -71,31 +74,33 @@ static void check(variant v) {
 
 static void test_furnace_pt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
+  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
 }
 
 static void test_furnace_lt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
+  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
 }
 
 static void test_furnace_bdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
+  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
 }
 
 static void test_furnace_cbdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1});
+  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS});
 }
 
 static void test_furnace_pcbpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_TRACED});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 4, PC_CANDVIS_UNCERTAIN});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1, PC_CANDVIS_RECORDS});
 }
 
 int main(void) {

@@ -2,7 +2,8 @@
  * the Cornell box the strategies they share with BDPT (pt, nee, lt)
  * are bit-identical to BDPT's for the same seed (same streams, same upper-bound counts), and
  * the inner layer's block means of BDPT, CBDPT, PCBPT (cached, cached with resampled
- * connections, exact, --mis standard) and
+ * connections whose target knows visibility from the records, from traced shadow rays or
+ * from both, exact, --mis standard) and
  * PCBPT with a uniform PMF and K about V (M = 20 paths, ~60 vertices) agree within 4.5
  * combined standard errors measured from independent iterations. (Uniform PCBPT with K = V
  * equals CBDPT in expectation, not sample by sample: its K draws are i.i.d.) With --mis
@@ -79,6 +80,7 @@ typedef struct variant {
   float u;
   int k;
   int candidates; /* resampling candidates (1: none) */
+  pc_candidate_visibility vis;
   int layer; /* compared layer: PC_LAYER_INNER or -1 (beauty) */
 } variant;
 
@@ -88,14 +90,17 @@ static void test_inner_agrees(void **state) {
   pc_scene scene = {0};
   assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
   const variant vs[] = {
-      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_LAYER_INNER},
-      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_LAYER_INNER},
-      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_LAYER_INNER},
-      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_LAYER_INNER},
-      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_LAYER_INNER},
-      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_LAYER_INNER},
-      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, -1},
-      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, -1},
+      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER},
+      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER},
+      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
+      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1},
+      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1},
+      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1},
   };
   const int nv = sizeof vs / sizeof vs[0];
   stat_blocks ref_inner, ref_beauty;
@@ -109,6 +114,7 @@ static void test_inner_agrees(void **state) {
     set.uniform_mix = vs[i].u;
     set.pcbpt_k = vs[i].k;
     set.pcbpt_candidates = vs[i].candidates;
+    set.candidate_visibility = vs[i].vis;
     stat_blocks st;
     const stat_blocks *ref = vs[i].layer < 0 ? &ref_beauty : &ref_inner;
     assert_int_equal(stat_render_blocks(&scene, &set, 2, 1000, ITER, vs[i].layer, BS, &st), 0);
@@ -132,15 +138,17 @@ static void test_inner_agrees(void **state) {
 static void test_all_scenes_finite(void **state) {
   (void)state;
   static const char *const scenes[] = {"cornell-box", "furnace", "ajar-door", "slit-room", "open-room", "glossy-glass"};
-  /* cbdpt; pcbpt cached, exact, and cached with resampled connections */
-  const pc_method methods[] = {PC_METHOD_CBDPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT};
+  /* cbdpt; pcbpt cached, exact, and cached with resampled connections (records' visibility,
+   * traced) */
+  const pc_method methods[] = {PC_METHOD_CBDPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT, PC_METHOD_PCBPT};
   for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; si++)
-    for (int mi = 0; mi < 4; mi++) {
+    for (int mi = 0; mi < 5; mi++) {
       pc_render_request req = request(methods[mi], 24, -1);
       req.set.height = 20;
       req.set.strategy_layers = 4;
       req.set.pmf_mode = mi == 2 ? PC_PMF_EXACT : PC_PMF_CACHED;
-      req.set.pcbpt_candidates = mi == 3 ? 4 : 1;
+      req.set.pcbpt_candidates = mi >= 3 ? 4 : 1;
+      req.set.candidate_visibility = mi == 4 ? PC_CANDVIS_TRACED : PC_CANDVIS_RECORDS;
       pc_scene scene = {0};
       assert_int_equal(stat_load(scenes[si], &req, &scene), 0);
       pc_film film;
@@ -153,7 +161,7 @@ static void test_all_scenes_finite(void **state) {
       assert_true(pc_film_is_finite(&film));
       /* Records are reported for cached PCBPT only (the exact mode's store holds scratch). */
       if (mi == 0) assert_int_equal(st.pmf_bytes, 0);
-      if (mi == 1 || mi == 3) assert_true(st.pmf_bytes > 0);
+      if (mi == 1 || mi >= 3) assert_true(st.pmf_bytes > 0);
       assert_int_equal(film.dropped_nonfinite, 0);
       pc_renderer_destroy(r);
       pc_film_free(&film);

@@ -453,20 +453,27 @@ static void test_lookup_is_pure(void **state) {
  * stratification number xi the candidates are independent with known component PMFs, and a
  * candidate tuple selects slot j with probability (h_j / p_j) / sum. Checked: the selected
  * vertices (the K selections together) follow it (chi-square), the estimate c(v) * factor averages sum_v c(v) (within 5
- * measured standard errors), and a vertex with h = 0 is never selected. */
+ * measured standard errors), and a vertex with h = 0 is never selected. The same with a target
+ * that knows visibility (--pcbpt-candidate-visibility traced: h = 0 exactly where c = 0, so
+ * an occluded candidate, vertex 4, is never selected and all-occluded candidates give 0). */
 #define RS_V 6
 #define RS_N 3
 static const float rs_h[RS_V] = {0.2f, 1.5f, 0.f, 0.7f, 3.f, 0.05f};
 static const float rs_g[RS_V] = {1.9f, 0.3f, 0.f, 1.f, 0.f, 2.f}; /* c = h * g: zero where occluded */
+static const float rs_h_traced[RS_V] = {0.2f, 1.5f, 0.f, 0.7f, 0.f, 0.05f}; /* rs_h, visibility known */
+
+typedef struct rs_user {
+  const float *h;
+  int seen[RS_N];
+} rs_user;
 
 static float rs_target(void *user, int slot, int v) {
-  int *seen = user;
-  seen[slot] = v;
-  return rs_h[v];
+  rs_user *u = user;
+  u->seen[slot] = v;
+  return u->h[v];
 }
 
-static void test_resample(void **state) {
-  (void)state;
+static void check_resample(const float *h) {
   const float pmf[RS_V] = {0.4f, 0.f, 0.1f, 0.25f, 0.05f, 0.2f};
   float cmf[RS_V];
   double run = 0.0;
@@ -475,7 +482,7 @@ static void test_resample(void **state) {
   /* Candidate j is uniform iff (j + xi) / N < u, i.e. xi < uN - j: the patterns change at
    * those breakpoints. */
   double expect[RS_V] = {0}, sum_c = 0.0;
-  for (int v = 0; v < RS_V; v++) sum_c += rs_h[v] * rs_g[v];
+  for (int v = 0; v < RS_V; v++) sum_c += h[v] * rs_g[v];
   double lo = 0.0;
   for (int piece = 0; piece <= RS_N; piece++) {
     double hi = 1.0;
@@ -492,7 +499,7 @@ static void test_resample(void **state) {
       double prob = hi - lo, w[RS_N], wsum = 0.0;
       for (int j = 0; j < RS_N; j++) {
         prob *= q[j][vs[j]];
-        w[j] = rs_h[vs[j]] / pc_irec_pconn(&L, vs[j]);
+        w[j] = h[vs[j]] / pc_irec_pconn(&L, vs[j]);
         wsum += w[j];
       }
       if (prob == 0.0 || wsum == 0.0) continue;
@@ -505,14 +512,15 @@ static void test_resample(void **state) {
   double count[NSEL][RS_V] = {{0}}, est = 0.0, est2 = 0.0;
   pc_rng rng = pc_rng_make(5, 0, PC_STREAM_MISC, 0);
   for (int i = 0; i < TRIALS; i++) {
-    int seen[RS_N], slot[NSEL];
+    rs_user user = {h, {0}};
+    int slot[NSEL];
     double factor[NSEL], x = 0.0;
-    int n = pc_irec_resample(&L, RS_N, NSEL, (double)pc_rng_f(&rng), &rng, rs_target, seen, slot, factor);
+    int n = pc_irec_resample(&L, RS_N, NSEL, (double)pc_rng_f(&rng), &rng, rs_target, &user, slot, factor);
     for (int k = 0; k < n; k++) {
-      int v = seen[slot[k]];
-      assert_true(rs_h[v] > 0.f);
+      int v = user.seen[slot[k]];
+      assert_true(h[v] > 0.f);
       count[k][v] += 1.0;
-      x += rs_h[v] * rs_g[v] * factor[k] / n;
+      x += h[v] * rs_g[v] * factor[k] / n;
     }
     est += x;
     est2 += x * x;
@@ -527,13 +535,20 @@ static void test_resample(void **state) {
   double mean = est / TRIALS, se = sqrt((est2 / TRIALS - mean * mean) / TRIALS);
   assert_true(fabs(mean - sum_c) < 5.0 * se);
   /* Nothing to select when every candidate's target is 0, or p_conn is undefined. */
-  int seen[RS_N], slot[1];
+  rs_user user = {h, {0}};
+  int slot[1];
   double factor[1];
   const float zero_pmf[RS_V] = {0.f, 0.f, 1.f, 0.f, 0.f, 0.f}, zero_cmf[RS_V] = {0.f, 0.f, 1.f, 1.f, 1.f, 1.f};
   pc_irec_lookup Z = {.V = RS_V, .u = 0.f, .n = 1, .w = {1.0}, .pmf = {zero_pmf}, .cmf = {zero_cmf}};
-  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, seen, slot, factor), 0);
+  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, &user, slot, factor), 0);
   Z.n = 0;
-  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, seen, slot, factor), 0);
+  assert_int_equal(pc_irec_resample(&Z, RS_N, 1, 0.5, &rng, rs_target, &user, slot, factor), 0);
+}
+
+static void test_resample(void **state) {
+  (void)state;
+  check_resample(rs_h);
+  check_resample(rs_h_traced);
 }
 
 int main(void) {
