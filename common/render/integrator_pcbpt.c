@@ -30,11 +30,13 @@ typedef struct candidates {
 } candidates;
 
 /* Whether the target traces this candidate's shadow ray (--pcbpt-candidate-visibility):
- * always, or only where the interpolated records disagree about it (some see the light
- * vertex, some do not). Where they agree, their verdict is usually right. */
+ * always, or unless every interpolated record sees the light vertex. Tracing only where the
+ * records disagree (0 < seen < 1) gained little on ajar-door (inner relMSE 0.180 against
+ * 0.185 without tracing and 0.154 tracing all, N = 4): what the records get wrong is mostly
+ * the light vertices none of them sees, drawn from the uniform part of p_conn. */
 static bool traces_candidate(pc_candidate_visibility mode, double seen) {
   if (mode == PC_CANDVIS_TRACED) return true;
-  return mode == PC_CANDVIS_UNCERTAIN && seen > 0.0 && seen < 1.0;
+  return mode == PC_CANDVIS_UNCERTAIN && seen < 1.0;
 }
 
 /* Target of the resampling: the luminance of the weighted contribution without visibility,

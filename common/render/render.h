@@ -17,8 +17,8 @@ typedef enum { PC_MIS_BALANCE, PC_MIS_POWER } pc_mis_heuristic;
 typedef enum { PC_MIS_UPPER_BOUND, PC_MIS_STANDARD } pc_mis_mode;   /* PCBPT correlated MIS */
 typedef enum { PC_PMF_CACHED, PC_PMF_EXACT } pc_pmf_mode;
 /* What the resampling target knows of a candidate connection's visibility: the records'
- * blurred estimate only, its own shadow ray where the records disagree, or its own shadow ray
- * always (the selected candidate then reuses it). */
+ * blurred estimate only, its own shadow ray unless every nearby record sees the light vertex,
+ * or its own shadow ray always (the selected candidate then reuses a traced ray). */
 typedef enum { PC_CANDVIS_RECORDS, PC_CANDVIS_UNCERTAIN, PC_CANDVIS_TRACED } pc_candidate_visibility;
 
 typedef struct pc_render_settings {
