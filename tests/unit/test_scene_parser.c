@@ -341,7 +341,6 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"bumpmap\"><bsdf type=\"diffuse\"/>\n<texture type=\"bitmap\"><string name=\"filename\" value=\"tex.png\"/></texture></bsdf>", 3, "gamma"},
     {"<bsdf type=\"bumpmap\">\n<texture type=\"checkerboard\"/></bsdf>", 2, "wraps no BSDF"},
     {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
-    {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/>\n<float name=\"x\" value=\"1\"/></bsdf>", 3, "x"},
     {"<bsdf type=\"coating\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 2, "bumpmap inside another BSDF: not modelled"},
     {"<bsdf type=\"coating\"><float name=\"intIOR\" value=\"1.2\"/><float name=\"extIOR\" value=\"1.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "differ"},
     {"<bsdf type=\"coating\"><float name=\"thickness\" value=\"-1\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "thickness"},
@@ -394,7 +393,10 @@ static const bad_case bad_cases[] = {
     {"\n<include filename=\"../outside.xml\"/>", 3, "outside"},
     {"<shape type=\"cube\">\n<include filename=\"inc.xml\"/></shape>", 3, "child of <scene>"},
     {"\n<default name=\"x\" value=\"$x\"/>", 3, "expands to itself"},
-    {"<medium type=\"homogeneous\"/>", 2, "medium 'homogeneous': not modelled by pcbpt"},
+    {"<medium type=\"homogeneous\"/>", 2, "medium 'homogeneous': not modelled by pcbpt (participating media"},
+    {"\n<phase type=\"isotropic\"/>", 3, "phase 'isotropic': not modelled by pcbpt (participating media"},
+    /* a parameter Mitsuba's plugin reads (it merges the OBJ's groups) that pcbpt does not honour */
+    {"<shape type=\"obj\">\n<boolean name=\"collapse\" value=\"true\"/></shape>", 3, "parameter 'collapse'"},
     {"<shape type=\"cube\" color=\"red\"/>", 2, "unknown attribute"},
     {"<shape type=\"cube\">\n<bsdf type=\"diffuse\">", 4, "syntax"},
     {"<shape type=\"cube\">hello</shape>", 2, "text"},
@@ -506,6 +508,11 @@ static const bad_case warn_cases[] = {
     {"<bsdf type=\"diffuse\">\n<rgb name=\"foo\" value=\"0.5\"/></bsdf>" SENSOR, 3, "'foo'"},
     {"<shape type=\"cube\">\n<string name=\"filename\" value=\"quad.obj\"/></shape>" SENSOR, 3, "shape 'cube': parameter 'filename' ignored"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/>\n<boolean name=\"sampleVisible\" value=\"false\"/></bsdf>" SENSOR, 3, "steers"},
+    /* parameters of other renderers' forks (Mitsuba warns and goes on), on every plugin */
+    {"<bsdf type=\"phong\">\n<string name=\"sdmmFilename\" value=\"x.sdmm\"/></bsdf>" SENSOR, 3, "bsdf 'phong': parameter 'sdmmFilename' ignored"},
+    {"<bsdf type=\"coating\"><bsdf type=\"diffuse\"/>\n<float name=\"foo\" value=\"1\"/></bsdf>" SENSOR, 3, "bsdf 'coating': parameter 'foo' ignored"},
+    {"<shape type=\"sphere\">\n<integer name=\"foo\" value=\"1\"/></shape>" SENSOR, 3, "shape 'sphere': parameter 'foo' ignored"},
+    {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/>\n<float name=\"x\" value=\"1\"/></bsdf>" SENSOR, 3, "bsdf 'bumpmap': parameter 'x' ignored"},
 };
 
 static void test_warnings(void **state) {
@@ -569,6 +576,19 @@ static void test_warnings(void **state) {
   assert_int_equal(s.lights[1].type, PC_LIGHT_ENV);
   assert_true(s.lights[1].sampling_weight == 0.5f);
   pc_scene_free(&s);
+  /* an unknown parameter: one line per (plugin, parameter), whatever its values and lines */
+  log.n = 0;
+  rc = load_body_opts(&t,
+                      SENSOR "\n<bsdf type=\"phong\"><string name=\"sdmmFilename\" value=\"a.sdmm\"/></bsdf>\n"
+                      "<bsdf type=\"phong\"><string name=\"sdmmFilename\" value=\"b.sdmm\"/></bsdf>\n"
+                      "<bsdf type=\"diffuse\"><string name=\"sdmmFilename\" value=\"c.sdmm\"/></bsdf>",
+                      &o, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  pc_scene_free(&s);
+  assert_int_equal(log.n, 2);
+  assert_non_null(strstr(log.lines[0], "scene.xml:3: warning: bsdf 'phong': parameter 'sdmmFilename' ignored"));
+  assert_non_null(strstr(log.lines[1], "scene.xml:5: warning: bsdf 'diffuse': parameter 'sdmmFilename' ignored"));
   th_rm_rf(t.root);
   assert_int_equal(failures, 0);
 }
