@@ -294,6 +294,21 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
   return rc ? pc_errf(c->e, rc, "%s:%d: %s: out of memory", c->file, n->line, what) : 0;
 }
 
+/* maxSmoothAngle: normals rebuilt as Mitsuba does (a file's own face-normal flag gives way, as
+ * the serialized plugin's faceNormals parameter overrides it); Mitsuba refuses it together with
+ * faceNormals. */
+static int smooth_angle_normals(pc_sx *c, const pc_param *p, const char *what, bool face_normals, float angle, pc_mesh *m) {
+  if (face_normals)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'maxSmoothAngle' and 'faceNormals' cannot be given together (as in Mitsuba)",
+                   c->file, p->line, what);
+  if (!(fabsf(angle) <= 360.f))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'maxSmoothAngle' must lie in [-360, 360] degrees", c->file, p->line, what);
+  int rc = pc_mesh_rebuild_topology(m, angle);
+  if (!rc) return 0;
+  return pc_errf(c->e, rc, "%s:%d: %s: maxSmoothAngle: %s", c->file, p->line, what,
+                 rc == PC_ENOMEM ? "out of memory" : rc == PC_ELIMIT ? "the split mesh has too many vertices" : "invalid mesh data");
+}
+
 int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
@@ -312,7 +327,7 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   int shape_index = 0;
   mat4 xf = mat4_identity();
   vec3 center = v3s(0);
-  float radius = 1.f;
+  float radius = 1.f, smooth_angle = 0.f;
   pc_param p[8] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"flipNormals", PC_P_BOOL, &flip_normals, 0, 0}};
   int np = 2;
   if (is_file) {
@@ -320,6 +335,7 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
     p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
     if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
     if (type[0] == 's') p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
+    p[np++] = (pc_param){"maxSmoothAngle", PC_P_FLOAT, &smooth_angle, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
@@ -379,7 +395,13 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
     if (type[0] == 'o' && flip_tex && sh.mesh.uv)
       for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
     pc_mesh_transform(&sh.mesh, &xf);
-    if (face_normals || file_face_normals) {
+    const pc_param *smooth = is_file ? &p[np - 1] : NULL;
+    if (smooth && smooth->set) {
+      if ((rc = smooth_angle_normals(c, smooth, what, face_normals, smooth_angle, &sh.mesh))) {
+        pc_mesh_free(&sh.mesh);
+        return rc;
+      }
+    } else if (face_normals || file_face_normals) {
       free(sh.mesh.n);
       sh.mesh.n = NULL;
     } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {

@@ -263,7 +263,6 @@ static const bad_case bad_cases[] = {
     {"<sensor type=\"orthographic\"/>", 2, "orthographic"},
     {"<sensor type=\"perspective\"/>", 2, "fov"},
     {"<sensor type=\"perspective\">\n<float name=\"focalLength\" value=\"50\"/></sensor>", 3, "focalLength"},
-    {"<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>\n<float name=\"maxSmoothAngle\" value=\"30\"/></shape>", 3, "maxSmoothAngle"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<string name=\"fovAxis\" value=\"z\"/></sensor>", 3, "fovAxis"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"180\"/></sensor>", 2, "fov"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<transform name=\"toWorld\"><scale value=\"2\"/></transform></sensor>", 3, "rigid"},
@@ -393,6 +392,8 @@ static const bad_case bad_cases[] = {
     {"\n<include filename=\"../outside.xml\"/>", 3, "outside"},
     {"<shape type=\"cube\">\n<include filename=\"inc.xml\"/></shape>", 3, "child of <scene>"},
     {"\n<default name=\"x\" value=\"$x\"/>", 3, "expands to itself"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/><boolean name=\"faceNormals\" value=\"true\"/>\n<float name=\"maxSmoothAngle\" value=\"30\"/></shape>", 3, "cannot be given together"},
+    {"<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>\n<float name=\"maxSmoothAngle\" value=\"1e9\"/></shape>", 3, "maxSmoothAngle"},
     {"<medium type=\"homogeneous\"/>", 2, "medium 'homogeneous': not modelled by pcbpt (participating media"},
     {"\n<phase type=\"isotropic\"/>", 3, "phase 'isotropic': not modelled by pcbpt (participating media"},
     /* a parameter Mitsuba's plugin reads (it merges the OBJ's groups) that pcbpt does not honour */
@@ -591,6 +592,31 @@ static void test_warnings(void **state) {
   assert_non_null(strstr(log.lines[1], "scene.xml:5: warning: bsdf 'diffuse': parameter 'sdmmFilename' ignored"));
   th_rm_rf(t.root);
   assert_int_equal(failures, 0);
+}
+
+/* maxSmoothAngle reaches the mesh: a cube's 90-degree edges split its 8 corners into 24 vertices */
+static void test_smooth_angle_param(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  assert_int_equal(th_write_str(t.dir, "cube.obj",
+                                "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+                                "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                                "f 3 4 8\nf 3 8 7\nf 2 3 7\nf 2 7 6\nf 1 5 8\nf 1 8 4\n"),
+                   0);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = load_body(&t, SENSOR "<shape type=\"obj\"><string name=\"filename\" value=\"cube.obj\"/>"
+                                "<float name=\"maxSmoothAngle\" value=\"30\"/></shape>"
+                                "<shape type=\"obj\"><string name=\"filename\" value=\"cube.obj\"/></shape>",
+                     &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.shapes[0].mesh.nverts, 24);
+  assert_non_null(s.shapes[0].mesh.n);
+  assert_int_equal(s.shapes[1].mesh.nverts, 8);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
 }
 
 /* -D and <default>, <include> with $names in its path, messages naming the included file, the
@@ -1010,7 +1036,7 @@ int main(void) {
       cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
-      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
+      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param),
       cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances), cmocka_unit_test(test_layers),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
