@@ -149,6 +149,11 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
               strcmp(el, "blackbody") == 0))
       rc = pc_xv_color(c->file, ch, p->out, c->e);
     break;
+  case PC_P_COLOR_SIGNED:
+    if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
+              strcmp(el, "blackbody") == 0))
+      rc = pc_xv_color_signed(c->file, ch, p->out, c->e);
+    break;
   case PC_P_SLOT:
     if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
               strcmp(el, "blackbody") == 0 || strcmp(el, "texture") == 0 || strcmp(el, "ref") == 0))

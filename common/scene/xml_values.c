@@ -83,7 +83,7 @@ static double srgb_to_linear(double c) {
   return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
 
-int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
+static int color(const char *file, const pc_xml_node *n, bool signed_ok, vec3 *out, pc_err *e) {
   double v[3];
   int k = 0, rc;
   const char *val = pc_xml_attr(n, "value");
@@ -154,12 +154,18 @@ int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
     return pc_errf(e, PC_EPARSE, "%s:%d: expected <rgb>, <srgb> or <spectrum>, found <%s>", file, n->line, n->name);
   }
   for (int i = 0; i < 3; i++) {
-    if (v[i] < 0) return pc_errf(e, PC_EINVAL, "%s:%d: <%s> has a negative value", file, n->line, n->name);
+    /* kept only where the numbers are taken as written (not through sRGB or a blackbody) */
+    if (v[i] < 0 && !(signed_ok && (strcmp(n->name, "rgb") == 0 || strcmp(n->name, "spectrum") == 0)))
+      return pc_errf(e, PC_EINVAL, "%s:%d: <%s> has a negative value", file, n->line, n->name);
     if (!(v[i] <= 3.4e38)) return pc_errf(e, PC_ENUMERIC, "%s:%d: <%s> value out of range", file, n->line, n->name);
   }
   *out = v3((float)v[0], (float)v[1], (float)v[2]);
   return 0;
 }
+
+int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) { return color(file, n, false, out, e); }
+
+int pc_xv_color_signed(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) { return color(file, n, true, out, e); }
 
 static int xyz_attrs(const char *file, const pc_xml_node *n, double def, double out[3], pc_err *e) {
   static const char *const names[3] = {"x", "y", "z"};

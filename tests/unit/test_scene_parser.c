@@ -9,6 +9,7 @@
 
 #include <sys/stat.h>
 
+#include "fresnel.h"
 #include "scene.h"
 #include "test_helpers_fs.h"
 
@@ -619,6 +620,40 @@ static void test_smooth_angle_param(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Negative conductor eta and k (exported scenes have them) give the Fresnel term of their
+ * magnitudes, which is what Mitsuba's formula computes with them; elsewhere a negative colour,
+ * and one through sRGB, stays an error. */
+static void test_negative_conductor(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = load_body(&t, SENSOR "<bsdf type=\"roughconductor\" id=\"c\"><float name=\"extEta\" value=\"1\"/>"
+                                "<rgb name=\"eta\" value=\"-0.0485226, 4.14275, 4.66977\"/>"
+                                "<spectrum name=\"k\" value=\"-0.0363742, 0.0937665, 1.30074\"/></bsdf>",
+                     &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  vec3 eta = v3(-0.0485226f, 4.14275f, 4.66977f), k = v3(-0.0363742f, 0.0937665f, 1.30074f);
+  const pc_material *m = &s.materials[0];
+  assert_true(m->eta.x == -eta.x && m->eta.y == eta.y && m->k.x == -k.x && m->k.z == k.z);
+  for (float c = 0.05f; c <= 1.f; c += 0.05f) {
+    vec3 a = pc_fresnel_conductor(c, eta, k), b = pc_fresnel_conductor(c, m->eta, m->k);
+    assert_true(a.x == b.x && a.y == b.y && a.z == b.z);
+  }
+  pc_scene_free(&s);
+  static const char *const refused[] = {
+      SENSOR "<bsdf type=\"conductor\"><srgb name=\"eta\" value=\"-0.1, 1, 1\"/><rgb name=\"k\" value=\"1\"/></bsdf>",
+      SENSOR "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"-0.1, 0.5, 0.5\"/></bsdf>",
+  };
+  for (int i = 0; i < 2; i++) {
+    assert_true(load_body(&t, refused[i], &s, &e) < 0);
+    assert_non_null(strstr(e.msg, "negative value"));
+  }
+  th_rm_rf(t.root);
+}
+
 /* -D and <default>, <include> with $names in its path, messages naming the included file, the
  * root folder option, and the list of files the scene read. */
 static void test_include_and_defines(void **state) {
@@ -1036,7 +1071,7 @@ int main(void) {
       cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
-      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param),
+      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
       cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances), cmocka_unit_test(test_layers),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
