@@ -523,6 +523,38 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, idx, n->line) : 0;
 }
 
+/* Mitsuba's Scene::configure without a sensor: a perspective camera, fov 45 along x, default
+ * film, unrotated (looking along +z), centred on the shapes' bounds in x and y and far enough
+ * in front of their nearest z for the x-y extent to fill the fov; at the origin if there are no
+ * shapes. */
+static int default_sensor(pc_sx *c, const pc_xml_node *root) {
+  int rc = pc_sx_warn(c, root, "the scene has no <sensor>: Mitsuba's default perspective camera (fov 45, looking along +z at the shapes)");
+  if (rc) return rc;
+  vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
+  for (int i = 0; i < c->s->nshapes; i++) {
+    const pc_shape *sh = &c->s->shapes[i];
+    if (sh->kind == PC_SHAPE_SPHERE) {
+      lo = v3_min(lo, v3_sub(sh->center, v3s(sh->radius)));
+      hi = v3_max(hi, v3_add(sh->center, v3s(sh->radius)));
+    } else {
+      for (uint32_t v = 0; v < sh->mesh.nverts; v++) lo = v3_min(lo, sh->mesh.p[v]), hi = v3_max(hi, sh->mesh.p[v]);
+    }
+  }
+  pc_camera *cam = &c->s->camera;
+  cam->width = 768, cam->height = 576; /* hdrfilm's default */
+  cam->fov_deg = 45.f;
+  cam->fov_axis = 'x';
+  cam->to_world = mat4_identity();
+  if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z) {
+    vec3 ext = v3_sub(hi, lo);
+    float dist = fmaxf(ext.x, ext.y) / (2.f * tanf(45.f * 0.5f * (float)M_PI / 180.f));
+    cam->to_world.m[0][3] = 0.5f * (lo.x + hi.x);
+    cam->to_world.m[1][3] = 0.5f * (lo.y + hi.y);
+    cam->to_world.m[2][3] = lo.z - dist;
+  }
+  return 0;
+}
+
 static int scene_root(pc_sx *c, const pc_xml_node *root) {
   static const char *const allowed[] = {"version", NULL};
   if (strcmp(root->name, "scene") != 0)
@@ -574,8 +606,7 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
     if (rc) return rc;
   }
   c->file = c->main_file;
-  if (!have_sensor) return pc_errf(c->e, PC_EINVAL, "%s:%d: the scene has no <sensor>", c->file, root->line);
-  return 0;
+  return have_sensor ? 0 : default_sensor(c, root);
 }
 
 int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scene *out, pc_err *e) {

@@ -270,7 +270,6 @@ static const bad_case bad_cases[] = {
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<film type=\"hdrfilm\"><integer name=\"width\" value=\"0\"/></film></sensor>", 3, "width"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<film type=\"hdrfilm\"><integer name=\"height\" value=\"20000\"/></film></sensor>", 3, "height"},
     {SENSOR "\n" SENSOR, 3, "sensor"},
-    {"<shape type=\"cube\"/>", 1, "no <sensor>"},
     /* transforms */
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<translate x=\"nan\"/></transform></sensor>", 3, "non-finite"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">\n<lookat origin=\"0,0,0\" target=\"0,1,0\" up=\"0,1,0\"/></transform></sensor>", 3, "parallel"},
@@ -651,6 +650,41 @@ static void test_negative_conductor(void **state) {
     assert_true(load_body(&t, refused[i], &s, &e) < 0);
     assert_non_null(strstr(e.msg, "negative value"));
   }
+  th_rm_rf(t.root);
+}
+
+/* No <sensor>: Mitsuba's default camera (fov 45 along x, 768x576, unrotated), centred on the
+ * shapes' bounds in x and y, at their nearest z minus the distance at which their x-y extent
+ * fills the fov; a warning, an error under --strict. */
+static void test_default_sensor(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  warn_log log = {0};
+  pc_scene_load_opts o = {.warn = collect, .warn_ud = &log};
+  pc_scene s;
+  pc_err e = {0};
+  /* the cube spans [1,3] x [-1,1] x [-1,1], the sphere reaches x = 5 and z = 4 */
+  const char *body = "<shape type=\"cube\"><transform name=\"toWorld\"><translate x=\"2\"/></transform></shape>"
+                     "<shape type=\"sphere\"><point name=\"center\" x=\"4\" y=\"0\" z=\"3\"/></shape>";
+  int rc = load_body_opts(&t, body, &o, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(log.n, 1);
+  assert_non_null(strstr(log.lines[0], "scene.xml:1: warning: the scene has no <sensor>"));
+  const pc_camera *cam = &s.camera;
+  assert_int_equal(cam->width, 768);
+  assert_int_equal(cam->height, 576);
+  assert_true(cam->fov_deg == 45.f && cam->fov_axis == 'x');
+  double dist = 4.0 / (2.0 * tan(22.5 * M_PI / 180.0)); /* x extent 1..5 */
+  assert_true(fabs(cam->to_world.m[0][3] - 3.0) < 1e-6 && fabs(cam->to_world.m[1][3]) < 1e-6);
+  assert_true(fabs(cam->to_world.m[2][3] - (-1.0 - dist)) < 1e-5);
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) assert_true(cam->to_world.m[i][j] == (i == j));
+  pc_scene_free(&s);
+  o.strict = true;
+  assert_true(load_body_opts(&t, body, &o, &s, &e) < 0);
+  assert_non_null(strstr(e.msg, "no <sensor>"));
   th_rm_rf(t.root);
 }
 
@@ -1071,7 +1105,7 @@ int main(void) {
       cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
-      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
+      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor), cmocka_unit_test(test_default_sensor),
       cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances), cmocka_unit_test(test_layers),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
