@@ -247,7 +247,8 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
       continue;
     }
     if (!p)
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unknown or unsupported parameter '%s'", c->file, ch->line, what, name);
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: parameter '%s' (read by Mitsuba's plugin): not modelled by pcbpt", c->file, ch->line,
+                     what, name);
     int rc;
     if (p->kind == PC_P_IGNORED) {
       if ((rc = pc_sx_warn(c, ch, "%s: parameter '%s' ignored (%s)", what, name, (const char *)p->out))) return rc;
@@ -255,9 +256,9 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
       p->line = ch->line;
       continue;
     }
-    if (p->set)
-      return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: parameter '%s' given twice (first on line %d)", c->file, ch->line, what,
-                     name, p->line);
+    /* Mitsuba's Properties warn and keep the last value */
+    if (p->set && (rc = pc_sx_warn(c, ch, "%s: parameter '%s' given more than once; the last value counts, as in Mitsuba", what, name)))
+      return rc;
     rc = read_one(c, ch, what, p);
     if (rc) return rc;
     p->set = true;

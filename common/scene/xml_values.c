@@ -113,13 +113,14 @@ static int color(const char *file, const pc_xml_node *n, bool signed_ok, vec3 *o
     if (intent && strcmp(intent, "reflectance") != 0 && strcmp(intent, "illuminant") != 0)
       return pc_errf(e, PC_EPARSE, "%s:%d: <%s> has an invalid intent '%s'", file, n->line, n->name, intent);
     int srgb = n->name[0] == 's';
-    if (srgb && val && val[0] == '#') {
+    /* Mitsuba reads #rrggbb in both, each byte over 255: linear for <rgb>, sRGB for <srgb> */
+    if (val && val[0] == '#') {
       size_t len = strlen(val);
-      if (len != 7) return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+      if (len != 7) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> hex colour must be #rrggbb", file, n->line, n->name);
       for (int i = 0; i < 3; i++) {
         char hex[3] = {val[1 + 2 * i], val[2 + 2 * i], 0};
         if (!isxdigit((unsigned char)hex[0]) || !isxdigit((unsigned char)hex[1]))
-          return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+          return pc_errf(e, PC_EPARSE, "%s:%d: <%s> hex colour must be #rrggbb", file, n->line, n->name);
         v[i] = (double)strtol(hex, NULL, 16) / 255.0;
       }
     } else {

@@ -330,7 +330,6 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><emitter type=\"area\">\n<blackbody name=\"radiance\" temperature=\"hot\"/></emitter></shape>", 3, "temperature"},
     {"<shape type=\"cube\"><emitter type=\"area\">\n<blackbody name=\"radiance\" temperature=\"5\"/></emitter></shape>", 3, "100..1e6"},
     {"<bsdf type=\"diffuse\">\n<float name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "cannot be given"},
-    {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>", 3, "twice"},
     {"<bsdf type=\"diffuse\">\n<rgb value=\"0.5\"/></bsdf>", 3, "name"},
     {"<bsdf type=\"diffuse\">\n<bsdf type=\"diffuse\"/></bsdf>", 3, "unexpected"},
     {"<bsdf type=\"roughconductor\">\n<string name=\"distribution\" value=\"walter\"/></bsdf>", 2, "distribution 'walter' unknown"},
@@ -510,6 +509,7 @@ static const bad_case warn_cases[] = {
     {"<shape type=\"cube\">\n<string name=\"filename\" value=\"quad.obj\"/></shape>" SENSOR, 3, "shape 'cube': parameter 'filename' ignored"},
     {"<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/>\n<boolean name=\"sampleVisible\" value=\"false\"/></bsdf>" SENSOR, 3, "steers"},
     /* parameters of other renderers' forks (Mitsuba warns and goes on), on every plugin */
+    {"<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/>\n<rgb name=\"reflectance\" value=\"0.5\"/></bsdf>" SENSOR, 3, "the last value counts"},
     {"<bsdf type=\"phong\">\n<string name=\"sdmmFilename\" value=\"x.sdmm\"/></bsdf>" SENSOR, 3, "bsdf 'phong': parameter 'sdmmFilename' ignored"},
     {"<bsdf type=\"coating\"><bsdf type=\"diffuse\"/>\n<float name=\"foo\" value=\"1\"/></bsdf>" SENSOR, 3, "bsdf 'coating': parameter 'foo' ignored"},
     {"<shape type=\"sphere\">\n<integer name=\"foo\" value=\"1\"/></shape>" SENSOR, 3, "shape 'sphere': parameter 'foo' ignored"},
@@ -590,6 +590,12 @@ static void test_warnings(void **state) {
   assert_int_equal(log.n, 2);
   assert_non_null(strstr(log.lines[0], "scene.xml:3: warning: bsdf 'phong': parameter 'sdmmFilename' ignored"));
   assert_non_null(strstr(log.lines[1], "scene.xml:5: warning: bsdf 'diffuse': parameter 'sdmmFilename' ignored"));
+  /* a repeated parameter: the last value counts */
+  rc = load_body_opts(&t, SENSOR "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.2\"/><rgb name=\"reflectance\" value=\"0.7\"/></bsdf>",
+                      &o, &s, &e);
+  assert_int_equal(rc, 0);
+  assert_true(s.materials[0].reflectance.value.x == 0.7f);
+  pc_scene_free(&s);
   th_rm_rf(t.root);
   assert_int_equal(failures, 0);
 }
@@ -621,7 +627,7 @@ static void test_smooth_angle_param(void **state) {
 
 /* Negative conductor eta and k (exported scenes have them) give the Fresnel term of their
  * magnitudes, which is what Mitsuba's formula computes with them; elsewhere a negative colour,
- * and one through sRGB, stays an error. */
+ * and one through sRGB, stays an error. Also Mitsuba's #rrggbb colours. */
 static void test_negative_conductor(void **state) {
   (void)state;
   tmp t;
@@ -642,6 +648,18 @@ static void test_negative_conductor(void **state) {
     assert_true(a.x == b.x && a.y == b.y && a.z == b.z);
   }
   pc_scene_free(&s);
+  /* #rrggbb: bytes over 255, taken as linear in <rgb> (Mitsuba's scenehandler), decoded in <srgb> */
+  rc = load_body(&t, SENSOR "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"#ff8000\"/></bsdf>"
+                            "<bsdf type=\"diffuse\"><srgb name=\"reflectance\" value=\"#ff8000\"/></bsdf>",
+                 &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  vec3 lin = s.materials[0].reflectance.value, dec = s.materials[1].reflectance.value;
+  assert_true(lin.x == 1.f && fabsf(lin.y - 128.f / 255.f) < 1e-6f && lin.z == 0.f);
+  assert_true(dec.x == 1.f && fabsf(dec.y - 0.21586f) < 1e-4f && dec.z == 0.f);
+  pc_scene_free(&s);
+  assert_true(load_body(&t, SENSOR "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"#ff80g0\"/></bsdf>", &s, &e) < 0);
+  assert_non_null(strstr(e.msg, "#rrggbb"));
   static const char *const refused[] = {
       SENSOR "<bsdf type=\"conductor\"><srgb name=\"eta\" value=\"-0.1, 1, 1\"/><rgb name=\"k\" value=\"1\"/></bsdf>",
       SENSOR "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"-0.1, 0.5, 0.5\"/></bsdf>",
