@@ -33,6 +33,7 @@ static inline vec3 v3_norm(vec3 a) {
   return l > 0.f ? v3_scale(a, 1.f / l) : a;
 }
 static inline float v3_maxc(vec3 a) { return fmaxf(a.x, fmaxf(a.y, a.z)); }
+static inline vec3 v3_min(vec3 a, vec3 b) { return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
 static inline vec3 v3_max(vec3 a, vec3 b) { return v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 static inline float v3_minc(vec3 a) { return fminf(a.x, fminf(a.y, a.z)); }
 static inline float v3_maxabs(vec3 a) { return fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z))); }

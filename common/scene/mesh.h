@@ -42,6 +42,11 @@ int pc_mesh_disk(pc_mesh *out, int segments); /* unit disk in z=0, normal +z */
 /* Mitsuba's smooth vertex normals (TriMesh::computeNormals: angle-weighted face normals);
  * replaces m->n. */
 int pc_mesh_compute_normals(pc_mesh *m);
+/* Mitsuba's maxSmoothAngle (TriMesh::rebuildTopology): rebuilds the vertices so that smooth
+ * normals (replacing m->n) interpolate only across edges whose faces' normals lie within
+ * max_angle_deg of each other. 0, or a negative code (PC_ENOMEM, PC_ELIMIT, PC_ENUMERIC for
+ * non-finite data, PC_EINVAL for a bad index or angle). */
+int pc_mesh_rebuild_topology(pc_mesh *m, float max_angle_deg);
 /* Fails unless every index is in range, every value is finite, normals have unit length and
  * some triangle has nonzero area. `where` prefixes the message ("scene.xml:12: shape obj"). */
 int pc_mesh_validate(const pc_mesh *m, const char *where, pc_err *e);

@@ -86,8 +86,8 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     const char *material = "Cu", *dist = "beckmann";
     float alpha = 0.1f, au = 0, av = 0, ext = 1.f;
     vec3 eta = v3s(0), k = v3s(0);
-    pc_param p[] = {{"material", PC_P_STRING, &material, 0, 0}, {"eta", PC_P_COLOR, &eta, 0, 0},
-                    {"k", PC_P_COLOR, &k, 0, 0}, {"extEta", PC_P_IOR, &ext, 0, 0},
+    pc_param p[] = {{"material", PC_P_STRING, &material, 0, 0}, {"eta", PC_P_COLOR_SIGNED, &eta, 0, 0},
+                    {"k", PC_P_COLOR_SIGNED, &k, 0, 0}, {"extEta", PC_P_IOR, &ext, 0, 0},
                     {"specularReflectance", PC_P_SLOT, &m->specular, 0, 0},
                     {"distribution", PC_P_STRING, &dist, 0, 0}, {"alpha", PC_P_FLOAT, &alpha, 0, 0},
                     {"alphaU", PC_P_FLOAT, &au, 0, 0}, {"alphaV", PC_P_FLOAT, &av, 0, 0}};
@@ -100,8 +100,10 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if (!p[1].set && !pc_conductor_ior(material, &eta, &k))
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: unknown conductor material '%s'", c->file, n->line, what, material);
     if ((rc = check_ior(c, n, what, "extEta", ext))) return rc;
-    m->eta = v3_scale(eta, 1.f / ext);
-    m->k = v3_scale(k, 1.f / ext);
+    /* Mitsuba's exact conductor Fresnel sees eta and k only as eta^2, k^2 and (eta k)^2, so a
+     * negative value (exported scenes have them) reflects as its magnitude does */
+    m->eta = v3_scale(v3(fabsf(eta.x), fabsf(eta.y), fabsf(eta.z)), 1.f / ext);
+    m->k = v3_scale(v3(fabsf(k.x), fabsf(k.y), fabsf(k.z)), 1.f / ext);
   } else if (strcmp(type, "plastic") == 0 || strcmp(type, "roughplastic") == 0) {
     bool rough = type[0] == 'r';
     const char *dist = "beckmann";

@@ -53,10 +53,12 @@ int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
   const char *type = pc_xml_attr(ch, "type");
   if (strcmp(ch->name, "animation") == 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: animation (motion blur): not modelled by pcbpt (in %s)", c->file, ch->line, what);
+  /* a phase function or a volume only exists to describe a medium */
+  bool media = strcmp(ch->name, "medium") == 0 || strcmp(ch->name, "phase") == 0 || strcmp(ch->name, "volume") == 0;
   for (const char *const *u = unmodelled; type && *u; u++)
     if (strcmp(ch->name, *u) == 0)
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s '%s': not modelled by pcbpt (in %s)", c->file, ch->line, ch->name,
-                     type, what);
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s '%s': not modelled by pcbpt (%sin %s)", c->file, ch->line, ch->name,
+                     type, media ? "participating media, " : "", what);
   if (type)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s type=\"%s\">", c->file, ch->line, what, ch->name, type);
   return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unexpected <%s>", c->file, ch->line, what, ch->name);
@@ -147,6 +149,11 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
               strcmp(el, "blackbody") == 0))
       rc = pc_xv_color(c->file, ch, p->out, c->e);
     break;
+  case PC_P_COLOR_SIGNED:
+    if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
+              strcmp(el, "blackbody") == 0))
+      rc = pc_xv_color_signed(c->file, ch, p->out, c->e);
+    break;
   case PC_P_SLOT:
     if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
               strcmp(el, "blackbody") == 0 || strcmp(el, "texture") == 0 || strcmp(el, "ref") == 0))
@@ -179,7 +186,8 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
 /* Mitsuba 0.6 warns about a parameter its plugin does not read and goes on, so such a
  * parameter cannot change the image; one it reads but pcbpt does not model stays an error. For
  * "what" (e.g. "bsdf 'conductor'"), the reason a parameter pcbpt does not take is ignored, or
- * NULL if it is not known to be harmless. */
+ * NULL if Mitsuba's plugin reads it (the lists below are the props.get* calls of Mitsuba 0.6's
+ * plugins and their base classes). */
 static const char *ignored_as_mitsuba(const char *what, const char *name) {
   static const struct { const char *what, *params; } mitsuba[] = {
       {"bsdf 'diffuse'", " reflectance "},
@@ -192,6 +200,12 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"bsdf 'thindielectric'", " intIOR extIOR specularReflectance specularTransmittance "},
       {"bsdf 'ward'", " variant alpha alphaU alphaV specularReflectance diffuseReflectance "},
       {"bsdf 'twosided'", " "},
+      {"bsdf 'phong'", " exponent specularReflectance diffuseReflectance ensureEnergyConservation "},
+      {"bsdf 'roughdiffuse'", " reflectance diffuseReflectance alpha useFastApprox ensureEnergyConservation "},
+      {"bsdf 'bumpmap'", " "},
+      {"bsdf 'coating'", " intIOR extIOR thickness sigmaA specularReflectance "},
+      {"bsdf 'roughcoating'", " distribution alpha alphaU alphaV intIOR extIOR thickness sigmaA specularReflectance sampleVisible "},
+      {"texture 'scale'", " scale value "},
       {"texture 'bitmap'", " filename wrapMode wrapModeU wrapModeV gamma filterType maxAnisotropy cache uoffset voffset uscale vscale channel "},
       {"texture 'checkerboard'", " color0 color1 uoffset voffset uscale vscale "},
       {"emitter 'area'", " radiance samplingWeight "},
@@ -205,6 +219,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"shape 'cube'", " toWorld flipNormals "},
       {"shape 'disk'", " toWorld flipNormals "},
       {"shape 'sphere'", " center radius toWorld flipNormals "},
+      {"shape 'instance'", " toWorld "},
       {"sensor 'perspective'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip "},
   };
   /* read by Mitsuba, but only to steer its sampling */
@@ -215,7 +230,8 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
   for (size_t i = 0; i < sizeof mitsuba / sizeof mitsuba[0]; i++)
     if (strcmp(mitsuba[i].what, what) == 0)
       return strstr(mitsuba[i].params, key) ? NULL : "Mitsuba's plugin does not read it either";
-  return NULL;
+  /* every plugin pcbpt accepts is listed above; this is for the rest, e.g. a wrapper's */
+  return "neither pcbpt nor, as far as pcbpt knows, Mitsuba's plugin reads it";
 }
 
 int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *params, int np) {
@@ -231,7 +247,8 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
       continue;
     }
     if (!p)
-      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: unknown or unsupported parameter '%s'", c->file, ch->line, what, name);
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: parameter '%s' (read by Mitsuba's plugin): not modelled by pcbpt", c->file, ch->line,
+                     what, name);
     int rc;
     if (p->kind == PC_P_IGNORED) {
       if ((rc = pc_sx_warn(c, ch, "%s: parameter '%s' ignored (%s)", what, name, (const char *)p->out))) return rc;
@@ -239,9 +256,9 @@ int pc_sx_params(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *par
       p->line = ch->line;
       continue;
     }
-    if (p->set)
-      return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: parameter '%s' given twice (first on line %d)", c->file, ch->line, what,
-                     name, p->line);
+    /* Mitsuba's Properties warn and keep the last value */
+    if (p->set && (rc = pc_sx_warn(c, ch, "%s: parameter '%s' given more than once; the last value counts, as in Mitsuba", what, name)))
+      return rc;
     rc = read_one(c, ch, what, p);
     if (rc) return rc;
     p->set = true;

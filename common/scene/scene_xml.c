@@ -294,6 +294,21 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
   return rc ? pc_errf(c->e, rc, "%s:%d: %s: out of memory", c->file, n->line, what) : 0;
 }
 
+/* maxSmoothAngle: normals rebuilt as Mitsuba does (a file's own face-normal flag gives way, as
+ * the serialized plugin's faceNormals parameter overrides it); Mitsuba refuses it together with
+ * faceNormals. */
+static int smooth_angle_normals(pc_sx *c, const pc_param *p, const char *what, bool face_normals, float angle, pc_mesh *m) {
+  if (face_normals)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'maxSmoothAngle' and 'faceNormals' cannot be given together (as in Mitsuba)",
+                   c->file, p->line, what);
+  if (!(fabsf(angle) <= 360.f))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'maxSmoothAngle' must lie in [-360, 360] degrees", c->file, p->line, what);
+  int rc = pc_mesh_rebuild_topology(m, angle);
+  if (!rc) return 0;
+  return pc_errf(c->e, rc, "%s:%d: %s: maxSmoothAngle: %s", c->file, p->line, what,
+                 rc == PC_ENOMEM ? "out of memory" : rc == PC_ELIMIT ? "the split mesh has too many vertices" : "invalid mesh data");
+}
+
 int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
@@ -312,7 +327,7 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   int shape_index = 0;
   mat4 xf = mat4_identity();
   vec3 center = v3s(0);
-  float radius = 1.f;
+  float radius = 1.f, smooth_angle = 0.f;
   pc_param p[8] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"flipNormals", PC_P_BOOL, &flip_normals, 0, 0}};
   int np = 2;
   if (is_file) {
@@ -320,6 +335,7 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
     p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
     if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
     if (type[0] == 's') p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
+    p[np++] = (pc_param){"maxSmoothAngle", PC_P_FLOAT, &smooth_angle, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
@@ -379,7 +395,13 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
     if (type[0] == 'o' && flip_tex && sh.mesh.uv)
       for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
     pc_mesh_transform(&sh.mesh, &xf);
-    if (face_normals || file_face_normals) {
+    const pc_param *smooth = is_file ? &p[np - 1] : NULL;
+    if (smooth && smooth->set) {
+      if ((rc = smooth_angle_normals(c, smooth, what, face_normals, smooth_angle, &sh.mesh))) {
+        pc_mesh_free(&sh.mesh);
+        return rc;
+      }
+    } else if (face_normals || file_face_normals) {
       free(sh.mesh.n);
       sh.mesh.n = NULL;
     } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {
@@ -501,6 +523,38 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, idx, n->line) : 0;
 }
 
+/* Mitsuba's Scene::configure without a sensor: a perspective camera, fov 45 along x, default
+ * film, unrotated (looking along +z), centred on the shapes' bounds in x and y and far enough
+ * in front of their nearest z for the x-y extent to fill the fov; at the origin if there are no
+ * shapes. */
+static int default_sensor(pc_sx *c, const pc_xml_node *root) {
+  int rc = pc_sx_warn(c, root, "the scene has no <sensor>: Mitsuba's default perspective camera (fov 45, looking along +z at the shapes)");
+  if (rc) return rc;
+  vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
+  for (int i = 0; i < c->s->nshapes; i++) {
+    const pc_shape *sh = &c->s->shapes[i];
+    if (sh->kind == PC_SHAPE_SPHERE) {
+      lo = v3_min(lo, v3_sub(sh->center, v3s(sh->radius)));
+      hi = v3_max(hi, v3_add(sh->center, v3s(sh->radius)));
+    } else {
+      for (uint32_t v = 0; v < sh->mesh.nverts; v++) lo = v3_min(lo, sh->mesh.p[v]), hi = v3_max(hi, sh->mesh.p[v]);
+    }
+  }
+  pc_camera *cam = &c->s->camera;
+  cam->width = 768, cam->height = 576; /* hdrfilm's default */
+  cam->fov_deg = 45.f;
+  cam->fov_axis = 'x';
+  cam->to_world = mat4_identity();
+  if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z) {
+    vec3 ext = v3_sub(hi, lo);
+    float dist = fmaxf(ext.x, ext.y) / (2.f * tanf(45.f * 0.5f * (float)M_PI / 180.f));
+    cam->to_world.m[0][3] = 0.5f * (lo.x + hi.x);
+    cam->to_world.m[1][3] = 0.5f * (lo.y + hi.y);
+    cam->to_world.m[2][3] = lo.z - dist;
+  }
+  return 0;
+}
+
 static int scene_root(pc_sx *c, const pc_xml_node *root) {
   static const char *const allowed[] = {"version", NULL};
   if (strcmp(root->name, "scene") != 0)
@@ -552,8 +606,7 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
     if (rc) return rc;
   }
   c->file = c->main_file;
-  if (!have_sensor) return pc_errf(c->e, PC_EINVAL, "%s:%d: the scene has no <sensor>", c->file, root->line);
-  return 0;
+  return have_sensor ? 0 : default_sensor(c, root);
 }
 
 int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scene *out, pc_err *e) {

@@ -60,6 +60,7 @@ typedef enum {
   PC_P_BOOL,      /* <boolean> */
   PC_P_STRING,    /* <string> */
   PC_P_COLOR,     /* <rgb>, <srgb>, <spectrum> -> vec3 */
+  PC_P_COLOR_SIGNED, /* the same, negative <rgb> and <spectrum> values kept (pc_xv_color_signed) */
   PC_P_SLOT,      /* a colour or a texture (nested, or <ref name=.. id=..>) -> pc_tex_slot */
   PC_P_POINT,     /* <point> -> vec3 */
   PC_P_TRANSFORM, /* <transform> -> mat4 */

@@ -83,7 +83,7 @@ static double srgb_to_linear(double c) {
   return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
 
-int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
+static int color(const char *file, const pc_xml_node *n, bool signed_ok, vec3 *out, pc_err *e) {
   double v[3];
   int k = 0, rc;
   const char *val = pc_xml_attr(n, "value");
@@ -113,13 +113,14 @@ int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
     if (intent && strcmp(intent, "reflectance") != 0 && strcmp(intent, "illuminant") != 0)
       return pc_errf(e, PC_EPARSE, "%s:%d: <%s> has an invalid intent '%s'", file, n->line, n->name, intent);
     int srgb = n->name[0] == 's';
-    if (srgb && val && val[0] == '#') {
+    /* Mitsuba reads #rrggbb in both, each byte over 255: linear for <rgb>, sRGB for <srgb> */
+    if (val && val[0] == '#') {
       size_t len = strlen(val);
-      if (len != 7) return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+      if (len != 7) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> hex colour must be #rrggbb", file, n->line, n->name);
       for (int i = 0; i < 3; i++) {
         char hex[3] = {val[1 + 2 * i], val[2 + 2 * i], 0};
         if (!isxdigit((unsigned char)hex[0]) || !isxdigit((unsigned char)hex[1]))
-          return pc_errf(e, PC_EPARSE, "%s:%d: <srgb> hex colour must be #rrggbb", file, n->line);
+          return pc_errf(e, PC_EPARSE, "%s:%d: <%s> hex colour must be #rrggbb", file, n->line, n->name);
         v[i] = (double)strtol(hex, NULL, 16) / 255.0;
       }
     } else {
@@ -154,12 +155,18 @@ int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) {
     return pc_errf(e, PC_EPARSE, "%s:%d: expected <rgb>, <srgb> or <spectrum>, found <%s>", file, n->line, n->name);
   }
   for (int i = 0; i < 3; i++) {
-    if (v[i] < 0) return pc_errf(e, PC_EINVAL, "%s:%d: <%s> has a negative value", file, n->line, n->name);
+    /* kept only where the numbers are taken as written (not through sRGB or a blackbody) */
+    if (v[i] < 0 && !(signed_ok && (strcmp(n->name, "rgb") == 0 || strcmp(n->name, "spectrum") == 0)))
+      return pc_errf(e, PC_EINVAL, "%s:%d: <%s> has a negative value", file, n->line, n->name);
     if (!(v[i] <= 3.4e38)) return pc_errf(e, PC_ENUMERIC, "%s:%d: <%s> value out of range", file, n->line, n->name);
   }
   *out = v3((float)v[0], (float)v[1], (float)v[2]);
   return 0;
 }
+
+int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) { return color(file, n, false, out, e); }
+
+int pc_xv_color_signed(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e) { return color(file, n, true, out, e); }
 
 static int xyz_attrs(const char *file, const pc_xml_node *n, double def, double out[3], pc_err *e) {
   static const char *const names[3] = {"x", "y", "z"};

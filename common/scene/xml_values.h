@@ -15,6 +15,9 @@ int pc_xv_numbers(const char *file, const pc_xml_node *n, const char *attr, cons
 int pc_xv_number(const char *file, const pc_xml_node *n, const char *attr, double *out, pc_err *e);
 /* An <rgb>, <srgb> or <spectrum> element as linear RGB; negative values are errors. */
 int pc_xv_color(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e);
+/* The same, keeping negative values of <rgb> and of <spectrum> given as 1 or 3 numbers (Mitsuba's
+ * RGB mode stores them as written); for parameters whose meaning is defined for them. */
+int pc_xv_color_signed(const char *file, const pc_xml_node *n, vec3 *out, pc_err *e);
 /* A <transform> element: its children applied in order (M = T_new * M). */
 int pc_xv_transform(const char *file, const pc_xml_node *n, mat4 *out, pc_err *e);
 /* Mitsuba's named indices of refraction (case-insensitive); false if unknown. */

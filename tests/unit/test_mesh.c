@@ -402,6 +402,54 @@ static void test_mesh_ops(void **state) {
   assert_int_equal(pc_mesh_disk(&m, 2), PC_EINVAL);
 }
 
+/* maxSmoothAngle on a cube (8 shared corners, 12 triangles): its 90-degree edges are creases at
+ * 30 degrees (each corner splits into one vertex per face, normals the face normals) and are
+ * smoothed over at 100 (8 vertices, normals along the diagonals); a flat quad stays one piece. */
+static const char cube_obj[] = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+                               "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                               "f 3 4 8\nf 3 8 7\nf 2 3 7\nf 2 7 6\nf 1 5 8\nf 1 8 4\n";
+
+static void test_smooth_angle(void **state) {
+  (void)state;
+  pc_mesh m;
+  pc_err e = {0};
+  assert_int_equal(load_obj_text(cube_obj, &m, &e), 0);
+  assert_int_equal(pc_mesh_compute_normals(&m), 0); /* discarded by the rebuild */
+  assert_int_equal(pc_mesh_rebuild_topology(&m, 30.f), 0);
+  assert_int_equal(m.nverts, 24);
+  assert_int_equal(m.ntris, 12);
+  assert_int_equal(pc_mesh_validate(&m, "cube30", &e), 0);
+  for (uint32_t t = 0; t < m.ntris; t++) {
+    const uint32_t *ix = &m.idx[3 * t];
+    vec3 fn = v3_norm(v3_cross(v3_sub(m.p[ix[1]], m.p[ix[0]]), v3_sub(m.p[ix[2]], m.p[ix[0]])));
+    for (int k = 0; k < 3; k++) assert_true(v3_dot(m.n[ix[k]], fn) > 1.f - 1e-6f);
+  }
+  pc_mesh_free(&m);
+  assert_int_equal(load_obj_text(cube_obj, &m, &e), 0);
+  assert_int_equal(pc_mesh_rebuild_topology(&m, 100.f), 0);
+  assert_int_equal(m.nverts, 8);
+  float r = 1.f / sqrtf(3.f);
+  for (uint32_t i = 0; i < m.nverts; i++)
+    assert_true(v3_dot(m.n[i], v3_scale(m.p[i], r)) > 1.f - 1e-6f); /* the corner's own diagonal */
+  pc_mesh_free(&m);
+  /* a flat quad of two triangles: one piece at any angle; a texture seam splits, as in Mitsuba */
+  assert_int_equal(load_obj_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n", &m, &e), 0);
+  assert_int_equal(pc_mesh_rebuild_topology(&m, 1.f), 0);
+  assert_int_equal(m.nverts, 4);
+  pc_mesh_free(&m);
+  assert_int_equal(load_obj_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
+                                 "f 1/1 2/2 3/3\nf 1/5 3/3 4/4\n", &m, &e), 0);
+  assert_int_equal(pc_mesh_rebuild_topology(&m, 30.f), 0);
+  assert_int_equal(m.nverts, 5);
+  pc_mesh_free(&m);
+  /* invalid data is refused, not read */
+  assert_int_equal(load_obj_text(cube_obj, &m, &e), 0);
+  assert_int_equal(pc_mesh_rebuild_topology(&m, NAN), PC_EINVAL);
+  m.p[3].y = INFINITY;
+  assert_int_equal(pc_mesh_rebuild_topology(&m, 30.f), PC_ENUMERIC);
+  pc_mesh_free(&m);
+}
+
 static void test_methods(void **state) {
   (void)state;
   pc_method m;
@@ -459,6 +507,7 @@ int main(void) {
       cmocka_unit_test(test_ply_binary),          cmocka_unit_test(test_ply_header_errors),
       cmocka_unit_test(test_mesh_ops),            cmocka_unit_test(test_methods),
       cmocka_unit_test(test_mutations),           cmocka_unit_test(test_serialized),
+      cmocka_unit_test(test_smooth_angle),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -59,7 +59,7 @@ static bool refusal_allowed(const char *msg) {
 }
 
 #define MAX_TRIES 4000
-#define STANDIN_SHAPES 256
+#define STANDIN_SHAPES 2048 /* the published scenes use shape indices up to 1488 */
 
 static const float cube_p[] = {-1, -1, -1, 1, -1, -1, 1, 1, -1, -1, 1, -1, -1, -1, 1, 1, -1, 1, 1, 1, 1, -1, 1, 1};
 static const uint32_t cube_i[] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
@@ -102,7 +102,7 @@ static int standin(const char *path) {
     return fclose(f);
   }
   if (ends_with(path, ".serialized")) {
-    th_ser_shape sh[STANDIN_SHAPES];
+    static th_ser_shape sh[STANDIN_SHAPES];
     for (int i = 0; i < STANDIN_SHAPES; i++) sh[i] = (th_ser_shape){8, 12, cube_p, NULL, NULL, cube_i, 8, 12, 0};
     return th_write_serialized(path, sh, STANDIN_SHAPES, 4, 0);
   }
