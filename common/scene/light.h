@@ -91,6 +91,7 @@ vec3 pc_spot_falloff(const pc_light *l, vec3 w);
 /* The integral over directions of the falloff without texture (steradians): the spot's flux
  * is intensity times this. */
 double pc_spot_solid_angle(const pc_light *l);
+/* Uniform over the cutoff cone; its pdf per unit solid angle (the same for every w). */
 vec3 pc_spot_sample_dir(const pc_light *l, float u0, float u1, float *pdf);
 float pc_spot_pdf_dir(const pc_light *l, vec3 w);
 

@@ -46,7 +46,10 @@ vec3 pc_spot_sample_dir(const pc_light *l, float u0, float u1, float *pdf) {
   return frame_to_world(&l->spot_frame, v3(st * cosf(phi), st * sinf(phi), 1.f - m));
 }
 
+/* As Mitsuba's pdfDirection, the same for every direction: those outside the cone carry no
+ * emission (the falloff is 0 there, so no connection asks), and a test of the cone here would
+ * disagree with the falloff's, in float, for samples at its very edge. */
 float pc_spot_pdf_dir(const pc_light *l, vec3 w) {
-  if (v3_dot(w, l->spot_frame.n) <= l->cos_cutoff) return 0.f;
+  (void)w;
   return 1.f / (2.f * PC_PI * one_minus_cos_cutoff(l));
 }
