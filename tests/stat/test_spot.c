@@ -42,25 +42,9 @@ static int render(const char *dir, const char *xml, pc_method m, int res, int it
   snprintf(path, sizeof path, "%s/scene.xml", dir);
   if (th_write_str(dir, "scene.xml", xml)) return -1;
   pc_render_request req;
-  pc_render_request_default(&req);
-  req.set.method = m;
-  req.method_set = true;
-  req.set.width = req.set.height = res;
-  req.width_set = req.height_set = true;
-  req.set.seed = 31;
-  req.set.pcbpt_m = 20;
-  req.set.cache_fraction = 0.05f;
   pc_scene scene;
-  pc_err e = {0};
-  int rc = pc_scene_load(path, &scene, &e);
-  if (!rc) {
-    pc_render_request_apply_scene(&req, &scene);
-    rc = pc_scene_build(&scene, &e);
-  }
-  if (rc) {
-    fprintf(stderr, "%s\n", e.msg);
-    return rc;
-  }
+  int rc = stat_load_file(path, NULL, m, res, 31, &req, &scene);
+  if (rc) return rc;
   rc = stat_render_blocks(&scene, &req.set, 2, 0, iterations, -1, block, st);
   if (keep) *keep = scene;
   else pc_scene_free(&scene);
