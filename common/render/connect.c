@@ -103,10 +103,11 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
     pdf_l_fwd = pc_env_disk_pdf(s);
   } else if (lv->kind == PC_VTX_LIGHT) {
     const pc_light *l = &s->lights[lv->light];
-    if (l->type == PC_LIGHT_POINT) {
-      fl = v3s(1.f);
+    if (pc_light_is_delta_pos(l)) {
+      fl = pc_light_profile(l, w); /* a spot's falloff; 1 for a point light */
+      if (v3_is_zero(fl)) return false;
       cos_l = 0.f; /* cannot be hit: no s=0 strategy */
-      pdf_l_fwd = 0.25f * PC_INV_PI;
+      pdf_l_fwd = pc_light_pdf_dir(l, lv->ng, w);
     } else {
       cos_l = v3_dot(lv->ng, w);
       if (!(cos_l > 0.f)) return false; /* back side or edge-on */

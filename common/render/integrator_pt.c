@@ -34,8 +34,8 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
   const pc_light *l = &s->lights[li];
   float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
   vec3 wi, le, f;
-  float pl; /* solid-angle pdf of wi; 0 for a point light (delta) */
-  float geo = 1.f; /* point light: 1 / d^2 */
+  float pl; /* solid-angle pdf of wi; 0 for a point or spot light (delta) */
+  float geo = 1.f; /* point or spot light: 1 / d^2 */
   bool visible;
   if (l->type == PC_LIGHT_ENV) {
     wi = pc_env_sample(l, u1, u2, &pl);
@@ -54,7 +54,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
     if (!(d2 > 0.f)) return v3s(0.f);
     wi = v3_scale(to, 1.f / sqrtf(d2));
     le = pc_light_le(l, lp.n, v3_neg(wi));
-    if (l->type == PC_LIGHT_POINT) {
+    if (pc_light_is_delta_pos(l)) {
       pl = 0.f;
       geo = 1.f / (d2 * pick);
     } else {

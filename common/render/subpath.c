@@ -142,12 +142,13 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   }
   pc_light_point lp;
   pc_light_sample_point(s, l, u1, u2, u3, &lp);
-  float pa = pick * lp.pdf_area; /* area pdf (point lights: the choice, the delta cancels) */
+  float pa = pick * lp.pdf_area; /* area pdf (point and spot lights: the choice, the delta cancels) */
   out->kind = PC_VTX_LIGHT;
   out->p = lp.p;
   out->ng = lp.n;
   out->wo = v3s(0.f);
-  out->beta = v3_scale(l->type == PC_LIGHT_POINT ? l->intensity : l->radiance, 1.f / pa);
+  /* A spot's profile enters with the emitted direction (pc_light_subpath, pc_connect). */
+  out->beta = v3_scale(pc_light_is_delta_pos(l) ? l->intensity : l->radiance, 1.f / pa);
   out->mis_near = pc_mis(n, 1.f / pa);
 }
 
@@ -180,9 +181,12 @@ int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path
   u1 = pc_rng_f(&rng);
   vec3 dir = pc_light_sample_dir(l, v[0].ng, u0, u1, &pdf_dir);
   if (!(pdf_dir > 0.f) || c->max_segments < 2) return 1;
-  /* A point light cannot be hit by an eye path: cos_out 0 removes the s=0 strategy. */
-  float cos_out = l->type == PC_LIGHT_POINT ? 0.f : v3_dot(v[0].ng, dir);
-  vec3 beta = v3_scale(v[0].beta, (l->type == PC_LIGHT_POINT ? 1.f : cos_out) / pdf_dir);
+  /* A point or spot light cannot be hit by an eye path: cos_out 0 removes the s=0 strategy. */
+  bool at_point = pc_light_is_delta_pos(l);
+  float cos_out = at_point ? 0.f : v3_dot(v[0].ng, dir);
+  vec3 beta = at_point ? v3_scale(v3_mul(v[0].beta, pc_light_profile(l, dir)), 1.f / pdf_dir)
+                       : v3_scale(v[0].beta, cos_out / pdf_dir);
+  if (v3_is_zero(beta)) return 1;
   return walk(c, n, &rng, v, 1, c->max_segments, true, dir, beta, pdf_dir, 0.f, false, cos_out, NULL, NULL);
 }
 

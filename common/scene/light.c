@@ -1,6 +1,8 @@
-/* light.c: sampling and evaluation of area and point emitters, and the power-proportional
+/* light.c: sampling and evaluation of area, point and spot emitters, and the power-proportional
  * choice among them (see light.h). */
 #include "light.h"
+
+#include <stdlib.h>
 
 #include "scene.h"
 
@@ -29,7 +31,7 @@ float pc_light_choose_pdf(const pc_scene *s, int light) {
 
 void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float u1, float u2,
                            pc_light_point *out) {
-  if (l->type == PC_LIGHT_POINT) {
+  if (pc_light_is_delta_pos(l)) {
     out->p = l->position;
     out->n = v3s(0.f);
     out->pdf_area = 1.f;
@@ -62,12 +64,17 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
   out->prim = t;
 }
 
+vec3 pc_light_profile(const pc_light *l, vec3 w) {
+  return l->type == PC_LIGHT_SPOT ? pc_spot_falloff(l, w) : v3s(1.f);
+}
+
 vec3 pc_light_le(const pc_light *l, vec3 n, vec3 w) {
-  if (l->type == PC_LIGHT_POINT) return l->intensity;
+  if (pc_light_is_delta_pos(l)) return v3_mul(l->intensity, pc_light_profile(l, w));
   return v3_dot(n, w) > 0.f ? l->radiance : v3s(0.f);
 }
 
 vec3 pc_light_sample_dir(const pc_light *l, vec3 n, float u0, float u1, float *pdf_dir) {
+  if (l->type == PC_LIGHT_SPOT) return pc_spot_sample_dir(l, u0, u1, pdf_dir);
   if (l->type == PC_LIGHT_POINT) {
     float z = 1.f - 2.f * u0;
     float r = sqrtf(fmaxf(0.f, 1.f - z * z));
@@ -84,6 +91,14 @@ vec3 pc_light_sample_dir(const pc_light *l, vec3 n, float u0, float u1, float *p
 
 float pc_light_pdf_dir(const pc_light *l, vec3 n, vec3 w) {
   if (l->type == PC_LIGHT_POINT) return 0.25f * PC_INV_PI;
+  if (l->type == PC_LIGHT_SPOT) return pc_spot_pdf_dir(l, w);
   float c = v3_dot(n, w);
   return c > 0.f ? c * PC_INV_PI : 0.f;
+}
+
+void pc_light_free(pc_light *l) {
+  pc_env_free(l);
+  if (l->spot_tex) pc_texture_free(l->spot_tex);
+  free(l->spot_tex);
+  l->spot_tex = NULL;
 }

@@ -1,4 +1,4 @@
-/* light.h: emitters (area lights on any shape, point lights, and the environment: Mitsuba's
+/* light.h: emitters (area lights on any shape, point and spot lights, and the environment: Mitsuba's
  * `constant` and lat-long `envmap`, at most one per scene), the power-proportional choice
  * among them, and every sampling routine and pdf the integrators need: sampling a point toward
  * a receiver (next-event estimation), sampling an emitted ray (light sub-paths), and the pdfs
@@ -11,15 +11,18 @@
 
 #include "error.h"
 #include "image.h"
+#include "texture.h"
 #include "vecmath.h"
 
-typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT, PC_LIGHT_ENV } pc_light_type;
+/* Point and spot lights sit at one point (a delta in position): they cannot be hit and their
+ * sampled point has area pdf 1; a spot only adds a directional profile (light_spot.c). */
+typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT, PC_LIGHT_SPOT, PC_LIGHT_ENV } pc_light_type;
 
 typedef struct pc_light {
   pc_light_type type;
   vec3 radiance;      /* area: emitted radiance */
-  vec3 intensity;     /* point: radiant intensity */
-  vec3 position;      /* point */
+  vec3 intensity;     /* point, spot: radiant intensity (a spot's, at the centre of its beam) */
+  vec3 position;      /* point, spot */
   int shape;          /* area: index of its shape in the scene */
   /* area: triangles or an exact sphere, sampled uniformly by area */
   float area;
@@ -35,14 +38,24 @@ typedef struct pc_light {
   float *env_col_cdf; /* h*(w+1): columns by luminance within each row */
   float env_norm;     /* pdf of pixel (x,y) per unit solid angle times sin(theta): lum * row weight * norm */
   float sampling_weight; /* Mitsuba's samplingWeight: scales power in the choice (0 is read as 1) */
+  /* spot (Mitsuba's `spot`): shines along spot_frame.n (its local +z); full intensity within
+   * beam_width of the axis, falling linearly in angle to 0 at cutoff (radians, beam <= cutoff);
+   * an optional texture (owned) projected over the cone's tangent plane. */
+  frame spot_frame;
+  float cutoff, beam_width, cos_cutoff, cos_beam;
+  pc_texture *spot_tex;
 } pc_light;
+
+static inline bool pc_light_is_delta_pos(const pc_light *l) {
+  return l->type == PC_LIGHT_POINT || l->type == PC_LIGHT_SPOT;
+}
 
 struct pc_scene;
 
-/* A sampled point on a light. For a point light, n is zero and pdf_area is 1 (delta). */
+/* A sampled point on a light. For a point or spot light, n is zero and pdf_area is 1 (delta). */
 typedef struct pc_light_point {
   vec3 p, n;
-  float pdf_area;  /* area pdf of the point given this light (1 for point lights) */
+  float pdf_area;  /* area pdf of the point given this light (1 for point and spot lights) */
   int shape, prim; /* the shape and primitive the point lies on (area lights) */
 } pc_light_point;
 
@@ -58,12 +71,29 @@ float pc_light_choose_pdf(const struct pc_scene *s, int light);
 void pc_light_sample_point(const struct pc_scene *s, const pc_light *l, float u0, float u1, float u2,
                            pc_light_point *out);
 /* Radiance emitted from a point of an area light with normal n toward direction w (zero on the
- * back side); point lights: intensity. */
+ * back side); point and spot lights: intensity times pc_light_profile. */
 vec3 pc_light_le(const pc_light *l, vec3 n, vec3 w);
+/* The directional factor of a point or spot light toward unit direction w: 1 for a point light,
+ * the spot's falloff (times its texture) for a spot. */
+vec3 pc_light_profile(const pc_light *l, vec3 w);
 /* Emission direction for a light sub-path: cosine-weighted about n (area), uniform sphere
- * (point). pdf is solid-angle. */
+ * (point), uniform over the cutoff cone (spot, as Mitsuba). pdf is solid-angle. */
 vec3 pc_light_sample_dir(const pc_light *l, vec3 n, float u0, float u1, float *pdf_dir);
 float pc_light_pdf_dir(const pc_light *l, vec3 n, vec3 w);
+/* Releases what a light owns (environment tables and image, a spot's texture). */
+void pc_light_free(pc_light *l);
+
+/* Spots (light_spot.c). Sets the derived cosines; cutoff and beam width in degrees. */
+void pc_spot_set_angles(pc_light *l, float cutoff_deg, float beam_deg);
+/* The falloff toward unit world direction w: 1 within the beam, (cutoff - angle) / (cutoff -
+ * beam) between beam and cutoff, 0 at and beyond the cutoff; times the texture if any. */
+vec3 pc_spot_falloff(const pc_light *l, vec3 w);
+/* The integral over directions of the falloff without texture (steradians): the spot's flux
+ * is intensity times this. */
+double pc_spot_solid_angle(const pc_light *l);
+/* Uniform over the cutoff cone; its pdf per unit solid angle (the same for every w). */
+vec3 pc_spot_sample_dir(const pc_light *l, float u0, float u1, float *pdf);
+float pc_spot_pdf_dir(const pc_light *l, vec3 w);
 
 /* The environment (light_env.c). Directions d point from the scene toward the environment;
  * light arriving from d travels along -d. Builds the sampling tables (envmap) and the power

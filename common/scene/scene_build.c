@@ -32,6 +32,10 @@ static int build_lights(pc_scene *s, pc_err *e) {
     pc_light *l = &s->lights[i];
     if (l->type == PC_LIGHT_POINT) {
       l->power = 4.f * PC_PI * v3_luminance(l->intensity);
+    } else if (l->type == PC_LIGHT_SPOT) {
+      /* A texture enters the choice by its mean (the choice needs no exact flux). */
+      vec3 t = l->spot_tex ? pc_texture_average(l->spot_tex) : v3s(1.f);
+      l->power = (float)(pc_spot_solid_angle(l) * v3_luminance(v3_mul(l->intensity, t)));
     } else if (l->type == PC_LIGHT_ENV) {
       /* Mitsuba allows one environment emitter per scene; the loader refuses a second. */
       if (s->env_light >= 0) return pc_errf(e, PC_EINVAL, "%s: more than one environment emitter", s->path);
@@ -169,7 +173,7 @@ void pc_scene_free(pc_scene *s) {
   for (int i = 0; i < s->ntextures; i++) pc_texture_free(&s->textures[i]);
   for (int i = 0; i < s->nlights; i++) {
     free(s->lights[i].tri_cdf);
-    pc_env_free(&s->lights[i]);
+    pc_light_free(&s->lights[i]);
   }
   free(s->shapes);
   free(s->materials);

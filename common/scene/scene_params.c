@@ -210,6 +210,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"texture 'checkerboard'", " color0 color1 uoffset voffset uscale vscale "},
       {"emitter 'area'", " radiance samplingWeight "},
       {"emitter 'point'", " toWorld position intensity samplingWeight "},
+      {"emitter 'spot'", " toWorld intensity cutoffAngle beamWidth texture samplingWeight "},
       {"emitter 'constant'", " radiance samplingWeight "},
       {"emitter 'envmap'", " filename scale toWorld gamma cache samplingWeight "},
       {"shape 'obj'", " filename faceNormals maxSmoothAngle flipNormals flipTexCoords toWorld collapse "},

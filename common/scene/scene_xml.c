@@ -482,6 +482,51 @@ static int env_emitter(pc_sx *c, const pc_xml_node *n, const char *type, pc_ligh
   return 0;
 }
 
+/* Mitsuba's `spot`: at the origin of its toWorld frame, shining along the frame's +z. */
+static int spot_emitter(pc_sx *c, const pc_xml_node *n, pc_light *l) {
+  static const char what[] = "emitter 'spot'";
+  mat4 xf = mat4_identity();
+  float cutoff = 20.f, beam = 0.f;
+  pc_tex_slot tex = {.tex = -1};
+  l->type = PC_LIGHT_SPOT;
+  l->intensity = v3s(1.f);
+  l->shape = -1;
+  pc_param p[] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0},       {"intensity", PC_P_COLOR, &l->intensity, 0, 0},
+                  {"cutoffAngle", PC_P_FLOAT, &cutoff, 0, 0},   {"beamWidth", PC_P_FLOAT, &beam, 0, 0},
+                  {"texture", PC_P_SLOT, &tex, 0, 0},           {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+  int rc;
+  if ((rc = only_params(c, n, what, p, 6)) || (rc = sampling_weight(c, &p[5], l->sampling_weight, what)) ||
+      (rc = positive_color(c, &p[1], l->intensity, what)))
+    return rc;
+  if (!(cutoff > 0.f && cutoff <= 180.f))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cutoffAngle must lie in (0, 180] degrees", c->file, p[2].line ? p[2].line : n->line,
+                   what);
+  if (!p[3].set) beam = cutoff * 0.75f; /* Mitsuba's default */
+  if (!(beam >= 0.f && beam <= cutoff))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: beamWidth must lie in [0, cutoffAngle]", c->file, p[3].line ? p[3].line : n->line,
+                   what);
+  if (!is_rigid(&xf))
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt", c->file,
+                   p[0].line, what);
+  l->position = mat4_point(&xf, v3s(0));
+  if (!v3_is_finite(l->position))
+    return pc_errf(c->e, PC_ENUMERIC, "%s:%d: %s: position is not finite", c->file, p[0].line, what);
+  l->spot_frame = (frame){v3_norm(mat4_vector(&xf, v3(1, 0, 0))), v3_norm(mat4_vector(&xf, v3(0, 1, 0))),
+                          v3_norm(mat4_vector(&xf, v3(0, 0, 1)))};
+  pc_spot_set_angles(l, cutoff, beam);
+  /* Mitsuba projects only a non-constant texture; a plain colour has no effect there either. */
+  if (tex.tex >= 0 && (c->s->textures[tex.tex].type != PC_TEX_CONST || c->s->textures[tex.tex].scaled)) {
+    if (!(l->spot_tex = calloc(1, sizeof *l->spot_tex)) || !pc_texture_copy(&c->s->textures[tex.tex], l->spot_tex)) {
+      free(l->spot_tex);
+      l->spot_tex = NULL;
+      return pc_errf(c->e, PC_ENOMEM, "%s:%d: %s: out of memory for its texture", c->file, p[4].line, what);
+    }
+  } else if (p[4].set && (rc = pc_sx_warn(c, n, "%s: a constant 'texture' is ignored (as by Mitsuba)", what))) {
+    return rc;
+  }
+  return 0;
+}
+
 static int emitter(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
@@ -493,7 +538,12 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
   l.sampling_weight = 1.f;
   if (strcmp(type, "constant") == 0 || strcmp(type, "envmap") == 0) {
     if ((rc = env_emitter(c, n, type, &l))) {
-      pc_env_free(&l);
+      pc_light_free(&l);
+      return rc;
+    }
+  } else if (strcmp(type, "spot") == 0) {
+    if ((rc = spot_emitter(c, n, &l))) {
+      pc_light_free(&l);
       return rc;
     }
   } else if (strcmp(type, "point") == 0) {
@@ -516,7 +566,7 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
   }
   int idx;
   if ((rc = add_light(c, n, &l, &idx))) {
-    pc_env_free(&l);
+    pc_light_free(&l);
     return rc;
   }
   const char *id = pc_xml_attr(n, "id");

@@ -43,6 +43,29 @@ static inline int stat_load(const char *name, pc_render_request *req, pc_scene *
   return rc;
 }
 
+/* Loads and builds the scene file `path` (with opts, NULL for none) for a request of `method`
+ * at res x res with the given seed and the PCBPT settings the statistical tests share (M = 20
+ * light paths, 5% cache pixels); returns 0 on success (prints the error otherwise). */
+static inline int stat_load_file(const char *path, const pc_scene_load_opts *opts, pc_method method, int res, uint64_t seed,
+                                 pc_render_request *req, pc_scene *scene) {
+  pc_render_request_default(req);
+  req->set.method = method;
+  req->method_set = true;
+  req->set.width = req->set.height = res;
+  req->width_set = req->height_set = true;
+  req->set.seed = seed;
+  req->set.pcbpt_m = 20;
+  req->set.cache_fraction = 0.05f;
+  pc_err e = {0};
+  int rc = pc_scene_load_with(path, opts, scene, &e);
+  if (!rc) {
+    pc_render_request_apply_scene(req, scene);
+    rc = pc_scene_build(scene, &e);
+  }
+  if (rc) fprintf(stderr, "%s\n", e.msg);
+  return rc;
+}
+
 /* Renders iterations [first, first+n) one at a time and accumulates block means of `layer`
  * (-1 = beauty) into st (block size bs x bs pixels). */
 static inline int stat_render_blocks(const pc_scene *scene, const pc_render_settings *set, int threads, uint64_t first,

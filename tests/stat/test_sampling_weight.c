@@ -25,24 +25,9 @@ static int render(const char *path, const char *wa, const char *wp, const char *
   if (pc_scene_defines_add(&d, wa, &e) || pc_scene_defines_add(&d, wp, &e) || pc_scene_defines_add(&d, we, &e)) return -1;
   pc_scene_load_opts o = {.defines = &d};
   pc_render_request req;
-  pc_render_request_default(&req);
-  req.set.method = m;
-  req.method_set = true;
-  req.set.width = req.set.height = RES;
-  req.width_set = req.height_set = true;
-  req.set.seed = 77;
-  req.set.pcbpt_m = 20;
-  req.set.cache_fraction = 0.05f;
   pc_scene scene;
-  int rc = pc_scene_load_with(path, &o, &scene, &e);
-  if (!rc) {
-    pc_render_request_apply_scene(&req, &scene);
-    rc = pc_scene_build(&scene, &e);
-  }
-  if (rc) {
-    fprintf(stderr, "%s\n", e.msg);
-    return rc;
-  }
+  int rc = stat_load_file(path, &o, m, RES, 77, &req, &scene);
+  if (rc) return rc;
   rc = stat_render_blocks(&scene, &req.set, 2, 0, ITERATIONS, -1, BLOCK, st);
   pc_scene_free(&scene);
   return rc;

@@ -1,7 +1,7 @@
 /* test_bdpt_mis.c: the recursive MIS weights of the bidirectional integrators against a brute
  * force. Random light and eye sub-paths are traced in scenes/glossy-glass (its glass sphere made
  * a perfect mirror, so delta vertices occur and their lobe probabilities are known; optionally a
- * point light added); every connection the integrator makes (s=0 hits, s=1, t=1 and inner) gives
+ * point or spot light added, the spot's light paths leaving over its cutoff cone); every connection the integrator makes (s=0 hits, s=1, t=1 and inner) gives
  * a complete path whose strategies' pdfs are then evaluated explicitly, vertex by vertex, in
  * double precision, with Russian roulette, sample counts and the heuristic. The weight the
  * integrator computed must equal the explicit one, and re-deriving the weight of every other
@@ -29,10 +29,14 @@ typedef struct fixture {
   pc_render_settings set;
   pc_tctx c;
   pc_path_vertex *lbuf, *ebuf;
-  int checked, strategies_checked, env_checked;
+  int checked, strategies_checked, env_checked, at_point_checked; /* at_point: from a point or spot light */
 } fixture;
 
-static void load_scene(fixture *f, const char *name, bool point_light) {
+/* The light added to a scene: none, a point light, or a spot (60 degree cutoff, 40 degree beam). */
+typedef enum { NO_EXTRA, EXTRA_POINT, EXTRA_SPOT } extra_light;
+#define SPOT_CUTOFF_DEG 60.0
+
+static void load_scene(fixture *f, const char *name, extra_light extra) {
   const char *src = getenv("PCBPT_SOURCE_DIR");
   char path[4096];
   snprintf(path, sizeof path, "%s/scenes/%s/scene.xml", src ? src : ".", name);
@@ -51,19 +55,21 @@ static void load_scene(fixture *f, const char *name, bool point_light) {
     mirrors++;
   }
   assert_int_equal(mirrors, strcmp(name, "glossy-glass") == 0);
-  if (point_light) {
+  if (extra != NO_EXTRA) {
     pc_scene *s = &f->scene;
     s->lights = realloc(s->lights, sizeof(pc_light) * (size_t)(s->nlights + 1));
     pc_light *l = &s->lights[s->nlights++];
     memset(l, 0, sizeof *l);
-    l->type = PC_LIGHT_POINT;
+    l->type = extra == EXTRA_SPOT ? PC_LIGHT_SPOT : PC_LIGHT_POINT;
     l->intensity = v3s(30.f);
+    l->spot_frame = frame_from_normal(v3_norm(v3(-0.3f, -1.f, -0.2f)));
+    pc_spot_set_angles(l, (float)SPOT_CUTOFF_DEG, 40.f);
     l->shape = -1;
     l->position = v3_add(s->scene_center, v3(0.3f, 0.2f, 0.1f));
   }
   f->scene.camera.width = f->scene.camera.height = 32;
   assert_int_equal(pc_scene_build(&f->scene, &e), PC_OK);
-  if (point_light) { /* scene_center is known only after the build: move the light inside */
+  if (extra != NO_EXTRA) { /* scene_center is known only after the build: move the light inside */
     f->scene.lights[f->scene.nlights - 1].position = v3_add(f->scene.scene_center, v3(0.3f, 0.2f, 0.1f));
   }
   pc_render_settings_default(&f->set);
@@ -81,7 +87,7 @@ static void load_scene(fixture *f, const char *name, bool point_light) {
   f->c.weighted = true;
 }
 
-static void load(fixture *f, bool point_light) { load_scene(f, "glossy-glass", point_light); }
+static void load(fixture *f, extra_light extra) { load_scene(f, "glossy-glass", extra); }
 
 static void unload(fixture *f) {
   free(f->lbuf);
@@ -127,7 +133,7 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
   int k = fp->k;
   const pc_scene *s = &f->scene;
   const pc_light *l = &s->lights[fp->x[0].light];
-  bool point = l->type == PC_LIGHT_POINT, env = env_at(fp, 0);
+  bool point = pc_light_is_delta_pos(l), env = env_at(fp, 0);
   double fwd[2 * MAXV], bwd[2 * MAXV];
   /* Area pdfs from the light side (solid angle at the environment, whose light paths start
    * on the disk). */
@@ -142,6 +148,10 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
     if (i - 1 == 0) {
       vec3 d = unit(fp->x[0].p, fp->x[1].p);
       pd = point ? 0.25 / M_PI : fmax(0.0, v3_dot(fp->x[0].ng, d)) / M_PI;
+      if (l->type == PC_LIGHT_SPOT) { /* uniform over the cutoff cone, in double */
+        double cc = cos(SPOT_CUTOFF_DEG * M_PI / 180.0);
+        pd = v3_dot(d, l->spot_frame.n) > cc ? 1.0 / (2.0 * M_PI * (1.0 - cc)) : 0.0;
+      }
     } else {
       pd = dir_pdf(f, fp, i - 1, i - 2, i);
     }
@@ -203,8 +213,9 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
       pf = 1.f / (f->scene.camera.image_area * cz * cz * cz);
       cos_out = 0.f;
     } else {
-      bool point = f->scene.lights[a->light].type == PC_LIGHT_POINT;
-      pf = point ? 0.25f * PC_INV_PI : v3_dot(a->ng, dir) * PC_INV_PI;
+      const pc_light *l = &f->scene.lights[a->light];
+      bool point = pc_light_is_delta_pos(l);
+      pf = point ? pc_light_pdf_dir(l, a->ng, dir) : v3_dot(a->ng, dir) * PC_INV_PI;
       cos_out = point ? 0.f : v3_dot(a->ng, dir);
     }
     pr = 0.f;
@@ -228,7 +239,7 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
     lv[0].depth = 1;
     lv[0].beta = v3s(1.f);
     lv[0].delta = false;
-    lv[0].mis_near = pc_mis(n, 1.f / (pick * (l->type == PC_LIGHT_POINT ? 1.f : 1.f / l->area)));
+    lv[0].mis_near = pc_mis(n, 1.f / (pick * (pc_light_is_delta_pos(l) ? 1.f : 1.f / l->area)));
     if (env_at(fp, 0)) lv[0].mis_near = pc_mis(n, 1.f / (pick * pc_env_pdf(l, v3_neg(fp->x[0].wo))));
     lv[0].mis_far = 0.f;
     for (int i = 1; i < j; i++) extend(f, n, fp, lv, i, true, i - 2, i - 1, i);
@@ -238,7 +249,7 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
   ev[0].mis_near = ev[0].mis_far = 0.f;
   for (int u = 1; u <= k - j; u++) extend(f, n, fp, ev, u, false, u >= 2 ? k - u + 2 : -1, k - u + 1, k - u);
   if (j == 0) {
-    if (f->scene.lights[fp->x[0].light].type == PC_LIGHT_POINT) return 0.0;
+    if (pc_light_is_delta_pos(&f->scene.lights[fp->x[0].light])) return 0.0;
     return pc_mis_weight_hit(&f->scene, n, &ev[k], fp->x[0].light);
   }
   pc_connection con;
@@ -271,6 +282,7 @@ static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int 
   assert_true(fabs(sum - 1.0) < 1e-4);
   f->checked++;
   f->env_checked += env_at(fp, 0);
+  f->at_point_checked += !env_at(fp, 0) && pc_light_is_delta_pos(&f->scene.lights[fp->x[0].light]);
 }
 
 typedef struct hits {
@@ -293,7 +305,7 @@ static void place_env(fpath *fp) {
 
 static void run(fixture *f, pc_mis_counts n, int npaths) {
   f->c.counts = n;
-  f->checked = f->strategies_checked = f->env_checked = 0;
+  f->checked = f->strategies_checked = f->env_checked = f->at_point_checked = 0;
   for (int it = 0; it < npaths; it++) {
     f->c.iteration = (uint64_t)it;
     int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
@@ -325,15 +337,15 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
         check_path(f, &n, &fp, s, con.weight);
       }
   }
-  printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment), %d strategy weights checked\n",
-         n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->strategies_checked);
+  printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment, %d from a point or spot), %d strategy weights checked\n",
+         n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->at_point_checked, f->strategies_checked);
   assert_true(f->checked > 50);
 }
 
 static void test_mis_balance(void **state) {
   (void)state;
   fixture f;
-  load(&f, false);
+  load(&f, NO_EXTRA);
   run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
   unload(&f);
 }
@@ -341,7 +353,7 @@ static void test_mis_balance(void **state) {
 static void test_mis_power_nl(void **state) {
   (void)state;
   fixture f;
-  load(&f, false);
+  load(&f, NO_EXTRA);
   run(&f, (pc_mis_counts){0.37f, 1.f, true}, 400);
   unload(&f);
 }
@@ -349,8 +361,20 @@ static void test_mis_power_nl(void **state) {
 static void test_mis_point_light_counts(void **state) {
   (void)state;
   fixture f;
-  load(&f, true);
+  load(&f, EXTRA_POINT);
   run(&f, (pc_mis_counts){2.5f, 1.f, false}, 400);
+  run(&f, (pc_mis_counts){0.25f, 3.f, true}, 400);
+  unload(&f);
+}
+
+/* A spot: its light paths leave uniformly over the cutoff cone, and connections to it see its
+ * falloff and that cone pdf. */
+static void test_mis_spot_light(void **state) {
+  (void)state;
+  fixture f;
+  load(&f, EXTRA_SPOT);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  assert_true(f.at_point_checked > 300);
   run(&f, (pc_mis_counts){0.25f, 3.f, true}, 400);
   unload(&f);
 }
@@ -358,13 +382,13 @@ static void test_mis_point_light_counts(void **state) {
 static void test_mis_environment(void **state) {
   (void)state;
   fixture f;
-  load_scene(&f, "env-objects", false);
+  load_scene(&f, "env-objects", NO_EXTRA);
   run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
   assert_true(f.env_checked > 400);
   run(&f, (pc_mis_counts){0.37f, 2.f, true}, 400);
   unload(&f);
   /* With a point light too: the choice between the environment and it by power. */
-  load_scene(&f, "env-objects", true);
+  load_scene(&f, "env-objects", EXTRA_POINT);
   run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
   assert_true(f.env_checked > 100 && f.env_checked < f.checked);
   unload(&f);
@@ -376,6 +400,7 @@ int main(void) {
       cmocka_unit_test(test_mis_balance),
       cmocka_unit_test(test_mis_power_nl),
       cmocka_unit_test(test_mis_point_light_counts),
+      cmocka_unit_test(test_mis_spot_light),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -305,7 +305,7 @@ static const bad_case bad_cases[] = {
     {"<emitter type=\"constant\">\n<rgb name=\"radiance\" value=\"0\"/></emitter>", 3, "radiance"},
     {"<emitter type=\"constant\"/>\n<emitter type=\"constant\"/>", 3, "only one environment"},
     {"<emitter type=\"directional\"/>", 2, "directional"},
-    {"<emitter type=\"spot\"/>", 2, "spot"},
+    {"<emitter type=\"sunsky\"/>", 2, "sunsky"},
     {"<emitter type=\"sunsky\"/>", 2, "emitter 'sunsky': not modelled by pcbpt"},
     {"<emitter type=\"constant\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
     {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"samplingWeight\" value=\"2e6\"/></emitter>", 3, "samplingWeight"},
