@@ -1157,6 +1157,76 @@ static void test_coating_matched(void **state) {
   }
 }
 
+/* Two materials agree on every value, pdf and (if same_samples) sample, for random pairs. */
+static void assert_same_bsdf(const pc_material *a, const pc_material *b, const pc_shading *sh, bool same_samples, uint64_t seed) {
+  pc_rng r = pc_rng_make(11, seed, PC_STREAM_MISC, 11);
+  for (int i = 0; i < 2000; i++) {
+    vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+    for (int mode = 0; mode < 2; mode++)
+      assert_true(close3(pc_bsdf_eval(a, NULL, sh, wo, wi, (pc_transport)mode), pc_bsdf_eval(b, NULL, sh, wo, wi, (pc_transport)mode),
+                         1e-5f, 1e-7f));
+    assert_true(close_rel(pc_bsdf_pdf(a, NULL, sh, wo, wi), pc_bsdf_pdf(b, NULL, sh, wo, wi), 1e-5f, 1e-7f));
+    if (!same_samples) continue;
+    float u0 = pc_rng_f(&r), u1 = pc_rng_f(&r), u2 = pc_rng_f(&r);
+    pc_bsdf_sampled x, y;
+    bool okx = pc_bsdf_sample(a, NULL, sh, wo, u0, u1, u2, PC_RADIANCE, &x);
+    bool oky = pc_bsdf_sample(b, NULL, sh, wo, u0, u1, u2, PC_RADIANCE, &y);
+    assert_int_equal(okx, oky);
+    if (okx)
+      assert_true(close3(x.wi, y.wi, 0, 1e-6f) && close3(x.f, y.f, 1e-5f, 1e-7f) && close_rel(x.pdf, y.pdf, 1e-5f, 0) &&
+                  close_rel(x.pdf_rev, y.pdf_rev, 1e-5f, 0) && x.is_delta == y.is_delta);
+  }
+}
+
+/* The combining BSDFs reduce to what they combine: a mask of opacity 1 is its nested material,
+ * a blend of weight 0 or 1 one side, a mixture of copies of one material that material (values
+ * and pdfs; its samples draw the copy first). difftrans transmits exactly its transmittance
+ * (every sample weighs T), and a mask's pass-through weighs (1 - a) / (1 - luminance(a)). */
+static void test_mix_reductions(void **state) {
+  (void)state;
+  pc_material nested[] = {mk_diffuse(), mk_conductor("Cu", 0.3f), mk_plastic(0.1f, true), mk_plastic(0, false),
+                          mk_difftrans(v3(0.2f, 0.4f, 0.6f)), mk_dielectric(1.5f, 1.f)};
+  nested[0].twosided = true;
+  pc_shading sh = mk_shading(0.2f);
+  size_t nn = sizeof nested / sizeof nested[0];
+  for (size_t k = 0; k < nn; k++) {
+    pc_material other = mk_conductor("Au", 0.1f);
+    pc_material mask = mk_mask(&nested[k], v3s(1.f));
+    assert_same_bsdf(&mask, &nested[k], &sh, true, k);
+    pc_material b0 = mk_blend(&nested[k], &other, 0.f), b1 = mk_blend(&other, &nested[k], 1.f);
+    assert_same_bsdf(&b0, &nested[k], &sh, true, 10 + k);
+    assert_same_bsdf(&b1, &nested[k], &sh, true, 20 + k);
+    const pc_material *two[] = {&nested[k], &nested[k]};
+    pc_material mix = mk_mixture(2, two, (const float[]){0.5f, 0.5f});
+    assert_same_bsdf(&mix, &nested[k], &sh, false, 30 + k);
+    /* weights summing above 1 are rescaled: 2 x (0.7 + 0.7) / 1.4 */
+    pc_material mix2 = mk_mixture(2, two, (const float[]){0.7f, 0.7f});
+    assert_same_bsdf(&mix2, &nested[k], &sh, false, 40 + k);
+  }
+  pc_rng r = pc_rng_make(12, 0, PC_STREAM_MISC, 12);
+  vec3 t = v3(0.2f, 0.4f, 0.6f);
+  pc_material dt = mk_difftrans(t);
+  for (int i = 0; i < 1000; i++) {
+    vec3 wo = uniform_sphere(&r);
+    pc_bsdf_sampled b;
+    if (!pc_bsdf_sample(&dt, NULL, &sh, wo, pc_rng_f(&r), pc_rng_f(&r), pc_rng_f(&r), PC_RADIANCE, &b)) continue;
+    assert_true(v3_dot(wo, sh.sh.n) * v3_dot(b.wi, sh.sh.n) < 0.f);
+    assert_true(close3(v3_scale(b.f, v3_absdot(b.wi, sh.sh.n) / b.pdf), t, 1e-4f, 0));
+  }
+  pc_material d = mk_diffuse();
+  vec3 a = v3(0.9f, 0.4f, 0.2f);
+  pc_material mask = mk_mask(&d, a);
+  float p = v3_luminance(a);
+  vec3 wo = dir_local(&sh, 0.6f, 1.f);
+  pc_bsdf_sampled b;
+  assert_true(pc_bsdf_sample(&mask, NULL, &sh, wo, 0.5f * (1 + p), 0.3f, 0.3f, PC_IMPORTANCE, &b));
+  assert_true(b.is_delta && close3(b.wi, v3_neg(wo), 0, 1e-6f) && close_rel(b.pdf, 1 - p, 1e-6f, 0) && b.pdf_rev == b.pdf);
+  assert_true(close3(v3_scale(b.f, v3_absdot(b.wi, sh.sh.n) / b.pdf), v3_scale(v3_sub(v3s(1), a), 1 / (1 - p)), 1e-5f, 0));
+  vec3 wi = dir_local(&sh, 0.3f, 2.f);
+  assert_true(close3(pc_bsdf_eval(&mask, NULL, &sh, wo, wi, PC_RADIANCE), v3_scale(v3_mul(a, d.reflectance.value), PC_INV_PI), 1e-5f, 0));
+  assert_true(close_rel(pc_bsdf_pdf(&mask, NULL, &sh, wo, wi), p * 0.3f * PC_INV_PI, 1e-4f, 0));
+}
+
 /* Known values of the smooth coating: the mirror lobe's weight is specularReflectance x Fresnel
  * over its probability, and the covered diffuse part is (1 - F(wo))(1 - F(wi)) A rho / (pi eta^2)
  * with A = exp(-sigmaA d (1/cos wo' + 1/cos wi')) through the refracted cosines. */
@@ -1202,6 +1272,7 @@ int main(void) {
       cmocka_unit_test(test_bumpmap_frame),
       cmocka_unit_test(test_coating_matched),
       cmocka_unit_test(test_coating_values),
+      cmocka_unit_test(test_mix_reductions),
       cmocka_unit_test(test_finite),
       cmocka_unit_test(test_reciprocity_adjoint),
       cmocka_unit_test(test_delta_adjoint),
