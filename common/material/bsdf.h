@@ -9,7 +9,7 @@
  *  - For PC_IMPORTANCE transport, f already includes Veach's shading-normal correction
  *    |wo.ns||wi.ng| / (|wo.ng||wi.ns|) and omits the radiance eta^2 scaling of refraction,
  *    so light sub-path throughputs are correct as is.
- *  - Delta lobes (smooth conductor/dielectric/thindielectric/plastic's specular) are never returned by eval
+ *  - Delta lobes (smooth conductor/dielectric/thindielectric/plastic's specular, a mask's pass-through) are never returned by eval
  *    or pdf; only sample produces them, flagged is_delta, with pdf the discrete lobe
  *    probability (the Dirac factors cancel in f*cos/pdf and in MIS ratios).
  *  - A material that is not twosided reflects only on the front side of the shading frame
