@@ -1,5 +1,5 @@
 /* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
- * (BDPT, PCBPT with K in 1, 2, 4, 8, then the best K with another uniform mix) for a slice of
+ * (BDPT, PCBPT with K in 1, 2, 4, then 8 if doubling K still paid) for a slice of
  * the budget, measures its efficiency 1 / (estimated relMSE x render time) from the spread of
  * its own iterations (docs/variance.md), and picks the most efficient. The pilot renders with
  * a seed of its own and none of its iterations reach the image: the image is rendered afterwards
@@ -37,7 +37,7 @@
 
 typedef struct pc_pilot_candidate {
   pc_render_settings set;
-  char label[40];       /* "bdpt", "pcbpt K=2", "pcbpt K=2 mix=0.2" */
+  char label[40];       /* "bdpt", "pcbpt K=2" */
   uint64_t iterations;  /* rendered by the pilot */
   double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), worker-
                            seconds of the candidate's job on a farm */
@@ -83,8 +83,7 @@ double pc_pilot_remaining(double seconds, double pilot_seconds);
 uint64_t pc_pilot_seed(uint64_t job_seed);
 
 /* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1, 2, 4 side by side (the other settings
- * of base); stage 2 renders K = 8 if doubling K from 2 to 4 still paid, and, if PCBPT leads,
- * its best K with the other uniform mix (0.2, or 0.5 when base's is below 0.35). Picks the most
+ * of base); stage 2 renders K = 8 if doubling K from 2 to 4 still paid. Picks the most
  * efficient (BDPT on a tie within PC_PILOT_BDPT_MARGIN). Free with pc_pilot_free, also after
  * a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,

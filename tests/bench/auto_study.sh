@@ -6,7 +6,9 @@
 # of each configuration, auto's ratio to the best fixed one and to BDPT, and what auto chose.
 # Errors are against REFS_DIR/ref-<scene>.exr when that exists at the study's size, else each
 # image's own estimate (docs/variance.md).
-#   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN from the environment)
+#   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN, THREADS and
+#   OUT from the environment; with OUT of an earlier run, scenes already studied there are kept, so
+#   two runs over halves of the scenes with THREADS=1 can share a 2-core machine and one table)
 set -eu
 BIN=${BIN:-build/pcbpt-coord}
 T=${1:?seconds}; S=${2:?size}; RUNS=${3:?runs}
@@ -16,7 +18,9 @@ OUT=${OUT:-$(mktemp -d)}
 mkdir -p "$OUT"
 far=""
 [ -n "${HOST:-}" ] && far="--host $HOST --token-file $TOKEN"
+[ -n "${THREADS:-}" ] && far="$far --threads $THREADS"
 for sc in $SCENES; do
+  [ -f "$OUT/$sc/$sc/study.json" ] && continue
   ref=""
   [ -n "${REFS_DIR:-}" ] && [ -f "$REFS_DIR/ref-$sc.exr" ] && ref="--reference $REFS_DIR/ref-$sc.exr"
   # shellcheck disable=SC2086

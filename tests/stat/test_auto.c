@@ -1,14 +1,15 @@
 /* test_auto.c: --method auto's pilot (common/render/pilot.h).
  * - choose: the most efficient candidate wins; BDPT keeps ties within PC_PILOT_BDPT_MARGIN; a
  *   pilot that could not tell falls back to BDPT; a noiseless candidate wins (deterministic).
- * - grid: K = 4 and 8 are tried only while doubling K paid, the uniform-mix stage only when
- *   PCBPT leads, every candidate renders with the pilot seed, never the job's (a scripted
+ * - grid: K = 8 is tried only while doubling K paid, the job's uniform mix is kept, every
+ *   candidate renders with the pilot seed, never the job's (a scripted
  *   renderer of known efficiencies: deterministic).
  * - pooled: candidates are measured against the pooled mean of their images, not each against
  *   its own few iterations' mean.
- * - picks the clear winner on a real scene: ajar-door, where PCBPT's relMSE per iteration is
- *   4-6x lower than BDPT's (48x48, 4 iterations each: 1.88 against 0.29-0.70) while its cost
- *   per iteration is within 1.5x, so no timing noise of a shared machine can reverse it.
+ * - picks the clear winner on a real scene: ajar-door, where PCBPT K=1's relMSE per iteration is
+ *   about half BDPT's (48x48, 64 iterations, seeds 5-7, each image's own estimate: 0.427, 0.457,
+ *   0.433 against 0.197, 0.220, 0.243) at a lower cost per iteration, so no timing noise of a
+ *   shared machine can reverse it; the pilot's 4 iterations (seed 5) measure 2.9x.
  * - unbiased: on the white furnace (exact 2 everywhere) the mean over seeds of auto's image
  *   (pilot, then the winner with the job's seed) is 2 within 4 standard errors of the seeds'
  *   spread: the choice never leaks into the image. */
@@ -83,7 +84,7 @@ static void test_pooled(void **state) {
 
 /* Scripted efficiencies: relMSE per iteration by K (cost 1 s per candidate). */
 typedef struct script {
-  double bdpt, k[9], mix;
+  double bdpt, k[9];
   int calls;
   uint64_t job_seed;
   bool seed_leaked;
@@ -99,7 +100,7 @@ static int scripted(void *user, pc_pilot_candidate *c, int n, double seconds, ui
     if (set->seed == s->job_seed) s->seed_leaked = true;
     c[i].iterations = min_it;
     c[i].seconds = 1.0;
-    c[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : set->uniform_mix != 0.5f ? s->mix : s->k[set->pcbpt_k];
+    c[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : s->k[set->pcbpt_k];
   }
   return 0;
 }
@@ -120,23 +121,23 @@ static void run_script(script *s, pc_pilot *p) {
 static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
-  /* stage 1 is BDPT and K = 1, 2, 4 side by side. K=4 worse than K=2: no K=8; PCBPT leads:
-   * the mix of its best K runs and wins */
-  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.4, [8] = 0.01}, .mix = 0.1};
+  /* stage 1 is BDPT and K = 1, 2, 4 side by side. K=4 worse than K=2: no K=8 (however good it
+   * would have been), no other stage; the job's uniform mix is kept */
+  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.4, [8] = 0.01}};
   run_script(&a, &p);
-  assert_int_equal(a.calls, 5);
+  assert_int_equal(a.calls, 4);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
-  assert_true(p.c[p.best].set.uniform_mix == 0.2f);
+  assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
   /* efficiency rises to K=4 and drops at 8: K=4 */
-  script b = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.3, [4] = 0.2, [8] = 0.25}, .mix = 0.9};
+  script b = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.3, [4] = 0.2, [8] = 0.25}};
   run_script(&b, &p);
-  assert_int_equal(b.calls, 6);
+  assert_int_equal(b.calls, 5);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   pc_pilot_free(&p);
-  /* BDPT best: no mix stage */
-  script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}, .mix = 0.01};
+  /* BDPT best */
+  script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}};
   run_script(&c, &p);
   assert_int_equal(c.calls, 4);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
@@ -165,8 +166,8 @@ static void test_picks_winner(void **state) {
   pc_pilot_report(&p, line, sizeof line);
   printf("ajar-door 48x48: %s\n", line);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
-  /* the relMSE figures alone (time-free) say the same by a wide margin */
-  assert_true(p.c[0].relmse > 4 * p.c[p.best].relmse);
+  /* the relMSE figures alone (time-free) say the same */
+  assert_true(p.c[0].relmse > 1.5 * p.c[p.best].relmse);
   pc_pilot_free(&p);
   pc_scene_free(&scene);
 }
