@@ -19,7 +19,13 @@ bool pc_bsdf_is_delta(const pc_material *m) {
   case PC_MAT_THINDIELECTRIC: return true;
   case PC_MAT_BUMPMAP:
   case PC_MAT_COATING: /* its own lobe is a delta; all are if the wrapped ones are */
+  case PC_MAT_MASK: /* the pass-through is a delta too */
     return m->inner && pc_bsdf_is_delta(m->inner);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE:
+    for (int k = 0; k < m->nmix; k++)
+      if (!m->mix[k] || !pc_bsdf_is_delta(m->mix[k])) return false;
+    return m->nmix > 0;
   default: return false;
   }
 }
@@ -59,6 +65,10 @@ static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHDIFFUSE: return pc_roughdiffuse_eval(c, wo, wi);
   case PC_MAT_COATING: return pc_coating_eval(c, wo, wi);
   case PC_MAT_ROUGHCOATING: return pc_roughcoating_eval(c, wo, wi);
+  case PC_MAT_DIFFTRANS: return pc_difftrans_eval(c, wo, wi);
+  case PC_MAT_MASK: return pc_mask_eval(c, wo, wi);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE: return pc_mix_eval(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC:
@@ -79,6 +89,10 @@ static float lobe_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_pdf(c, wo, wi); /* Mitsuba samples it as Lambertian */
   case PC_MAT_COATING: return pc_coating_pdf(c, wo, wi);
   case PC_MAT_ROUGHCOATING: return pc_roughcoating_pdf(c, wo, wi);
+  case PC_MAT_DIFFTRANS: return pc_difftrans_pdf(c, wo, wi);
+  case PC_MAT_MASK: return pc_mask_pdf(c, wo, wi);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE: return pc_mix_pdf(c, wo, wi);
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC:
@@ -102,6 +116,10 @@ static bool lobe_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float
   case PC_MAT_ROUGHDIFFUSE: return pc_diffuse_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_COATING: return pc_coating_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_ROUGHCOATING: return pc_roughcoating_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_DIFFTRANS: return pc_difftrans_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_MASK: return pc_mask_sample(c, wo, u0, u1, u2, s);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE: return pc_mix_sample(c, wo, u0, u1, u2, s);
   case PC_MAT_BUMPMAP: break;
   }
   return false;
@@ -308,6 +326,23 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
   case PC_MAT_COATING:
   case PC_MAT_ROUGHCOATING: /* Fresnel splits between the layer's reflection and what it covers */
     q = fmaxf(v3_maxc(pc_slot_eval(&m->specular, texs, uv)), m->inner ? pc_bsdf_continuation(m->inner, texs, sh) : 0.f);
+    break;
+  case PC_MAT_DIFFTRANS: q = v3_maxc(pc_slot_eval(&m->transmittance, texs, uv)); break;
+  case PC_MAT_MASK: { /* a q_inner + (1 - a), per channel */
+    vec3 a = pc_slot_eval(&m->weight, texs, uv);
+    float qi = m->inner ? pc_bsdf_continuation(m->inner, texs, sh) : 0.f;
+    q = v3_maxc(v3_add(v3_scale(a, qi), v3_sub(v3s(1.f), a)));
+    break;
+  }
+  case PC_MAT_BLEND: {
+    vec3 t = pc_slot_eval(&m->weight, texs, uv);
+    float b = fminf(fmaxf((t.x + t.y + t.z) / 3.f, 0.f), 1.f);
+    q = (1.f - b) * (m->mix[0] ? pc_bsdf_continuation(m->mix[0], texs, sh) : 0.f) +
+        b * (m->mix[1] ? pc_bsdf_continuation(m->mix[1], texs, sh) : 0.f);
+    break;
+  }
+  case PC_MAT_MIXTURE:
+    for (int k = 0; k < m->nmix; k++) q += m->mix_w[k] * (m->mix[k] ? pc_bsdf_continuation(m->mix[k], texs, sh) : 0.f);
     break;
   case PC_MAT_BUMPMAP: break;
   }

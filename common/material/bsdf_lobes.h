@@ -112,4 +112,15 @@ bool pc_phong_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2
 
 vec3 pc_roughdiffuse_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 
+vec3 pc_difftrans_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_difftrans_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_difftrans_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+vec3 pc_mask_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_mask_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_mask_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+/* blendbsdf and mixturebsdf */
+vec3 pc_mix_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+float pc_mix_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+bool pc_mix_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
+
 #endif

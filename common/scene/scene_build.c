@@ -141,7 +141,18 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
      * that is the texture's average, as Mitsuba's getAverage(). */
     pc_tex_slot *slots[] = {&m->reflectance, &m->specular, &m->transmittance, &m->sigma_a};
     /* A wrapper's material comes before it (so wrapping cannot loop), and is prepared first. */
-    bool wraps = m->type == PC_MAT_BUMPMAP || m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING;
+    bool wraps = m->type == PC_MAT_BUMPMAP || m->type == PC_MAT_COATING || m->type == PC_MAT_ROUGHCOATING ||
+                 m->type == PC_MAT_MASK;
+    bool mixes = m->type == PC_MAT_BLEND || m->type == PC_MAT_MIXTURE;
+    if (mixes && !(m->nmix >= 1 && m->nmix <= PC_MIX_MAX))
+      return pc_errf(e, PC_EINVAL, "%s: material %d mixes %d materials", s->path, i, m->nmix);
+    for (int k = 0; k < (mixes ? m->nmix : 0); k++) {
+      if (!(m->mix_nested[k] >= 0 && m->mix_nested[k] < i))
+        return pc_errf(e, PC_EINVAL, "%s: material %d mixes material %d", s->path, i, m->mix_nested[k]);
+      m->mix[k] = &s->materials[m->mix_nested[k]];
+    }
+    if ((m->type == PC_MAT_MASK || m->type == PC_MAT_BLEND) && m->weight.tex >= s->ntextures)
+      return pc_errf(e, PC_EINVAL, "%s: material %d refers to texture %d of %d", s->path, i, m->weight.tex, s->ntextures);
     if (wraps && !(m->nested >= 0 && m->nested < i))
       return pc_errf(e, PC_EINVAL, "%s: material %d wraps material %d", s->path, i, m->nested);
     if (m->type == PC_MAT_BUMPMAP && !(m->bump_tex >= 0 && m->bump_tex < s->ntextures))

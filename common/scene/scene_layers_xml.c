@@ -1,7 +1,8 @@
-/* scene_layers_xml.c: the Mitsuba 0.6 BSDFs that wrap another one (`bumpmap`, `coating`,
- * `roughcoating`) and the `scale` texture that bump maps are usually given through. Each
+/* scene_layers_xml.c: the Mitsuba 0.6 BSDFs that wrap or combine others (`bumpmap`, `coating`,
+ * `roughcoating`, `mask`, `blendbsdf`, `mixturebsdf`) and the `scale` texture that bump maps are usually given through. Each
  * wrapper's material keeps the index of the one it wraps (read first, so always a lower index);
  * pc_scene_build links them. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "scene_xml_ctx.h"
@@ -173,5 +174,125 @@ int pc_sx_scale_texture(pc_sx *c, const pc_xml_node *n, const char *what, pc_tex
   /* Folded into the copy: a scale of a scale multiplies. */
   t->scale = t->scaled ? v3_mul(t->scale, scale) : scale;
   t->scaled = true;
+  return 0;
+}
+
+/* ---- mask, blendbsdf, mixturebsdf ---- */
+
+bool pc_sx_transmits(const pc_sx *c, const pc_material *m) {
+  switch (m->type) {
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_ROUGHDIELECTRIC:
+  case PC_MAT_THINDIELECTRIC:
+  case PC_MAT_DIFFTRANS:
+  case PC_MAT_MASK: return true;
+  case PC_MAT_BUMPMAP:
+  case PC_MAT_COATING:
+  case PC_MAT_ROUGHCOATING: return pc_sx_transmits(c, &c->s->materials[m->nested]);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE:
+    for (int k = 0; k < m->nmix; k++)
+      if (pc_sx_transmits(c, &c->s->materials[m->mix_nested[k]])) return true;
+    return false;
+  default: return false;
+  }
+}
+
+/* The nested BSDFs (bsdf or ref children that are not parameters), at most `max`, into idx. */
+static int components(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p, int np, int *idx, int max, int *count) {
+  int nb = 0, rc = 0;
+  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next) {
+    if (pc_sx_is_param(ch, p, np)) continue;
+    bool ref = strcmp(ch->name, "ref") == 0;
+    if (!(strcmp(ch->name, "bsdf") == 0 || (ref && ref_kind(c, ch) == PC_ID_BSDF))) {
+      rc = pc_sx_unexpected(c, ch, what);
+    } else if (nb >= max) {
+      rc = pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: more than %d nested BSDFs", c->file, ch->line, what, max);
+    } else if (!(rc = child_object(c, ch, what, PC_ID_BSDF, &idx[nb])) && c->s->materials[idx[nb]].type == PC_MAT_BUMPMAP) {
+      rc = pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: a bumpmap inside another BSDF: not modelled by pcbpt", c->file, ch->line, what);
+    }
+    nb++;
+  }
+  *count = nb;
+  return rc;
+}
+
+/* A weight or opacity given as a <float> (Mitsuba's blendbsdf reads a float) or a colour or texture. */
+static bool given_as_float(const pc_xml_node *n, const char *name) {
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next)
+    if (strcmp(ch->name, "float") == 0 && pc_xml_attr(ch, "name") && strcmp(pc_xml_attr(ch, "name"), name) == 0) return true;
+  return false;
+}
+
+/* Mitsuba's `weights` string: numbers separated by spaces, commas or semicolons. */
+static int parse_weights(pc_sx *c, const pc_xml_node *n, const char *what, const char *s, float *w, int max, int *count) {
+  int k = 0;
+  while (*s) {
+    if (strchr(" ,;\t\n\r", *s)) {
+      s++;
+      continue;
+    }
+    char *end;
+    double v = strtod(s, &end);
+    if (end == s || (*end && !strchr(" ,;\t\n\r", *end)))
+      return pc_errf(c->e, PC_EPARSE, "%s:%d: %s: could not parse the BSDF weights", c->file, n->line, what);
+    if (!(v >= 0.0) || !isfinite(v))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: invalid BSDF weight %g", c->file, n->line, what, v);
+    if (k >= max) return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: more than %d weights", c->file, n->line, what, max);
+    w[k++] = (float)v;
+    s = end;
+  }
+  *count = k;
+  return 0;
+}
+
+int pc_sx_bsdf_mix(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m) {
+  m->nested = m->bump_tex = -1;
+  int rc, nb = 0;
+  if (strcmp(type, "mixturebsdf") == 0) {
+    const char *weights = NULL;
+    bool ensure = true;
+    pc_param p[] = {{"weights", PC_P_STRING, &weights, 0, 0}, {"ensureEnergyConservation", PC_P_BOOL, &ensure, 0, 0}};
+    m->type = PC_MAT_MIXTURE;
+    int nw = 0;
+    if ((rc = pc_sx_params(c, n, what, p, 2)) || (rc = components(c, n, what, p, 2, m->mix_nested, PC_MIX_MAX, &nb)))
+      return rc;
+    if (!weights) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'weights' is required", c->file, n->line, what);
+    if ((rc = parse_weights(c, n, what, weights, m->mix_w, PC_MIX_MAX, &nw))) return rc;
+    if (nw != nb)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: %d nested BSDFs but %d weights", c->file, n->line, what, nb, nw);
+    float total = 0.f;
+    for (int k = 0; k < nw; k++) total += m->mix_w[k];
+    if (!(total > 0.f) || !isfinite(total))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: the weights must sum to more than zero", c->file, n->line, what);
+    for (int k = 0; k < nw; k++) {
+      m->mix_p[k] = m->mix_w[k] / total;
+      if (ensure && total > 1.f) m->mix_w[k] /= total;
+    }
+    m->nmix = nb;
+    return 0;
+  }
+  bool mask = strcmp(type, "mask") == 0;
+  m->type = mask ? PC_MAT_MASK : PC_MAT_BLEND;
+  const char *name = mask ? "opacity" : "weight";
+  float fw = 0.5f;
+  m->weight = (pc_tex_slot){.tex = -1, .value = v3s(0.5f)}; /* both default to 0.5 */
+  bool as_float = given_as_float(n, name);
+  pc_param p[] = {{name, as_float ? PC_P_FLOAT : PC_P_SLOT, as_float ? (void *)&fw : (void *)&m->weight, 0, 0}};
+  int idx[2];
+  if ((rc = pc_sx_params(c, n, what, p, 1)) || (rc = components(c, n, what, p, 1, idx, mask ? 1 : 2, &nb))) return rc;
+  if (nb != (mask ? 1 : 2))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs %s nested BSDF%s", c->file, n->line, what, mask ? "one" : "two",
+                   mask ? "" : "s");
+  if (as_float) m->weight.value = v3s(fw);
+  if (m->weight.tex < 0 && !(v3_minc(m->weight.value) >= 0.f && v3_maxc(m->weight.value) <= 1.f))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: '%s' must lie in [0, 1]", c->file, n->line, what, name);
+  if (mask) {
+    m->nested = idx[0];
+  } else {
+    m->nmix = 2;
+    m->mix_nested[0] = idx[0];
+    m->mix_nested[1] = idx[1];
+  }
   return 0;
 }

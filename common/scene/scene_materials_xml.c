@@ -164,6 +164,13 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if (m->specular.tex < 0 && m->reflectance.tex < 0 && v3_maxc(v3_add(m->specular.value, m->reflectance.value)) > 1.f)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: specularReflectance + diffuseReflectance above 1 would create energy",
                      c->file, n->line, what);
+  } else if (strcmp(type, "difftrans") == 0) {
+    pc_param p[] = {{"transmittance", PC_P_SLOT, &m->transmittance, 0, 0}};
+    m->type = PC_MAT_DIFFTRANS;
+    m->transmittance = konst(0.5f);
+    if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->transmittance, what))) return rc;
+  } else if (strcmp(type, "mask") == 0 || strcmp(type, "blendbsdf") == 0 || strcmp(type, "mixturebsdf") == 0) {
+    return pc_sx_bsdf_mix(c, n, type, what, m);
   } else if (strcmp(type, "bumpmap") == 0 || strcmp(type, "coating") == 0 || strcmp(type, "roughcoating") == 0) {
     return pc_sx_bsdf_wrapper(c, n, type, what, m);
   } else if (strcmp(type, "twosided") == 0) {
@@ -198,6 +205,8 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if (m->twosided) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps another twosided BSDF", c->file, inner->line, what);
     if (m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cannot wrap a dielectric (it is two-sided already)", c->file, inner->line, what);
+    if (pc_sx_transmits(c, m)) /* as Mitsuba: only materials without transmission (a mask's null component included) */
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: cannot wrap a material that transmits light", c->file, inner->line, what);
     m->twosided = true;
     return 0;
   } else {

@@ -149,6 +149,11 @@ int pc_sx_default_material(pc_sx *c, const pc_xml_node *n, int *index);
 /* The wrappers bumpmap, coating and roughcoating into *m (whose slots hold their defaults), and
  * the `scale` texture into *t (scene_layers_xml.c). */
 int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m);
+/* Mitsuba's `mask`, `blendbsdf` and `mixturebsdf` (scene_layers_xml.c). */
+int pc_sx_bsdf_mix(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m);
+/* True if a parsed material (its components by index) transmits light, which Mitsuba's
+ * twosided refuses to wrap. */
+bool pc_sx_transmits(const pc_sx *c, const pc_material *m);
 int pc_sx_scale_texture(pc_sx *c, const pc_xml_node *n, const char *what, pc_texture *t);
 /* Mitsuba's microfacet distribution names (beckmann, ggx, phong or its alias as); -1 if none. */
 int pc_sx_distribution(const char *name, pc_mf_type *out);

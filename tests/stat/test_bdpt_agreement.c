@@ -318,6 +318,78 @@ static void test_agree_layered(void **state) {
   }
 }
 
+/* The Cornell box with Mitsuba's combining BSDFs: the back wall a blendbsdf (weight 0.4) of its
+ * diffuse and a rough conductor, the right wall a mixturebsdf (weights 0.5 0.3 0.4, rescaled) of
+ * diffuse, difftrans and rough conductor, the short box difftrans (light enters it and leaves
+ * through its other faces), and, when `masked`, the tall box behind a mask whose opacity is a
+ * checkerboard of 0.8 and 0.3 (a delta pass-through in view: no light tracing then). */
+static bool with_mask;
+static void mixed_cornell(pc_scene *s) {
+  pc_texture t;
+  memset(&t, 0, sizeof t);
+  t.type = PC_TEX_CHECKER;
+  t.color0 = v3s(0.8f);
+  t.color1 = v3s(0.3f);
+  t.uscale = t.vscale = 4.f;
+  pc_texture *q = realloc(s->textures, sizeof *q * (size_t)(s->ntextures + 1));
+  assert_non_null(q);
+  s->textures = q;
+  s->textures[s->ntextures++] = t;
+  int back = s->shapes[2].material, right = s->shapes[3].material, tall = s->shapes[6].material;
+  pc_material rc = wrapper(PC_MAT_ROUGHCONDUCTOR, -1);
+  rc.alpha = 0.3f;
+  assert_true(pc_conductor_ior("Au", &rc.eta, &rc.k));
+  int irc = append_material(s, rc);
+  pc_material dt = wrapper(PC_MAT_DIFFTRANS, -1);
+  dt.transmittance = (pc_tex_slot){-1, v3(0.7f, 0.6f, 0.4f)};
+  int idt = append_material(s, dt);
+  pc_material bl = wrapper(PC_MAT_BLEND, -1);
+  bl.nmix = 2;
+  bl.mix_nested[0] = back;
+  bl.mix_nested[1] = irc;
+  bl.weight = (pc_tex_slot){-1, v3s(0.4f)};
+  s->shapes[2].material = append_material(s, bl);
+  pc_material mx = wrapper(PC_MAT_MIXTURE, -1);
+  const float w[3] = {0.5f, 0.3f, 0.4f};
+  const int comp[3] = {right, idt, irc};
+  mx.nmix = 3;
+  for (int k = 0; k < 3; k++) mx.mix_nested[k] = comp[k], mx.mix_w[k] = w[k] / 1.2f, mx.mix_p[k] = w[k] / 1.2f;
+  s->shapes[3].material = append_material(s, mx);
+  s->shapes[5].material = idt;
+  if (with_mask) {
+    pc_material mk = wrapper(PC_MAT_MASK, tall);
+    mk.weight = (pc_tex_slot){s->ntextures - 1, v3s(0.5f)};
+    s->shapes[6].material = append_material(s, mk);
+  }
+}
+
+static void test_agree_mixed(void **state) {
+  (void)state;
+  int beauty = -1;
+  for (int masked = 0; masked < 2; masked++) {
+    with_mask = masked;
+    multi *pt = malloc(sizeof *pt), *bd = malloc(sizeof *bd), *l = malloc(sizeof *l);
+    render_multi("cornell-box", settings(PC_METHOD_PT, 64, 6, 51), 256, &beauty, 1, 8, mixed_cornell, pt);
+    render_multi("cornell-box", settings(PC_METHOD_BDPT, 64, 6, 52), 64, &beauty, 1, 8, mixed_cornell, bd);
+    compare_blocks(masked ? "cornell mixed+mask pt vs bdpt" : "cornell mixed pt vs bdpt", pt, 0, bd, 0, 5.0);
+    if (!masked) {
+      render_multi("cornell-box", settings(PC_METHOD_LT, 64, 6, 53), 64, &beauty, 1, 8, mixed_cornell, l);
+      compare_blocks("cornell mixed lt vs bdpt", l, 0, bd, 0, 5.0);
+    }
+    render_multi("cornell-box", settings(PC_METHOD_CBDPT, 64, 6, 55), 64, &beauty, 1, 8, mixed_cornell, l);
+    compare_blocks(masked ? "cornell mixed+mask cbdpt vs bdpt" : "cornell mixed cbdpt vs bdpt", l, 0, bd, 0, 5.0);
+    pc_render_settings set = settings(PC_METHOD_PCBPT, 64, 6, 54);
+    set.pcbpt_m = 50;
+    set.pcbpt_k = 2;
+    set.cache_fraction = 0.02f;
+    render_multi("cornell-box", set, 64, &beauty, 1, 8, mixed_cornell, l);
+    compare_blocks(masked ? "cornell mixed+mask pcbpt vs bdpt" : "cornell mixed pcbpt vs bdpt", l, 0, bd, 0, 5.0);
+    free(pt);
+    free(bd);
+    free(l);
+  }
+}
+
 /* Totals of every strategy of path lengths 2 and 3 (segments) on a scene. */
 static void strategies(const char *scene) {
   pc_render_settings set = settings(PC_METHOD_BDPT, 32, 3, 21);
@@ -435,7 +507,7 @@ int main(void) {
       cmocka_unit_test(test_agree_open_room), cmocka_unit_test(test_agree_ajar_door),
       cmocka_unit_test(test_agree_slit_room), cmocka_unit_test(test_agree_env_objects),
       cmocka_unit_test(test_agree_thin_glass), cmocka_unit_test(test_agree_near_specular),
-      cmocka_unit_test(test_agree_layered),
+      cmocka_unit_test(test_agree_layered),  cmocka_unit_test(test_agree_mixed),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -142,6 +142,43 @@ static pc_material mk_dist(pc_material m, pc_mf_type dist) {
   pc_material_prepare(&m); /* roughplastic's table follows the distribution */
   return m;
 }
+static pc_material mk_difftrans(vec3 t) {
+  pc_material m = base_material(PC_MAT_DIFFTRANS);
+  m.transmittance = (pc_tex_slot){-1, t};
+  return m;
+}
+/* A mask of opacity a over *inner, which must outlive it. */
+static pc_material mk_mask(const pc_material *inner, vec3 a) {
+  pc_material m = base_material(PC_MAT_MASK);
+  m.inner = inner;
+  m.weight = (pc_tex_slot){-1, a};
+  return m;
+}
+/* blendbsdf: (1 - w) *a + w *b. */
+static pc_material mk_blend(const pc_material *a, const pc_material *b, float w) {
+  pc_material m = base_material(PC_MAT_BLEND);
+  m.nmix = 2;
+  m.mix[0] = a;
+  m.mix[1] = b;
+  m.weight = slot(w, w, w);
+  return m;
+}
+/* mixturebsdf with weights w as the loader leaves them (ensureEnergyConservation). */
+static pc_material mk_mixture(int n, const pc_material *const *comps, const float *w) {
+  pc_material m = base_material(PC_MAT_MIXTURE);
+  float total = 0;
+  for (int k = 0; k < n; k++) total += w[k];
+  m.nmix = n;
+  for (int k = 0; k < n; k++) {
+    m.mix[k] = comps[k];
+    m.mix_p[k] = w[k] / total;
+    m.mix_w[k] = total > 1 ? w[k] / total : w[k];
+  }
+  return m;
+}
+static bool transmits(const pc_material *m) {
+  return m->type == PC_MAT_DIFFTRANS || m->type == PC_MAT_MASK || m->type == PC_MAT_BLEND || m->type == PC_MAT_MIXTURE;
+}
 static pc_material mk_bumpmap(const pc_material *inner) {
   pc_material m = base_material(PC_MAT_BUMPMAP);
   m.inner = inner;
@@ -182,7 +219,7 @@ static int all_cases(tcase *c) {
   int n = 0;
   pc_shading flat = mk_shading(0), tilted = mk_shading(0.35f), bumped = mk_bump_shading(0.6f);
   /* What the wrappers wrap (they point at it, so it is static). */
-  static pc_material in[8];
+  static pc_material in[10];
   in[0] = mk_diffuse();
   in[1] = mk_conductor("Cu", 0.3f);
   in[2] = mk_diffuse();
@@ -190,6 +227,13 @@ static int all_cases(tcase *c) {
   in[3] = mk_conductor("Au", 0);
   in[4] = mk_plastic(0.1f, false);
   in[5] = mk_beckmann_conductor("Al", 0.2f);
+  in[6] = mk_thindielectric();
+  in[7] = mk_difftrans(v3(0, 0.5f, 0));
+  in[8] = mk_diffuse();
+  in[8].reflectance = slot(0.5f, 0, 0);
+  in[9] = mk_mask(&in[0], v3s(0.5f));
+  static const pc_material *const mt[] = {&in[8], &in[7]}, *const dc[] = {&in[6], &in[3]}, *const dd[] = {&in[6], &in[0]},
+                                  *const three[] = {&in[0], &in[1], &in[4]};
   static pc_material coated;
   coated = mk_coating(&in[0], 1.6f, 0, PC_MF_GGX, v3(0.2f, 0.4f, 0.8f), 0.5f);
   const struct { const char *name; pc_material m; } mats[] = {
@@ -241,10 +285,23 @@ static int all_cases(tcase *c) {
       {"roughcoating-beckmann-0.2-diffuse", mk_coating(&in[0], 1.5f, 0.2f, PC_MF_BECKMANN, v3s(0), 1)},
       {"roughcoating-ggx-0.3-roughplastic", mk_coating(&in[4], 1.4f, 0.3f, PC_MF_GGX, v3(0.3f, 0.2f, 0.1f), 1)},
       {"roughcoating-ggx-0.1-mirror", mk_coating(&in[3], 1.5f, 0.1f, PC_MF_GGX, v3s(0), 1)},
+      {"difftrans", mk_difftrans(v3(0.7f, 0.5f, 0.3f))},
+      {"mask-0.5-diffuse", mk_mask(&in[0], v3s(0.5f))},
+      {"mask-colour-twosided-diffuse", mk_mask(&in[2], v3(0.9f, 0.4f, 0.2f))},
+      {"mask-mirror", mk_mask(&in[3], v3s(0.3f))},
+      {"mask-roughplastic", mk_mask(&in[4], v3s(0.8f))},
+      {"mask-0-diffuse", mk_mask(&in[0], v3s(0.f))},
+      {"blend-0.3-diffuse-roughconductor", mk_blend(&in[0], &in[1], 0.3f)},
+      {"blend-0.6-thindielectric-diffuse", mk_blend(&in[6], &in[0], 0.6f)},
+      {"mixture-diffuse-difftrans", mk_mixture(2, mt, (const float[]){0.5f, 0.3f})},
+      {"mixture-thindielectric-conductor", mk_mixture(2, dc, (const float[]){0.8f, 0.2f})},
+      {"mixture-thindielectric-diffuse", mk_mixture(2, dd, (const float[]){0.8f, 0.2f})},
+      {"mixture-three-rescaled", mk_mixture(3, three, (const float[]){0.6f, 0.6f, 0.3f})},
+      {"coating-mask", mk_coating(&in[9], 1.5f, 0, PC_MF_GGX, v3s(0), 1)},
   };
   for (size_t i = 0; i < sizeof mats / sizeof mats[0]; i++) {
     c[n++] = (tcase){mats[i].name, mats[i].m, flat};
-    if (!is_dielectric(&mats[i].m)) {
+    if (!is_dielectric(&mats[i].m) && !transmits(&mats[i].m)) {
       c[n] = (tcase){mats[i].name, mats[i].m, flat};
       c[n++].m.twosided = true;
     }
@@ -270,6 +327,10 @@ static int all_cases(tcase *c) {
   c[n++] = (tcase){"bumpmap-roughconductor-beckmann", mk_bumpmap(&in[5]), bumped};
   c[n++] = (tcase){"bumpmap-coating", mk_bumpmap(&coated), bumped};
   c[n++] = (tcase){"bumpmap-mirror", mk_bumpmap(&in[3]), bumped};
+  c[n++] = (tcase){"mask-diffuse-tilted", mk_mask(&in[0], v3s(0.4f)), tilted};
+  c[n++] = (tcase){"difftrans-tilted", mk_difftrans(v3s(0.9f)), tilted};
+  c[n++] = (tcase){"blend-tilted", mk_blend(&in[4], &in[1], 0.5f), tilted};
+  c[n++] = (tcase){"bumpmap-mask", mk_bumpmap(&in[9]), bumped};
   assert_true(n <= MAX_CASES);
   return n;
 }
@@ -398,7 +459,9 @@ static void test_reciprocity_adjoint(void **state) {
       }
       nonzero += !v3_is_zero(f);
     }
-    assert_true(nonzero > 500);
+    /* (a fully transparent mask has only its delta pass-through) */
+    bool empty = cases[c].m.type == PC_MAT_MASK && v3_is_zero(cases[c].m.weight.value);
+    assert_true(empty ? nonzero == 0 : nonzero > 500);
   }
 }
 
@@ -1094,6 +1157,76 @@ static void test_coating_matched(void **state) {
   }
 }
 
+/* Two materials agree on every value, pdf and (if same_samples) sample, for random pairs. */
+static void assert_same_bsdf(const pc_material *a, const pc_material *b, const pc_shading *sh, bool same_samples, uint64_t seed) {
+  pc_rng r = pc_rng_make(11, seed, PC_STREAM_MISC, 11);
+  for (int i = 0; i < 2000; i++) {
+    vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+    for (int mode = 0; mode < 2; mode++)
+      assert_true(close3(pc_bsdf_eval(a, NULL, sh, wo, wi, (pc_transport)mode), pc_bsdf_eval(b, NULL, sh, wo, wi, (pc_transport)mode),
+                         1e-5f, 1e-7f));
+    assert_true(close_rel(pc_bsdf_pdf(a, NULL, sh, wo, wi), pc_bsdf_pdf(b, NULL, sh, wo, wi), 1e-5f, 1e-7f));
+    if (!same_samples) continue;
+    float u0 = pc_rng_f(&r), u1 = pc_rng_f(&r), u2 = pc_rng_f(&r);
+    pc_bsdf_sampled x, y;
+    bool okx = pc_bsdf_sample(a, NULL, sh, wo, u0, u1, u2, PC_RADIANCE, &x);
+    bool oky = pc_bsdf_sample(b, NULL, sh, wo, u0, u1, u2, PC_RADIANCE, &y);
+    assert_int_equal(okx, oky);
+    if (okx)
+      assert_true(close3(x.wi, y.wi, 0, 1e-6f) && close3(x.f, y.f, 1e-5f, 1e-7f) && close_rel(x.pdf, y.pdf, 1e-5f, 0) &&
+                  close_rel(x.pdf_rev, y.pdf_rev, 1e-5f, 0) && x.is_delta == y.is_delta);
+  }
+}
+
+/* The combining BSDFs reduce to what they combine: a mask of opacity 1 is its nested material,
+ * a blend of weight 0 or 1 one side, a mixture of copies of one material that material (values
+ * and pdfs; its samples draw the copy first). difftrans transmits exactly its transmittance
+ * (every sample weighs T), and a mask's pass-through weighs (1 - a) / (1 - luminance(a)). */
+static void test_mix_reductions(void **state) {
+  (void)state;
+  pc_material nested[] = {mk_diffuse(), mk_conductor("Cu", 0.3f), mk_plastic(0.1f, true), mk_plastic(0, false),
+                          mk_difftrans(v3(0.2f, 0.4f, 0.6f)), mk_dielectric(1.5f, 1.f)};
+  nested[0].twosided = true;
+  pc_shading sh = mk_shading(0.2f);
+  size_t nn = sizeof nested / sizeof nested[0];
+  for (size_t k = 0; k < nn; k++) {
+    pc_material other = mk_conductor("Au", 0.1f);
+    pc_material mask = mk_mask(&nested[k], v3s(1.f));
+    assert_same_bsdf(&mask, &nested[k], &sh, true, k);
+    pc_material b0 = mk_blend(&nested[k], &other, 0.f), b1 = mk_blend(&other, &nested[k], 1.f);
+    assert_same_bsdf(&b0, &nested[k], &sh, true, 10 + k);
+    assert_same_bsdf(&b1, &nested[k], &sh, true, 20 + k);
+    const pc_material *two[] = {&nested[k], &nested[k]};
+    pc_material mix = mk_mixture(2, two, (const float[]){0.5f, 0.5f});
+    assert_same_bsdf(&mix, &nested[k], &sh, false, 30 + k);
+    /* weights summing above 1 are rescaled: 2 x (0.7 + 0.7) / 1.4 */
+    pc_material mix2 = mk_mixture(2, two, (const float[]){0.7f, 0.7f});
+    assert_same_bsdf(&mix2, &nested[k], &sh, false, 40 + k);
+  }
+  pc_rng r = pc_rng_make(12, 0, PC_STREAM_MISC, 12);
+  vec3 t = v3(0.2f, 0.4f, 0.6f);
+  pc_material dt = mk_difftrans(t);
+  for (int i = 0; i < 1000; i++) {
+    vec3 wo = uniform_sphere(&r);
+    pc_bsdf_sampled b;
+    if (!pc_bsdf_sample(&dt, NULL, &sh, wo, pc_rng_f(&r), pc_rng_f(&r), pc_rng_f(&r), PC_RADIANCE, &b)) continue;
+    assert_true(v3_dot(wo, sh.sh.n) * v3_dot(b.wi, sh.sh.n) < 0.f);
+    assert_true(close3(v3_scale(b.f, v3_absdot(b.wi, sh.sh.n) / b.pdf), t, 1e-4f, 0));
+  }
+  pc_material d = mk_diffuse();
+  vec3 a = v3(0.9f, 0.4f, 0.2f);
+  pc_material mask = mk_mask(&d, a);
+  float p = v3_luminance(a);
+  vec3 wo = dir_local(&sh, 0.6f, 1.f);
+  pc_bsdf_sampled b;
+  assert_true(pc_bsdf_sample(&mask, NULL, &sh, wo, 0.5f * (1 + p), 0.3f, 0.3f, PC_IMPORTANCE, &b));
+  assert_true(b.is_delta && close3(b.wi, v3_neg(wo), 0, 1e-6f) && close_rel(b.pdf, 1 - p, 1e-6f, 0) && b.pdf_rev == b.pdf);
+  assert_true(close3(v3_scale(b.f, v3_absdot(b.wi, sh.sh.n) / b.pdf), v3_scale(v3_sub(v3s(1), a), 1 / (1 - p)), 1e-5f, 0));
+  vec3 wi = dir_local(&sh, 0.3f, 2.f);
+  assert_true(close3(pc_bsdf_eval(&mask, NULL, &sh, wo, wi, PC_RADIANCE), v3_scale(v3_mul(a, d.reflectance.value), PC_INV_PI), 1e-5f, 0));
+  assert_true(close_rel(pc_bsdf_pdf(&mask, NULL, &sh, wo, wi), p * 0.3f * PC_INV_PI, 1e-4f, 0));
+}
+
 /* Known values of the smooth coating: the mirror lobe's weight is specularReflectance x Fresnel
  * over its probability, and the covered diffuse part is (1 - F(wo))(1 - F(wi)) A rho / (pi eta^2)
  * with A = exp(-sigmaA d (1/cos wo' + 1/cos wi')) through the refracted cosines. */
@@ -1139,6 +1272,7 @@ int main(void) {
       cmocka_unit_test(test_bumpmap_frame),
       cmocka_unit_test(test_coating_matched),
       cmocka_unit_test(test_coating_values),
+      cmocka_unit_test(test_mix_reductions),
       cmocka_unit_test(test_finite),
       cmocka_unit_test(test_reciprocity_adjoint),
       cmocka_unit_test(test_delta_adjoint),

@@ -340,6 +340,20 @@ static const bad_case bad_cases[] = {
     {"<bsdf type=\"bumpmap\">\n<texture type=\"checkerboard\"/></bsdf>", 2, "wraps no BSDF"},
     {"<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/>\n<texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf>", 3, "more than one"},
     {"<bsdf type=\"coating\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 2, "bumpmap inside another BSDF: not modelled"},
+    {"<bsdf type=\"mask\">\n<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "bumpmap inside another BSDF: not modelled"},
+    {"<bsdf type=\"mask\"><rgb name=\"opacity\" value=\"1.5\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "'opacity' must lie in [0, 1]"},
+    {"<bsdf type=\"mask\">\n<bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 3, "more than 1 nested"},
+    {"<bsdf type=\"mask\"/>", 2, "needs one nested BSDF"},
+    {"<bsdf type=\"blendbsdf\"><bsdf type=\"diffuse\"/></bsdf>", 2, "needs two nested BSDFs"},
+    {"<bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"-0.5\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 2, "'weight' must lie in [0, 1]"},
+    {"<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 2, "2 nested BSDFs but 1 weights"},
+    {"<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5 x\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 2, "could not parse the BSDF weights"},
+    {"<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0 0\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 2, "sum to more than zero"},
+    {"<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"-1 2\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>", 2, "invalid BSDF weight"},
+    {"<bsdf type=\"mixturebsdf\"><bsdf type=\"diffuse\"/></bsdf>", 2, "'weights' is required"},
+    {"<bsdf type=\"twosided\">\n<bsdf type=\"mask\"><bsdf type=\"diffuse\"/></bsdf></bsdf>", 3, "transmits"},
+    {"<bsdf type=\"twosided\">\n<bsdf type=\"difftrans\"/></bsdf>", 3, "transmits"},
+    {"<bsdf type=\"difftrans\"><rgb name=\"transmittance\" value=\"2\"/></bsdf>", 2, "above 1"},
     {"<bsdf type=\"coating\"><float name=\"intIOR\" value=\"1.2\"/><float name=\"extIOR\" value=\"1.2\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "differ"},
     {"<bsdf type=\"coating\"><float name=\"thickness\" value=\"-1\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "thickness"},
     {"<bsdf type=\"coating\"><rgb name=\"specularReflectance\" value=\"1.5\"/>\n<bsdf type=\"diffuse\"/></bsdf>", 2, "above 1"},
@@ -1055,6 +1069,50 @@ static void test_layers(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's combining BSDFs: mask (opacity texture, nested twosided), blendbsdf (a float
+ * weight), mixturebsdf (weights rescaled by ensureEnergyConservation, or not), difftrans. */
+static void test_mixes(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_err e = {0};
+  pc_scene s;
+  const char *body =
+      SENSOR "\n<bsdf type=\"mask\" id=\"m\"><texture type=\"checkerboard\" name=\"opacity\"/>"
+      "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf>\n"
+      "<bsdf type=\"blendbsdf\" id=\"b\"><float name=\"weight\" value=\"0.25\"/><bsdf type=\"diffuse\"/>"
+      "<bsdf type=\"conductor\"/></bsdf>\n"
+      "<bsdf type=\"mixturebsdf\" id=\"x\"><string name=\"weights\" value=\"0.6, 0.6;0.3\"/><bsdf type=\"diffuse\"/>"
+      "<bsdf type=\"difftrans\"><rgb name=\"transmittance\" value=\"0 0.5 0\"/></bsdf><ref id=\"b\"/></bsdf>\n"
+      "<bsdf type=\"mixturebsdf\" id=\"y\"><boolean name=\"ensureEnergyConservation\" value=\"false\"/>"
+      "<string name=\"weights\" value=\"1 1\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>\n"
+      "<shape type=\"rectangle\"><ref id=\"m\"/></shape><shape type=\"rectangle\"><ref id=\"b\"/></shape>"
+      "<shape type=\"rectangle\"><ref id=\"x\"/></shape><shape type=\"sphere\"><ref id=\"y\"/></shape>"
+      "<emitter type=\"constant\"/>";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *m = &s.materials[s.shapes[0].material], *b = &s.materials[s.shapes[1].material];
+  const pc_material *x = &s.materials[s.shapes[2].material], *y = &s.materials[s.shapes[3].material];
+  assert_int_equal(m->type, PC_MAT_MASK);
+  assert_true(m->weight.tex == 0 && s.materials[m->nested].twosided && s.materials[m->nested].type == PC_MAT_DIFFUSE);
+  assert_int_equal(b->type, PC_MAT_BLEND);
+  assert_true(b->nmix == 2 && b->weight.tex < 0 && b->weight.value.x == 0.25f);
+  assert_int_equal(s.materials[b->mix_nested[1]].type, PC_MAT_CONDUCTOR);
+  assert_true(x->type == PC_MAT_MIXTURE && x->nmix == 3 && x->mix_nested[2] == s.shapes[1].material);
+  assert_int_equal(s.materials[x->mix_nested[1]].type, PC_MAT_DIFFTRANS);
+  near3(s.materials[x->mix_nested[1]].transmittance.value, v3(0, 0.5f, 0), 1e-6f);
+  assert_true(fabsf(x->mix_w[0] - 0.4f) < 1e-6f && fabsf(x->mix_w[2] - 0.2f) < 1e-6f && fabsf(x->mix_p[1] - 0.4f) < 1e-6f);
+  assert_true(y->mix_w[0] == 1.f && y->mix_w[1] == 1.f && y->mix_p[0] == 0.5f);
+  rc = pc_scene_build(&s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_ptr_equal(m->inner, &s.materials[m->nested]);
+  assert_ptr_equal(x->mix[2], b);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* Mutated copies of the full scene never crash (run under -DPCBPT_SANITIZE=ON as well). */
 static void test_mutations(void **state) {
   (void)state;
@@ -1123,8 +1181,12 @@ int main(void) {
       cmocka_unit_test(test_full_scene),       cmocka_unit_test(test_cornell_box),
       cmocka_unit_test(test_bad_scenes),       cmocka_unit_test(test_bad_documents),
       cmocka_unit_test(test_defaults_and_values), cmocka_unit_test(test_bitmap_texture),
-      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings), cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor), cmocka_unit_test(test_default_sensor),
-      cmocka_unit_test(test_include_and_defines), cmocka_unit_test(test_ward), cmocka_unit_test(test_phong_roughdiffuse), cmocka_unit_test(test_instances), cmocka_unit_test(test_layers),
+      cmocka_unit_test(test_mutations),        cmocka_unit_test(test_warnings),
+      cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
+      cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
+      cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
+      cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
+      cmocka_unit_test(test_mixes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
