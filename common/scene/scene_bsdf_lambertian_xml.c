@@ -69,5 +69,9 @@ int pc_sx_bsdf_more(pc_sx *c, const pc_xml_node *n, const char *type, const char
   m->lobe_scale = 1.f;
   if (strcmp(type, "phong") == 0) return phong(c, n, what, m);
   if (strcmp(type, "roughdiffuse") == 0) return roughdiffuse(c, n, what, m);
+  /* Mitsuba's scattering-layer BSDFs integrate a participating medium inside the surface */
+  if (strcmp(type, "hk") == 0 || strcmp(type, "dipolebrdf") == 0 || strcmp(type, "sssbrdf") == 0)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt (participating media in a layer)",
+                   c->file, n->line, type);
   return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: bsdf '%s': not modelled by pcbpt", c->file, n->line, type);
 }

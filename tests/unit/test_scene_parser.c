@@ -316,6 +316,7 @@ static const bad_case bad_cases[] = {
     {"<emitter type=\"point\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
     {"<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>\n<float name=\"samplingWeight\" value=\"-1\"/></emitter></shape>", 3, "samplingWeight"},
     {"\n<shape type=\"hair\"/>", 3, "shape 'hair': not modelled by pcbpt"},
+    {"<bsdf type=\"hk\"/>", 2, "bsdf 'hk': not modelled by pcbpt (participating media in a layer)"},
     /* BSDFs */
     {"<bsdf type=\"hk\"/>", 2, "hk"},
     {"<shape type=\"disk\">\n<sensor type=\"irradiancemeter\"/></shape>", 3, "irradiancemeter': not modelled"},
