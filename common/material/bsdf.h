@@ -76,6 +76,7 @@ typedef struct pc_material {
   int nested;
   const struct pc_material *inner;
   int bump_tex;              /* bumpmap: the displacement texture (index into the textures) */
+  bool normal_map;           /* bumpmap: bump_tex holds tangent-space normals (Mitsuba's `normalmap`) */
   pc_tex_slot sigma_a;       /* coatings: absorption coefficient inside the layer */
   pc_tex_slot weight;        /* mask: the opacity; blendbsdf: the weight of the second material */
   /* blendbsdf and mixturebsdf: the mixed materials (indices as `nested`, linked as `inner`) and

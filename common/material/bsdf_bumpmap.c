@@ -10,7 +10,10 @@
  * with dh/du, dh/dv the luminance of the texture's gradient (texture_gradient.c). The wrapped
  * material is then evaluated in that frame by bsdf.c, so integrators' cosines and the adjoint
  * correction of importance transport use the bumped normal too (what makes light tracing the
- * adjoint of path tracing; Mitsuba's own particle tracer corrects with the unbumped normal). */
+ * adjoint of path tracing; Mitsuba's own particle tracer corrects with the unbumped normal).
+ * Mitsuba's `normalmap` is the same wrapper with the frame read, not derived: the texture's
+ * colour c gives the normal 2c - 1 in the unbumped shading frame (NormalMap::getFrame):
+ *   n' = normalize(frame(2c - 1)) turned to the geometric normal's side, s' = dpdu projected. */
 #include "bsdf.h"
 
 /* Mitsuba's computeShadingFrame; an arbitrary tangent where dpdu is degenerate. */
@@ -42,6 +45,19 @@ static frame bumped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, ve
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
+/* The frame of a normal map, or the unperturbed one where its texel gives no direction. */
+static frame normal_mapped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, vec2 uv) {
+  vec3 c = pc_texture_eval(tex, uv);
+  vec3 local = v3(2.f * c.x - 1.f, 2.f * c.y - 1.f, 2.f * c.z - 1.f);
+  vec3 n = v3_add(v3_add(v3_scale(f.s, local.x), v3_scale(f.t, local.y)), v3_scale(f.n, local.z));
+  float len = v3_len(n);
+  if (!(len > 0.f) || !isfinite(len)) return f;
+  n = v3_scale(n, 1.f / len);
+  if (v3_dot(n, ng) < 0.f) n = v3_neg(n);
+  frame r = shading_frame(n, dpdu);
+  return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
+}
+
 /* Mitsuba's twosided around a bumpmap, queried from behind, turns the directions over the
  * unbumped tangent plane and evaluates the bumped material in front. The same, with the
  * directions kept: the bumped frame mirrored through that plane to the back (made right-handed
@@ -65,7 +81,8 @@ pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng
   sh.sh = shading_frame(ns, dpdu);
   sh.nb = ns;
   if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
-    sh.sh = bumped_frame(&texs[m->bump_tex], ng, sh.sh, dpdu, dpdv, uv);
+    const pc_texture *tex = &texs[m->bump_tex];
+    sh.sh = m->normal_map ? normal_mapped_frame(tex, ng, sh.sh, dpdu, uv) : bumped_frame(tex, ng, sh.sh, dpdu, dpdv, uv);
     if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(&sh);
   }
   return sh;

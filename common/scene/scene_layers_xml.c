@@ -54,8 +54,8 @@ static int wrapped(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p
     /* Mitsuba refuses a bitmap bump map without an explicit gamma (8-bit files would be read as
      * sRGB, rarely what a height field means). */
     if (is_tex && !ref && nt == 0 && bitmap_without_gamma(ch))
-      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: a bitmap bump map needs an explicit 'gamma' (usually 1.0), as Mitsuba requires",
-                   c->file, ch->line, what);
+      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: a bitmap %s map needs an explicit 'gamma' (usually 1.0), as Mitsuba requires",
+                   c->file, ch->line, what, m->normal_map ? "normal" : "bump");
     else if (is_bsdf && nb++ == 0) rc = child_object(c, ch, what, PC_ID_BSDF, &m->nested);
     else if (is_tex && nt++ == 0) rc = child_object(c, ch, what, PC_ID_TEXTURE, &m->bump_tex);
     else if (is_bsdf || is_tex)
@@ -64,7 +64,9 @@ static int wrapped(pc_sx *c, const pc_xml_node *n, const char *what, pc_param *p
   }
   if (rc) return rc;
   if (nb == 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: wraps no BSDF", c->file, n->line, what);
-  if (bump && nt == 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs a displacement texture", c->file, n->line, what);
+  if (bump && nt == 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs a %s texture", c->file, n->line, what,
+                   m->normal_map ? "normal" : "displacement");
   /* The bump map's frame is made once per hit for the material a shape has, so a bump map can
    * only be the outermost wrapper. */
   const pc_material *in = &c->s->materials[m->nested];
@@ -88,8 +90,9 @@ int pc_sx_distribution(const char *name, pc_mf_type *out) {
 
 int pc_sx_bsdf_wrapper(pc_sx *c, const pc_xml_node *n, const char *type, const char *what, pc_material *m) {
   m->nested = m->bump_tex = -1;
-  if (strcmp(type, "bumpmap") == 0) {
+  if (strcmp(type, "bumpmap") == 0 || strcmp(type, "normalmap") == 0) {
     m->type = PC_MAT_BUMPMAP;
+    m->normal_map = type[0] == 'n';
     int rc = pc_sx_params(c, n, what, NULL, 0);
     return rc ? rc : wrapped(c, n, what, NULL, 0, m, true);
   }

@@ -171,7 +171,8 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->transmittance, what))) return rc;
   } else if (strcmp(type, "mask") == 0 || strcmp(type, "blendbsdf") == 0 || strcmp(type, "mixturebsdf") == 0) {
     return pc_sx_bsdf_mix(c, n, type, what, m);
-  } else if (strcmp(type, "bumpmap") == 0 || strcmp(type, "coating") == 0 || strcmp(type, "roughcoating") == 0) {
+  } else if (strcmp(type, "bumpmap") == 0 || strcmp(type, "normalmap") == 0 || strcmp(type, "coating") == 0 ||
+             strcmp(type, "roughcoating") == 0) {
     return pc_sx_bsdf_wrapper(c, n, type, what, m);
   } else if (strcmp(type, "twosided") == 0) {
     if ((rc = pc_sx_params(c, n, what, NULL, 0))) return rc;

@@ -203,6 +203,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"bsdf 'phong'", " exponent specularReflectance diffuseReflectance ensureEnergyConservation "},
       {"bsdf 'roughdiffuse'", " reflectance diffuseReflectance alpha useFastApprox ensureEnergyConservation "},
       {"bsdf 'bumpmap'", " "},
+      {"bsdf 'normalmap'", " "},
       {"bsdf 'coating'", " intIOR extIOR thickness sigmaA specularReflectance "},
       {"bsdf 'roughcoating'", " distribution alpha alphaU alphaV intIOR extIOR thickness sigmaA specularReflectance sampleVisible "},
       {"texture 'scale'", " scale value "},

@@ -1036,6 +1036,47 @@ static void test_bitmap(void **state) {
 
 /* ---- wrappers: bumpmap and coatings ---- */
 
+/* Mitsuba's normalmap: the texel c is the normal 2c - 1 in the unbumped shading frame; the
+ * flat colour (0.5, 0.5, 1) leaves the material exactly as it was, a tilted texel tilts the
+ * frame by its own angle (tangent along dp/du), and a texel pointing below the surface is
+ * turned to the geometric normal's side. */
+static void test_normalmap_frame(void **state) {
+  (void)state;
+  pc_texture texs[1];
+  memset(texs, 0, sizeof texs);
+  texs[0].type = PC_TEX_CONST;
+  texs[0].value = v3(0.5f, 0.5f, 1.f);
+  pc_material inner = mk_plastic(0.2f, false);
+  pc_material nmap = mk_bumpmap(&inner);
+  nmap.normal_map = true;
+  nmap.bump_tex = 0;
+  vec3 ng = v3_norm(v3(0.2f, -0.3f, 0.9f)), ns = v3_norm(v3(0.25f, -0.2f, 0.9f));
+  vec3 dpdu = v3(1.5f, 0.3f, -0.2f), dpdv = v3(-0.1f, 0.8f, 0.4f);
+  pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+  pc_shading mapped = pc_shading_make(&nmap, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+  assert_true(close3(mapped.sh.n, plain.sh.n, 0, 1e-6f) && close3(mapped.sh.s, plain.sh.s, 0, 1e-6f));
+  pc_rng r = pc_rng_make(10, 0, PC_STREAM_MISC, 10);
+  for (int i = 0; i < 2000; i++) {
+    vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+    for (int mode = 0; mode < 2; mode++)
+      assert_true(close3(pc_bsdf_eval(&nmap, texs, &mapped, wo, wi, (pc_transport)mode),
+                         pc_bsdf_eval(&inner, texs, &plain, wo, wi, (pc_transport)mode), 1e-4f, 1e-6f));
+    assert_true(close_rel(pc_bsdf_pdf(&nmap, texs, &mapped, wo, wi), pc_bsdf_pdf(&inner, texs, &plain, wo, wi), 1e-4f, 1e-6f));
+  }
+  vec3 x = v3(1, 0, 0), y = v3(0, 1, 0), z = v3(0, 0, 1);
+  texs[0].value = v3(1.f, 0.5f, 1.f); /* (1, 0, 1) locally: 45 degrees toward +u */
+  pc_shading sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  assert_true(close3(sh.sh.n, v3_norm(v3(1, 0, 1)), 0, 1e-6f));
+  assert_true(close3(sh.sh.s, v3_norm(v3(1, 0, -1)), 0, 1e-6f));
+  assert_true(close3(sh.nb, z, 0, 0));
+  texs[0].value = v3(0.5f, 0.75f, 0.f); /* (0, 0.5, -1): below the surface, turned over */
+  sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  assert_true(close3(sh.sh.n, v3_norm(v3(0, -0.5f, 1)), 0, 1e-6f));
+  texs[0].value = v3(0.5f, 0.5f, 0.5f); /* the zero vector: no direction, the frame is kept */
+  sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  assert_true(close3(sh.sh.n, z, 0, 0));
+}
+
 /* A bump map whose displacement has no slope (a constant, or a bitmap of one value) leaves the
  * material exactly as it was; a linear ramp h = a u + b v on a flat patch tilts the normal to
  * (-a, -b, 1) (Mitsuba's getFrame with dpdu = x, dpdv = y). */
@@ -1269,7 +1310,7 @@ int main(void) {
       cmocka_unit_test(test_roughdiffuse_values),
       cmocka_unit_test(test_checkerboard),
       cmocka_unit_test(test_bitmap),
-      cmocka_unit_test(test_bumpmap_frame),
+      cmocka_unit_test(test_bumpmap_frame),     cmocka_unit_test(test_normalmap_frame),
       cmocka_unit_test(test_coating_matched),
       cmocka_unit_test(test_coating_values),
       cmocka_unit_test(test_mix_reductions),

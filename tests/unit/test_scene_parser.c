@@ -317,6 +317,9 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>\n<float name=\"samplingWeight\" value=\"-1\"/></emitter></shape>", 3, "samplingWeight"},
     {"\n<shape type=\"hair\"/>", 3, "shape 'hair': not modelled by pcbpt"},
     {"<bsdf type=\"hk\"/>", 2, "bsdf 'hk': not modelled by pcbpt (participating media in a layer)"},
+    {"<bsdf type=\"normalmap\"><bsdf type=\"diffuse\"/></bsdf>", 2, "needs a normal texture"},
+    {"<bsdf type=\"normalmap\"><bsdf type=\"diffuse\"/>\n<texture type=\"bitmap\"><string name=\"filename\" value=\"n.png\"/></texture></bsdf>", 3,
+     "a bitmap normal map needs an explicit 'gamma'"},
     /* BSDFs */
     {"<bsdf type=\"hk\"/>", 2, "hk"},
     {"<shape type=\"disk\">\n<sensor type=\"irradiancemeter\"/></shape>", 3, "irradiancemeter': not modelled"},
