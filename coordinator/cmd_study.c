@@ -599,7 +599,8 @@ static int study_scene(const study_args *a, pc_study_farm *farm, int k, pc_repor
       pc_study_group g = {.scene_path = s.path, .blob = s.blob, .hash = s.hash, .blob_n = s.blob_n, .req = &s.req,
                           .methods = a->methods, .nmethods = a->nmethods, .seed = run_seed(a, r), .seconds = a->seconds,
                           .workers = a->workers[size], .snapshots = (int)a->snapshots - 1, .ref = &s.ref,
-                          .keep_dir = size == a->nsizes - 1 && r == 0 ? s.dir : NULL, .label = label};
+                          .keep_dir = size == a->nsizes - 1 && r == 0 ? s.dir : NULL, .work_dir = s.dir,
+                          .label = label};
       rc = pc_study_farm_group(farm, &g, run_at(a, &s, size, r, 0), e);
       for (int m = 0; !rc && m < a->nmethods; m++) run_at(a, &s, size, r, m)->run = r;
     }

@@ -268,7 +268,7 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
     if (env) pcbpt__envelope__free_unpacked(env, NULL);
     if (nsnaps > (uint32_t)g->snapshots) nsnaps = (uint32_t)g->snapshots;
     char tmp[4096], keep[4096] = "";
-    const char *dir = g->keep_dir ? g->keep_dir : ".";
+    const char *dir = g->work_dir ? g->work_dir : g->keep_dir ? g->keep_dir : ".";
     snprintf(tmp, sizeof tmp, "%s/.snapshot.%ld.exr", dir, (long)getpid());
     if (g->keep_path) snprintf(keep, sizeof keep, "%s", g->keep_path);
     else if (g->keep_dir) snprintf(keep, sizeof keep, "%s/%s.exr", g->keep_dir, run->method.name);

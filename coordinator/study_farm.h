@@ -46,6 +46,8 @@ typedef struct pc_study_group {
   const pc_study_ref *ref;                /* NULL: measure nothing (a reference render) */
   const char *keep_dir;                   /* final images kept as <keep_dir>/<method>.exr+.png */
   const char *keep_path;                  /* one method: its final image kept here */
+  const char *work_dir;                   /* snapshots are fetched through a file here (NULL:
+                                             keep_dir, else the current directory) */
   const char *label;                      /* progress lines: "ajar-door run 2/3, 2 workers" */
 } pc_study_group;
 
