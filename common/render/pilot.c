@@ -16,7 +16,8 @@ static double clock_s(clockid_t id) {
 
 static double now_s(void) { return clock_s(CLOCK_MONOTONIC); }
 
-/* Stage 1 has 4 candidates and stage 2 at most 1: the budget is split over 5. */
+/* Stage 1 (BDPT and K = 1) has two slices each and stage 2 (K = 2) one: the budget is split
+ * over 5. Stages 3 and 4 (K = 4, 8) add one slice each only where the doubling before paid. */
 #define PILOT_SLICES 5
 /* The estimate needs 2 iterations (1 degree of freedom per pixel, averaged over the image). */
 #define PILOT_MIN_ITERATIONS 2
@@ -130,22 +131,37 @@ static void pooled_relmse(pc_pilot *p) {
     if (p->c[i].npix && p->c[i].iterations >= 2) p->c[i].relmse = sum[i] / (double)nv;
 }
 
+/* The candidate of method m and (for PCBPT) K = k, or -1. */
+static int find(const pc_pilot *p, pc_method m, int k) {
+  for (int i = 0; i < p->n; i++)
+    if (p->c[i].set.method == m && (m != PC_METHOD_PCBPT || p->c[i].set.pcbpt_k == k)) return i;
+  return -1;
+}
+
 void pc_pilot_choose(pc_pilot *p) {
   pooled_relmse(p);
-  p->best = -1;
   for (int i = 0; i < p->n; i++) {
     pc_pilot_candidate *c = &p->c[i];
     c->efficiency = c->relmse > 0 && c->seconds > 0 ? 1.0 / (c->relmse * c->seconds) : 0;
     /* an image without noise (all black, or exact) is infinitely efficient */
     if (c->relmse == 0 && c->iterations >= 2) c->efficiency = INFINITY;
   }
-  int bdpt = -1;
-  for (int i = 0; i < p->n; i++) {
-    if (p->c[i].set.method == PC_METHOD_BDPT && bdpt < 0) bdpt = i;
-    if (p->c[i].efficiency > 0 && (p->best < 0 || p->c[i].efficiency > p->c[p->best].efficiency)) p->best = i;
+  /* PCBPT: K = 1 unless doubling K is clearly better, step by step (pc_pilot_run) */
+  int pc = -1;
+  for (int k = 1; k <= 8; k *= 2) {
+    int i = find(p, PC_METHOD_PCBPT, k);
+    if (i < 0) break;
+    if (pc < 0) {
+      if (p->c[i].efficiency > 0) pc = i;
+      continue;
+    }
+    if (!(p->c[i].efficiency > PC_PILOT_K_MARGIN * p->c[pc].efficiency)) break;
+    pc = i;
   }
-  if (bdpt >= 0 && p->best >= 0 && p->best != bdpt && p->c[bdpt].efficiency > 0 &&
-      p->c[p->best].efficiency < PC_PILOT_BDPT_MARGIN * p->c[bdpt].efficiency)
+  int bdpt = find(p, PC_METHOD_BDPT, 0);
+  p->best = pc;
+  if (bdpt >= 0 && p->c[bdpt].efficiency > 0 &&
+      (pc < 0 || p->c[pc].efficiency < PC_PILOT_BDPT_MARGIN * p->c[bdpt].efficiency))
     p->best = bdpt;
   if (p->best < 0) p->best = bdpt >= 0 ? bdpt : 0; /* nothing could tell: BDPT, the safe default */
 }
@@ -162,17 +178,19 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
                  void *user, pc_err *e) {
   memset(p, 0, sizeof *p);
   double t0 = now_s();
+  /* stage 1: the comparison that matters most everywhere, with twice the budget each */
   add_candidate(p, base, PC_METHOD_BDPT, 0);
-  for (int k = 1; k <= 4; k *= 2) add_candidate(p, base, PC_METHOD_PCBPT, k);
-  int rc = render_from(p, 0, slice, min_it, render, user, e);
-  if (rc) return rc;
-  /* efficiency over K has one peak (more connections cost linearly and gain less each), so K=8
-   * only while doubling K still paid. The uniform mix is not tried: a less defensive mix has
-   * heavier tails, which a few iterations miss (docs/auto.md) */
-  if (p->c[3].efficiency >= p->c[2].efficiency) {
-    add_candidate(p, base, PC_METHOD_PCBPT, 8);
-    if ((rc = render_from(p, p->n - 1, slice, min_it, render, user, e)) != 0) return rc;
+  add_candidate(p, base, PC_METHOD_PCBPT, 1);
+  int rc = render_from(p, 0, 2 * slice, 2 * min_it, render, user, e);
+  /* stages 2-4: K doubles while the last doubling paid by PC_PILOT_K_MARGIN; efficiency over K
+   * has one peak (more connections cost linearly and gain less each). The uniform mix is not
+   * tried: a less defensive mix has heavier tails, which a few iterations miss (docs/auto.md) */
+  for (int k = 2; !rc && k <= 8; k *= 2) {
+    if (k > 2 && p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
+    add_candidate(p, base, PC_METHOD_PCBPT, k);
+    rc = render_from(p, p->n - 1, slice, min_it, render, user, e);
   }
+  if (rc) return rc;
   p->seconds = now_s() - t0;
   return PC_OK;
 }

@@ -27,6 +27,11 @@
  * pilot's few iterations see heavy tails (PCBPT's fireflies) less often than a long render does,
  * so its estimate of a heavy-tailed method is more often low than high. */
 #define PC_PILOT_BDPT_MARGIN 1.05
+/* A doubled K replaces the smaller one only if its efficiency is higher by this factor. At 128x128
+ * K = 1 was the best PCBPT K on all 13 shipped scenes (docs/auto.md), by 2-14% over K = 2, while
+ * the pilot's log efficiency ratio of K = 2 to K = 1 erred by a standard deviation of ~0.2 (2-10
+ * iterations each, 39 pilots): a win by less than this is more likely noise than real. */
+#define PC_PILOT_K_MARGIN 1.25
 
 /* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every
  * candidate's error is measured against the same denominator: the mean of all candidates'
@@ -82,15 +87,16 @@ double pc_pilot_remaining(double seconds, double pilot_seconds);
 /* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
 uint64_t pc_pilot_seed(uint64_t job_seed);
 
-/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1, 2, 4 side by side (the other settings
- * of base); stage 2 renders K = 8 if doubling K from 2 to 4 still paid. Picks the most
- * efficient (BDPT on a tie within PC_PILOT_BDPT_MARGIN). Free with pc_pilot_free, also after
- * a failure. */
+/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1 side by side (the other settings of
+ * base) with two slices each; stage 2 renders K = 2, and stages 3 and 4 K = 4 and 8 only while
+ * the last doubling paid by PC_PILOT_K_MARGIN. Picks that PCBPT K, or BDPT unless the PCBPT
+ * candidate beats it by PC_PILOT_BDPT_MARGIN. Free with pc_pilot_free, also after a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
                  pc_pilot_render_fn render, void *user, pc_err *e);
 /* Measures every candidate against the pooled mean of their images (candidates without an
- * image keep their own estimate) and picks p->best (used by pc_pilot_run; exposed for the
- * tests). */
+ * image keep their own estimate) and picks p->best by pc_pilot_run's rule: the PCBPT K reached
+ * from K = 1 by doublings each better by PC_PILOT_K_MARGIN, against BDPT (used by
+ * pc_pilot_run; exposed for the tests). */
 void pc_pilot_choose(pc_pilot *p);
 
 /* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */

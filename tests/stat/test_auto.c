@@ -1,7 +1,8 @@
 /* test_auto.c: --method auto's pilot (common/render/pilot.h).
  * - choose: the most efficient candidate wins; BDPT keeps ties within PC_PILOT_BDPT_MARGIN; a
  *   pilot that could not tell falls back to BDPT; a noiseless candidate wins (deterministic).
- * - grid: K = 8 is tried only while doubling K paid, the job's uniform mix is kept, every
+ * - grid: K = 4 and 8 are tried only while doubling K paid by PC_PILOT_K_MARGIN, a smaller gain
+ *   keeps the smaller K, the job's uniform mix is kept, every
  *   candidate renders with the pilot seed, never the job's (a scripted
  *   renderer of known efficiencies: deterministic).
  * - pooled: candidates are measured against the pooled mean of their images, not each against
@@ -121,25 +122,31 @@ static void run_script(script *s, pc_pilot *p) {
 static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
-  /* stage 1 is BDPT and K = 1, 2, 4 side by side. K=4 worse than K=2: no K=8 (however good it
-   * would have been), no other stage; the job's uniform mix is kept */
-  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.4, [8] = 0.01}};
+  /* stage 1 is BDPT and K = 1, stage 2 K = 2. K=2 worse than K=1: no K=4 or 8 (however good
+   * they would have been); the job's uniform mix is kept */
+  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
   run_script(&a, &p);
-  assert_int_equal(a.calls, 4);
+  assert_int_equal(a.calls, 3);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
-  /* efficiency rises to K=4 and drops at 8: K=4 */
+  /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4 */
   script b = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.3, [4] = 0.2, [8] = 0.25}};
   run_script(&b, &p);
   assert_int_equal(b.calls, 5);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   pc_pilot_free(&p);
+  /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried */
+  script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01}};
+  run_script(&d, &p);
+  assert_int_equal(d.calls, 3);
+  assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
+  pc_pilot_free(&p);
   /* BDPT best */
   script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}};
   run_script(&c, &p);
-  assert_int_equal(c.calls, 4);
+  assert_int_equal(c.calls, 3);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
   pc_pilot_free(&p);
 }
