@@ -29,7 +29,25 @@ void pc_mesh_transform(pc_mesh *m, const mat4 *xf);
 /* Reverses every triangle's winding and negates shading normals (Mitsuba's flipNormals). */
 void pc_mesh_flip(pc_mesh *m);
 
+/* An OBJ file split into meshes as Mitsuba 0.6's obj plugin splits it (mesh_obj.c). */
+#define PC_OBJ_MAX_MESHES 65536
+typedef struct pc_obj_mesh {
+  pc_mesh mesh;
+  char *material; /* the `usemtl` name in force for its faces ("" if none) */
+} pc_obj_mesh;
+typedef struct pc_obj {
+  int n;
+  pc_obj_mesh *meshes;
+  char *mtllib;    /* the last `mtllib` name as written (Mitsuba reads that one), or NULL */
+  int mtllib_line;
+} pc_obj;
+/* collapse: Mitsuba's `collapse` (one mesh for the whole file); shape_index: its `shapeIndex`
+ * (-1: every mesh). n may be 0 when shape_index selects no mesh. */
+int pc_obj_load(const char *path, bool collapse, int shape_index, pc_obj *out, pc_err *e);
+void pc_obj_free(pc_obj *o);
+
 /* Loaders. `where` is the "file:line" of the referencing scene element, used in messages. */
+/* The whole OBJ file as one mesh (pc_obj_load collapsed). */
 int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e);
 int pc_mesh_load_ply(const char *path, pc_mesh *out, pc_err *e);
 /* Shape shape_index of a Mitsuba serialized file; *face_normals is the file's own flag. */

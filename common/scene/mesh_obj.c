@@ -1,9 +1,11 @@
 /* mesh_obj.c: the Wavefront OBJ reader. Reads v, vn, vt and f (polygons fan-triangulated,
- * indices positive or negative, forms v, v/vt, v//vn, v/vt/vn) and merges equal
- * (v, vt, vn) triples into one vertex as Mitsuba does. Groups, objects, smoothing groups and
- * materials (o, g, s, usemtl, mtllib) are ignored: a shape has one BSDF in the scene file.
- * Faces must agree on having normals and texture coordinates: a file that mixes them is
- * refused rather than given invented values. */
+ * indices positive or negative, forms v, v/vt, v//vn, v/vt/vn) and splits the faces into meshes
+ * as Mitsuba 0.6's obj plugin does: a new mesh at every `g` and every `usemtl` that follows
+ * faces (unless collapsed), each mesh with the `usemtl` name in force and its own vertices
+ * (equal (v, vt, vn) triples merged within the mesh). The last `mtllib` is kept for the caller;
+ * objects and smoothing groups (o, s) are ignored, as Mitsuba does. Faces of one mesh must
+ * agree on having normals and texture coordinates: a mesh that mixes them is refused rather
+ * than given invented values. */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +15,7 @@
 
 #define OBJ_MAX_FILE ((size_t)2 << 30)
 #define OBJ_MAX_LINE (1 << 20)
+#define OBJ_MAX_NAME 4096
 
 typedef struct obj_key { uint32_t v, vt, vn; } obj_key;
 
@@ -34,6 +37,12 @@ typedef struct obj_state {
   uint32_t *table;
   uint32_t table_size;
   int has_vt, has_vn; /* -1 unknown, else whether faces carry them */
+  /* the meshes so far, the usemtl name in force, and Mitsuba's count of meshes made */
+  bool collapse;
+  int shape_index;
+  pc_obj *out;
+  int cap_meshes, made;
+  char *material;
   pc_err *e;
 } obj_state;
 
@@ -257,6 +266,60 @@ static int count_pass(obj_state *st, const char *buf, size_t n) {
   return 0;
 }
 
+/* The rest of a statement's line, trimmed, as Mitsuba reads usemtl and mtllib names. */
+static int rest_of_line(obj_state *st, const char *s, const char *eol, char **out) {
+  s = skip_space(s, eol);
+  while (eol > s && is_space(eol[-1])) eol--;
+  size_t len = (size_t)(eol - s);
+  if (len > OBJ_MAX_NAME) return pc_errf(st->e, PC_ELIMIT, "%s:%d: name longer than %d bytes", st->path, st->line, OBJ_MAX_NAME);
+  *out = malloc(len + 1);
+  if (!*out) return pc_errf(st->e, PC_ENOMEM, "%s: out of memory", st->path);
+  memcpy(*out, s, len);
+  (*out)[len] = 0;
+  return 0;
+}
+
+/* Ends the mesh being read (if it has faces) as Mitsuba's createMesh does, keeping it if
+ * shape_index selects it. Mitsuba numbers a mesh ended by `g` or `usemtl` by its count of
+ * meshes before it, but tests the last one against that count minus one: a shapeIndex of the
+ * second-to-last mesh also selects the last, and on a file of one mesh shapeIndex 0 selects
+ * nothing. Kept as Mitsuba renders it. */
+static int flush(obj_state *st, bool last) {
+  if (st->ntris == 0) return 0;
+  int index = last ? st->made - 1 : st->made;
+  if (!last) st->made++;
+  else if (st->made == 0) st->made = 1; /* the count of meshes read, for "no faces" */
+  bool keep = st->shape_index < 0 || index == st->shape_index;
+  if (keep) {
+    if (st->out->n >= PC_OBJ_MAX_MESHES)
+      return pc_errf(st->e, PC_ELIMIT, "%s:%d: more than %d meshes (groups or materials)", st->path, st->line, PC_OBJ_MAX_MESHES);
+    if (st->out->n == st->cap_meshes) {
+      int cap = st->cap_meshes ? 2 * st->cap_meshes : 4;
+      void *q = realloc(st->out->meshes, (size_t)cap * sizeof *st->out->meshes);
+      if (!q) return pc_errf(st->e, PC_ENOMEM, "%s: out of memory", st->path);
+      st->out->meshes = q;
+      st->cap_meshes = cap;
+    }
+    pc_obj_mesh *m = &st->out->meshes[st->out->n];
+    memset(m, 0, sizeof *m);
+    m->material = strdup(st->material ? st->material : "");
+    if (!m->material) return pc_errf(st->e, PC_ENOMEM, "%s: out of memory", st->path);
+    m->mesh = (pc_mesh){.nverts = st->nverts, .ntris = st->ntris, .p = st->p, .n = st->n, .uv = st->uv, .idx = st->idx};
+    st->out->n++;
+  } else {
+    free(st->p);
+    free(st->n);
+    free(st->uv);
+    free(st->idx);
+  }
+  st->p = st->n = NULL;
+  st->uv = NULL;
+  st->idx = NULL;
+  st->nverts = st->cap_verts = st->ntris = st->cap_tris = 0;
+  st->has_vt = st->has_vn = -1;
+  return last ? 0 : table_rehash(st, 1024);
+}
+
 static int parse_line(obj_state *st, const char *s, const char *eol) {
   const char *k = s;
   size_t len = next_token(&k, eol);
@@ -279,21 +342,48 @@ static int parse_line(obj_state *st, const char *s, const char *eol) {
     st->vn[st->nvn++] = v3_scale(n, 1.f / l);
   } else if (keyword_is(k, len, "f")) {
     return parse_face(st, rest, eol);
-  } else if (!(keyword_is(k, len, "o") || keyword_is(k, len, "g") || keyword_is(k, len, "s") ||
-               keyword_is(k, len, "usemtl") || keyword_is(k, len, "mtllib"))) {
+  } else if (keyword_is(k, len, "g")) {
+    if (!st->collapse) return flush(st, false);
+  } else if (keyword_is(k, len, "usemtl") || keyword_is(k, len, "mtllib")) {
+    char *name;
+    if ((rc = rest_of_line(st, rest, eol, &name))) return rc;
+    if (k[0] == 'm') {
+      free(st->out->mtllib);
+      st->out->mtllib = name;
+      st->out->mtllib_line = st->line;
+      return 0;
+    }
+    if (!st->collapse && (rc = flush(st, false))) {
+      free(name);
+      return rc;
+    }
+    free(st->material);
+    st->material = name;
+  } else if (!(keyword_is(k, len, "o") || keyword_is(k, len, "s"))) {
     return pc_errf(st->e, PC_EUNSUPPORTED, "%s:%d: unsupported OBJ statement '%.*s'", st->path, st->line,
                    (int)(len > 32 ? 32 : len), k);
   }
   return 0;
 }
 
-int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e) {
+void pc_obj_free(pc_obj *o) {
+  for (int i = 0; i < o->n; i++) {
+    pc_mesh_free(&o->meshes[i].mesh);
+    free(o->meshes[i].material);
+  }
+  free(o->meshes);
+  free(o->mtllib);
+  memset(o, 0, sizeof *o);
+}
+
+int pc_obj_load(const char *path, bool collapse, int shape_index, pc_obj *out, pc_err *e) {
   memset(out, 0, sizeof *out);
   char *buf;
   size_t n;
   int rc = pc_file_read(path, OBJ_MAX_FILE, &buf, &n, e);
   if (rc) return rc;
-  obj_state st = {.path = path, .e = e, .has_vt = -1, .has_vn = -1};
+  obj_state st = {.path = path, .e = e, .has_vt = -1, .has_vn = -1, .collapse = collapse, .shape_index = shape_index,
+                  .out = out};
   rc = count_pass(&st, buf, n);
   if (!rc) rc = table_rehash(&st, 1024);
   const char *s = buf, *end = buf + n;
@@ -312,25 +402,30 @@ int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e) {
     rc = parse_line(&st, s, eol);
     s = eol + 1;
   }
-  if (!rc && st.ntris == 0) rc = pc_errf(e, PC_EINVAL, "%s: no faces", path);
+  if (!rc) rc = flush(&st, true);
+  if (!rc && st.made == 0) rc = pc_errf(e, PC_EINVAL, "%s: no faces", path);
   free(buf);
   free(st.v);
   free(st.vt);
   free(st.vn);
   free(st.keys);
   free(st.table);
-  if (rc) {
-    free(st.p);
-    free(st.n);
-    free(st.uv);
-    free(st.idx);
-    return rc;
-  }
-  out->nverts = st.nverts;
-  out->ntris = st.ntris;
-  out->p = st.p;
-  out->n = st.n;
-  out->uv = st.uv;
-  out->idx = st.idx;
+  free(st.p);
+  free(st.n);
+  free(st.uv);
+  free(st.idx);
+  free(st.material);
+  if (rc) pc_obj_free(out);
+  return rc;
+}
+
+int pc_mesh_load_obj(const char *path, pc_mesh *out, pc_err *e) {
+  memset(out, 0, sizeof *out);
+  pc_obj o;
+  int rc = pc_obj_load(path, true, -1, &o, e);
+  if (rc) return rc;
+  *out = o.meshes[0].mesh;
+  o.meshes[0].mesh = (pc_mesh){0};
+  pc_obj_free(&o);
   return 0;
 }

@@ -169,6 +169,13 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
     m->type = PC_MAT_DIFFTRANS;
     m->transmittance = konst(0.5f);
     if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->transmittance, what))) return rc;
+  } else if (strcmp(type, "null") == 0) {
+    /* Mitsuba's null: every ray passes straight through, which a mask of opacity 0 is exactly
+     * (its wrapped BSDF, the default, never counts) */
+    if ((rc = pc_sx_params_only(c, n, what, NULL, 0))) return rc;
+    m->type = PC_MAT_MASK;
+    m->weight = konst(0.f);
+    return pc_sx_default_material(c, n, &m->nested);
   } else if (strcmp(type, "mask") == 0 || strcmp(type, "blendbsdf") == 0 || strcmp(type, "mixturebsdf") == 0) {
     return pc_sx_bsdf_mix(c, n, type, what, m);
   } else if (strcmp(type, "bumpmap") == 0 || strcmp(type, "normalmap") == 0 || strcmp(type, "coating") == 0 ||

@@ -287,7 +287,7 @@ static int load_mesh(pc_sx *c, const pc_xml_node *n, const char *type, const cha
     char *path;
     if ((rc = pc_sx_resolve(c, n, what, filename, &path))) return rc;
     if (type[0] == 's') rc = pc_mesh_load_serialized(path, shape_index, m, file_face_normals, c->e);
-    else rc = type[0] == 'o' ? pc_mesh_load_obj(path, m, c->e) : pc_mesh_load_ply(path, m, c->e);
+    else rc = pc_mesh_load_ply(path, m, c->e);
     free(path);
     return rc ? pc_sx_wrap(c, n, what, rc) : 0;
   }
@@ -309,6 +309,105 @@ static int smooth_angle_normals(pc_sx *c, const pc_param *p, const char *what, b
                  rc == PC_ENOMEM ? "out of memory" : rc == PC_ELIMIT ? "the split mesh has too many vertices" : "invalid mesh data");
 }
 
+/* What a mesh shape's parameters ask of each of its meshes. */
+typedef struct mesh_opts {
+  bool obj, file, face_normals, file_face_normals, flip_normals, flip_tex;
+  const pc_param *smooth; /* maxSmoothAngle when given */
+  float smooth_angle;
+  mat4 xf;
+} mesh_opts;
+
+/* A loaded mesh made into a shape's mesh as Mitsuba's TriMesh does: texture coordinates flipped,
+ * toWorld applied, normals rebuilt, computed or dropped, flipNormals, then validated. */
+static int finish_mesh(pc_sx *c, const pc_xml_node *n, const char *what, const mesh_opts *o, pc_mesh *m) {
+  int rc;
+  if (o->obj && o->flip_tex && m->uv)
+    for (uint32_t i = 0; i < m->nverts; i++) m->uv[i].y = 1.f - m->uv[i].y;
+  pc_mesh_transform(m, &o->xf);
+  if (o->smooth) {
+    if ((rc = smooth_angle_normals(c, o->smooth, what, o->face_normals, o->smooth_angle, m))) return rc;
+  } else if (o->face_normals || o->file_face_normals) {
+    free(m->n);
+    m->n = NULL;
+  } else if (o->file && !m->n && pc_mesh_compute_normals(m)) {
+    return pc_errf(c->e, PC_ENOMEM, "%s:%d: %s: out of memory", c->file, n->line, what);
+  }
+  if (o->flip_normals) pc_mesh_flip(m);
+  char where[PC_SX_WHAT_MAX + 64];
+  snprintf(where, sizeof where, "%s:%d: %s", c->file, n->line, what);
+  return pc_mesh_validate(m, where, c->e);
+}
+
+/* Appends a shape (taking its mesh) and the area light it carries, if any. */
+static int add_shape_with_light(pc_sx *c, const pc_xml_node *n, pc_shape *sh, bool emits, vec3 radiance, float weight) {
+  int rc = pc_sx_add_shape(c, n, sh);
+  if (rc) {
+    pc_mesh_free(&sh->mesh);
+    return rc;
+  }
+  if (!emits) return 0;
+  pc_light l;
+  memset(&l, 0, sizeof l);
+  l.type = PC_LIGHT_AREA;
+  l.radiance = radiance;
+  l.sampling_weight = weight;
+  l.shape = c->s->nshapes - 1;
+  return add_light(c, n, &l, &c->s->shapes[c->s->nshapes - 1].light);
+}
+
+/* A BSDF child of a shape: the material and the name it was given (NULL: none). */
+typedef struct shape_bsdf {
+  const char *name;
+  int material, line;
+} shape_bsdf;
+
+/* The meshes of an OBJ file, each with its material (scene_obj_xml.c has the rules). */
+static int obj_shapes(pc_sx *c, const pc_xml_node *n, const char *what, const char *filename, bool collapse, int shape_index,
+                      bool load_materials, const mesh_opts *o, const shape_bsdf *bsdfs, int nb, bool emits, vec3 radiance,
+                      float weight) {
+  char *path;
+  int rc = pc_sx_resolve(c, n, what, filename, &path);
+  if (rc) return rc;
+  pc_obj obj;
+  rc = pc_obj_load(path, collapse, shape_index, &obj, c->e);
+  free(path);
+  if (rc) return pc_sx_wrap(c, n, what, rc);
+  pc_sx_mtl *lib = NULL;
+  if (emits && obj.n > 1)
+    rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: an emitter on an OBJ file of %d meshes (groups or materials); Mitsuba refuses it too",
+                 c->file, n->line, what, obj.n);
+  if (!rc && obj.n == 0)
+    rc = pc_sx_warn(c, n, "%s: shapeIndex %d selects no mesh of '%s' (as in Mitsuba): the shape is empty", what, shape_index, filename);
+  if (!rc && load_materials && obj.mtllib) rc = pc_sx_mtl_load(c, n, filename, obj.mtllib, obj.mtllib_line, &lib);
+  for (int j = 0; j < nb && !rc; j++) {
+    bool used = !bsdfs[j].name;
+    for (int i = 0; i < obj.n && !used; i++) used = strcmp(obj.meshes[i].material, bsdfs[j].name) == 0;
+    if (!used)
+      rc = pc_sx_warn(c, n, "%s: the BSDF named '%s' (line %d) names no material of '%s', as Mitsuba warns too", what, bsdfs[j].name,
+                      bsdfs[j].line, filename);
+  }
+  for (int i = 0; i < obj.n && !rc; i++) {
+    pc_shape sh;
+    memset(&sh, 0, sizeof sh);
+    sh.kind = PC_SHAPE_MESH;
+    sh.light = -1;
+    sh.material = -1;
+    const char *mtl = obj.meshes[i].material;
+    for (int j = 0; j < nb; j++)
+      if (!bsdfs[j].name || strcmp(bsdfs[j].name, mtl) == 0) sh.material = bsdfs[j].material;
+    if (sh.material < 0 && *mtl) rc = pc_sx_mtl_material(c, lib, mtl, &sh.material);
+    if (!rc && sh.material < 0) rc = pc_sx_default_material(c, n, &sh.material);
+    sh.mesh = obj.meshes[i].mesh;
+    obj.meshes[i].mesh = (pc_mesh){0};
+    if (!rc && (rc = finish_mesh(c, n, what, o, &sh.mesh))) pc_mesh_free(&sh.mesh);
+    if (!rc) rc = add_shape_with_light(c, n, &sh, emits, radiance, weight);
+    if (rc) pc_mesh_free(&sh.mesh);
+  }
+  pc_sx_mtl_free(lib);
+  pc_obj_free(&obj);
+  return rc;
+}
+
 int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
@@ -317,60 +416,84 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   if (strcasecmp(type, "shapegroup") == 0) return pc_sx_shapegroup(c, n);
   if (strcmp(type, "instance") == 0) return pc_sx_instance(c, n);
   bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "serialized") == 0;
+  bool is_obj = strcmp(type, "obj") == 0;
   bool is_sphere = strcmp(type, "sphere") == 0;
   if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape '%s': not modelled by pcbpt", c->file, n->line, type);
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "shape '%s'", type);
   const char *filename = NULL;
-  bool face_normals = false, flip_normals = false, flip_tex = true, file_face_normals = false;
-  int shape_index = 0;
-  mat4 xf = mat4_identity();
+  mesh_opts o = {.obj = is_obj, .file = is_file, .flip_tex = true, .xf = mat4_identity()};
+  bool collapse = false, load_materials = true;
+  int shape_index = is_obj ? -1 : 0;
   vec3 center = v3s(0);
-  float radius = 1.f, smooth_angle = 0.f;
-  pc_param p[8] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0}, {"flipNormals", PC_P_BOOL, &flip_normals, 0, 0}};
+  float radius = 1.f;
+  pc_param p[10] = {{"toWorld", PC_P_TRANSFORM, &o.xf, 0, 0}, {"flipNormals", PC_P_BOOL, &o.flip_normals, 0, 0}};
   int np = 2;
   if (is_file) {
     p[np++] = (pc_param){"filename", PC_P_STRING, &filename, 0, 0};
-    p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &face_normals, 0, 0};
-    if (type[0] == 'o') p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &flip_tex, 0, 0};
-    if (type[0] == 's') p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
-    p[np++] = (pc_param){"maxSmoothAngle", PC_P_FLOAT, &smooth_angle, 0, 0};
+    p[np++] = (pc_param){"faceNormals", PC_P_BOOL, &o.face_normals, 0, 0};
+    if (is_obj) {
+      p[np++] = (pc_param){"flipTexCoords", PC_P_BOOL, &o.flip_tex, 0, 0};
+      p[np++] = (pc_param){"collapse", PC_P_BOOL, &collapse, 0, 0};
+      p[np++] = (pc_param){"loadMaterials", PC_P_BOOL, &load_materials, 0, 0};
+    }
+    if (type[0] == 's' || is_obj) p[np++] = (pc_param){"shapeIndex", PC_P_INT, &shape_index, 0, 0};
+    p[np++] = (pc_param){"maxSmoothAngle", PC_P_FLOAT, &o.smooth_angle, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
   }
   if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
-  int material = -1;
+  if (is_file && p[np - 1].set) o.smooth = &p[np - 1];
+  int nchildren = 0;
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) nchildren++;
+  shape_bsdf *bsdfs = calloc((size_t)(nchildren ? nchildren : 1), sizeof *bsdfs);
+  if (!bsdfs) return pc_errf(c->e, PC_ENOMEM, "%s: out of memory", c->file);
+  int nb = 0;
   bool emits = false;
   vec3 radiance = v3s(0);
   float weight = 1.f;
-  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+  for (const pc_xml_node *ch = n->first; ch && !rc; ch = ch->next) {
     if (pc_sx_is_param(ch, p, np)) continue;
     if (strcmp(ch->name, "bsdf") == 0 || strcmp(ch->name, "ref") == 0) {
-      if (material >= 0 && pc_xml_attr(ch, "name"))
-        return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: BSDFs named after the file's materials (usemtl): not modelled by pcbpt",
-                       c->file, ch->line, what);
-      if (material >= 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one BSDF", c->file, ch->line, what);
+      /* an OBJ's BSDFs may be named after its materials; other shapes have one */
+      if (nb > 0 && !is_obj) {
+        rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one BSDF", c->file, ch->line, what);
+        break;
+      }
+      shape_bsdf *b = &bsdfs[nb];
+      b->name = is_obj ? pc_xml_attr(ch, "name") : NULL;
+      b->line = ch->line;
       if (ch->name[0] == 'b') {
-        if ((rc = pc_sx_bsdf(c, ch, &material))) return rc;
+        if (!(rc = pc_sx_bsdf(c, ch, &b->material))) nb++;
         continue;
       }
       static const char *const allowed[] = {"id", "name", NULL};
-      if ((rc = pc_xml_check_attrs(c->file, ch, allowed, c->e))) return rc;
+      if ((rc = pc_xml_check_attrs(c->file, ch, allowed, c->e))) break;
       const char *id = pc_xml_attr(ch, "id");
       const pc_sx_id *r = id ? pc_sx_id_find(c, id) : NULL;
-      if (!r) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: reference to unknown id '%s'", c->file, ch->line, what, id ? id : "");
-      if (r->kind != PC_ID_BSDF) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: id '%s' is not a BSDF", c->file, ch->line, what, id);
-      material = r->index;
+      if (!r) rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: reference to unknown id '%s'", c->file, ch->line, what, id ? id : "");
+      else if (r->kind != PC_ID_BSDF) rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: id '%s' is not a BSDF", c->file, ch->line, what, id);
+      else b->material = r->index, nb++;
     } else if (strcmp(ch->name, "emitter") == 0) {
-      if (emits) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one emitter", c->file, ch->line, what);
-      if ((rc = area_emitter(c, ch, &radiance, &weight))) return rc;
-      emits = true;
+      if (emits) rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one emitter", c->file, ch->line, what);
+      else if (!(rc = area_emitter(c, ch, &radiance, &weight))) emits = true;
     } else {
-      return pc_sx_unexpected(c, ch, what);
+      rc = pc_sx_unexpected(c, ch, what);
     }
   }
+  if (!rc && is_obj) {
+    if (!filename) rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
+    else rc = obj_shapes(c, n, what, filename, collapse, shape_index, load_materials, &o, bsdfs, nb, emits, radiance, weight);
+    free(bsdfs);
+    if (rc) return rc;
+    const char *id = pc_xml_attr(n, "id");
+    return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
+  }
+  int material = nb > 0 ? bsdfs[0].material : -1;
+  free(bsdfs);
+  if (rc) return rc;
   if (material < 0 && (rc = pc_sx_default_material(c, n, &material))) return rc;
 
   pc_shape sh;
@@ -379,56 +502,25 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   sh.light = -1;
   if (is_sphere) {
     double s;
-    if (!pc_sx_is_similarity(&xf, &s))
+    if (!pc_sx_is_similarity(&o.xf, &s))
       return pc_errf(c->e, PC_EUNSUPPORTED,
                      "%s:%d: %s: toWorld may only translate, rotate and scale uniformly (a sphere must stay a sphere)",
                      c->file, n->line, what);
     sh.kind = PC_SHAPE_SPHERE;
-    sh.center = mat4_point(&xf, center);
+    sh.center = mat4_point(&o.xf, center);
     sh.radius = (float)(s * radius);
-    sh.flip_normals = flip_normals;
+    sh.flip_normals = o.flip_normals;
     if (!(radius > 0.f) || !(sh.radius > 0.f) || !isfinite(sh.radius) || !v3_is_finite(sh.center))
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius must be positive and finite", c->file, n->line, what);
   } else {
     sh.kind = PC_SHAPE_MESH;
-    if ((rc = load_mesh(c, n, type, what, filename, shape_index, &file_face_normals, &sh.mesh))) return rc;
-    if (type[0] == 'o' && flip_tex && sh.mesh.uv)
-      for (uint32_t i = 0; i < sh.mesh.nverts; i++) sh.mesh.uv[i].y = 1.f - sh.mesh.uv[i].y;
-    pc_mesh_transform(&sh.mesh, &xf);
-    const pc_param *smooth = is_file ? &p[np - 1] : NULL;
-    if (smooth && smooth->set) {
-      if ((rc = smooth_angle_normals(c, smooth, what, face_normals, smooth_angle, &sh.mesh))) {
-        pc_mesh_free(&sh.mesh);
-        return rc;
-      }
-    } else if (face_normals || file_face_normals) {
-      free(sh.mesh.n);
-      sh.mesh.n = NULL;
-    } else if (is_file && !sh.mesh.n && pc_mesh_compute_normals(&sh.mesh)) {
-      pc_mesh_free(&sh.mesh);
-      return pc_errf(c->e, PC_ENOMEM, "%s:%d: %s: out of memory", c->file, n->line, what);
-    }
-    if (flip_normals) pc_mesh_flip(&sh.mesh);
-    char where[PC_SX_WHAT_MAX + 64];
-    snprintf(where, sizeof where, "%s:%d: %s", c->file, n->line, what);
-    if ((rc = pc_mesh_validate(&sh.mesh, where, c->e))) {
+    if ((rc = load_mesh(c, n, type, what, filename, shape_index, &o.file_face_normals, &sh.mesh))) return rc;
+    if ((rc = finish_mesh(c, n, what, &o, &sh.mesh))) {
       pc_mesh_free(&sh.mesh);
       return rc;
     }
   }
-  if ((rc = pc_sx_add_shape(c, n, &sh))) {
-    pc_mesh_free(&sh.mesh);
-    return rc;
-  }
-  if (emits) {
-    pc_light l;
-    memset(&l, 0, sizeof l);
-    l.type = PC_LIGHT_AREA;
-    l.radiance = radiance;
-    l.sampling_weight = weight;
-    l.shape = c->s->nshapes - 1;
-    if ((rc = add_light(c, n, &l, &c->s->shapes[c->s->nshapes - 1].light))) return rc;
-  }
+  if ((rc = add_shape_with_light(c, n, &sh, emits, radiance, weight))) return rc;
   const char *id = pc_xml_attr(n, "id");
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
 }

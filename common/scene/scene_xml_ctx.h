@@ -155,6 +155,15 @@ int pc_sx_bsdf_mix(pc_sx *c, const pc_xml_node *n, const char *type, const char 
  * twosided refuses to wrap. */
 bool pc_sx_transmits(const pc_sx *c, const pc_material *m);
 int pc_sx_scale_texture(pc_sx *c, const pc_xml_node *n, const char *what, pc_texture *t);
+/* An OBJ's material library (scene_obj_xml.c), read as Mitsuba's obj plugin reads it: mtllib as
+ * written in the OBJ obj_rel (relative to the scene's folder) at `line`. *out NULL, with a
+ * warning, when Mitsuba would not find it either. */
+typedef struct pc_sx_mtl pc_sx_mtl;
+int pc_sx_mtl_load(pc_sx *c, const pc_xml_node *shape, const char *obj_rel, const char *mtllib, int line, pc_sx_mtl **out);
+/* The scene material of the library's material `name` (made on first use), or -1 if the library
+ * (which may be NULL) has none of that name. */
+int pc_sx_mtl_material(pc_sx *c, pc_sx_mtl *lib, const char *name, int *index);
+void pc_sx_mtl_free(pc_sx_mtl *lib);
 /* Mitsuba's microfacet distribution names (beckmann, ggx, phong or its alias as); -1 if none. */
 int pc_sx_distribution(const char *name, pc_mf_type *out);
 

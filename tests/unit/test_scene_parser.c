@@ -413,8 +413,8 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>\n<float name=\"maxSmoothAngle\" value=\"1e9\"/></shape>", 3, "maxSmoothAngle"},
     {"<medium type=\"homogeneous\"/>", 2, "medium 'homogeneous': not modelled by pcbpt (participating media"},
     {"\n<phase type=\"isotropic\"/>", 3, "phase 'isotropic': not modelled by pcbpt (participating media"},
-    /* a parameter Mitsuba's plugin reads (it merges the OBJ's groups) that pcbpt does not honour */
-    {"<shape type=\"obj\">\n<boolean name=\"collapse\" value=\"true\"/></shape>", 3, "parameter 'collapse'"},
+    /* a parameter Mitsuba's plugin reads (vertex colours) that pcbpt does not honour */
+    {"<shape type=\"ply\">\n<boolean name=\"srgb\" value=\"true\"/></shape>", 3, "parameter 'srgb'"},
     {"<shape type=\"cube\" color=\"red\"/>", 2, "unknown attribute"},
     {"<shape type=\"cube\">\n<bsdf type=\"diffuse\">", 4, "syntax"},
     {"<shape type=\"cube\">hello</shape>", 2, "text"},
@@ -925,6 +925,129 @@ static void test_phong_roughdiffuse(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba 0.6's obj plugin: a mesh per `g` and per `usemtl` after faces, each with its own
+ * vertices; the material of a mesh is the last unnamed or same-named BSDF child, else the .mtl
+ * material (sRGB Kd, illum models, d as a mask), else the default; collapse, loadMaterials and
+ * shapeIndex (with Mitsuba's numbering of the last mesh). */
+static const char *GROUPS_OBJ = "mtllib sub/m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+                                "usemtl red\nf 1 2 3 4\nusemtl glass\nf 2 5 6 3\ng other\nusemtl shiny\nf 1 2 3\n";
+static const char *GROUPS_MTL = "# comment\nnewmtl red\nKd 0.5 0.25 1\nKa 1 1 1\nnewmtl glass\nillum 7\n"
+                                "newmtl shiny\nKd 0.2 0.2 0.2\nKs 0.5 0.5 0.5\nNs 20\nillum 2\n"
+                                "newmtl masked\nKd 1 1 1\nd 0.25\nmap_Ks missing.png\nNs 10\nillum 2\nnewmtl metal\nillum 5\n";
+
+static int obj_scene(tmp *t, const char *inner, pc_scene *s, pc_err *e) {
+  char body[2048];
+  snprintf(body, sizeof body, SENSOR "\n<shape type=\"obj\"><string name=\"filename\" value=\"sub/g.obj\"/>%s</shape>", inner);
+  return load_body(t, body, s, e);
+}
+
+static float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : powf((v + 0.055f) / 1.055f, 2.4f); }
+
+static void test_obj_materials(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  char sub[400];
+  snprintf(sub, sizeof sub, "%s/sub", t.dir);
+  assert_int_equal(mkdir(sub, 0700), 0);
+  assert_int_equal(th_write_str(sub, "g.obj", GROUPS_OBJ), 0);
+  assert_int_equal(th_write_str(sub, "m.mtl", GROUPS_MTL), 0);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = obj_scene(&t, "", &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 3);
+  /* each mesh has its own vertices (the shared edge is not merged across meshes) */
+  assert_int_equal(s.shapes[0].mesh.nverts, 4);
+  assert_int_equal(s.shapes[1].mesh.nverts, 4);
+  assert_int_equal(s.shapes[2].mesh.ntris, 1);
+  const pc_material *red = &s.materials[s.shapes[0].material];
+  assert_int_equal(red->type, PC_MAT_DIFFUSE);
+  near3(red->reflectance.value, v3(srgb_to_linear(0.5f), srgb_to_linear(0.25f), 1.f), 1e-5f);
+  assert_int_equal(s.materials[s.shapes[1].material].type, PC_MAT_DIELECTRIC);
+  const pc_material *shiny = &s.materials[s.shapes[2].material];
+  assert_int_equal(shiny->type, PC_MAT_PHONG);
+  assert_true(shiny->exponent == 20.f);
+  pc_scene_free(&s);
+  /* an unnamed BSDF replaces every mesh's; a named one after it the meshes of its name */
+  rc = obj_scene(&t, "<bsdf type=\"roughconductor\"/><bsdf type=\"conductor\" name=\"glass\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.materials[s.shapes[0].material].type, PC_MAT_ROUGHCONDUCTOR);
+  assert_int_equal(s.materials[s.shapes[1].material].type, PC_MAT_CONDUCTOR);
+  assert_int_equal(s.materials[s.shapes[2].material].type, PC_MAT_ROUGHCONDUCTOR);
+  pc_scene_free(&s);
+  /* Mitsuba's null BSDF: everything passes through, a mask of opacity 0 */
+  rc = obj_scene(&t, "<bsdf type=\"null\" name=\"glass\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.materials[s.shapes[1].material].type, PC_MAT_MASK);
+  near3(s.materials[s.shapes[1].material].weight.value, v3s(0.f), 0);
+  pc_scene_free(&s);
+  /* ... and an unnamed one after the named one replaces it too (document order) */
+  rc = obj_scene(&t, "<bsdf type=\"conductor\" name=\"glass\"/><bsdf type=\"roughconductor\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.materials[s.shapes[1].material].type, PC_MAT_ROUGHCONDUCTOR);
+  pc_scene_free(&s);
+  /* collapse: one mesh with the last usemtl's material */
+  rc = obj_scene(&t, "<boolean name=\"collapse\" value=\"true\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 1);
+  assert_int_equal(s.shapes[0].mesh.ntris, 5);
+  assert_int_equal(s.materials[s.shapes[0].material].type, PC_MAT_PHONG);
+  pc_scene_free(&s);
+  /* loadMaterials false: Mitsuba's default diffuse 0.5 */
+  rc = obj_scene(&t, "<boolean name=\"loadMaterials\" value=\"false\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 3);
+  near3(s.materials[s.shapes[1].material].reflectance.value, v3s(0.5f), 0);
+  pc_scene_free(&s);
+  /* shapeIndex counts meshes in file order, and Mitsuba tests the last mesh against the
+   * count before it, so index 1 selects the second mesh and the last */
+  rc = obj_scene(&t, "<integer name=\"shapeIndex\" value=\"0\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 1);
+  assert_int_equal(s.shapes[0].mesh.ntris, 2);
+  pc_scene_free(&s);
+  rc = obj_scene(&t, "<integer name=\"shapeIndex\" value=\"1\"/>", &s, &e);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 2);
+  pc_scene_free(&s);
+  /* an emitter cannot go on several meshes (Mitsuba refuses it too) */
+  rc = obj_scene(&t, "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1 1 1\"/></emitter>", &s, &e);
+  assert_int_not_equal(rc, 0);
+  assert_non_null(strstr(e.msg, "emitter on an OBJ file of 3 meshes"));
+  /* a mask from d, a missing map as black (a warning; an error under --strict), illum 5 */
+  assert_int_equal(th_write_str(sub, "g.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl masked\nf 1 2 3\n"
+                                              "usemtl metal\nf 1 3 2\nusemtl nosuch\nf 3 2 1\n"), 0);
+  rc = obj_scene(&t, "", &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  const pc_material *mask = &s.materials[s.shapes[0].material];
+  assert_int_equal(mask->type, PC_MAT_MASK);
+  near3(mask->weight.value, v3s(0.25f), 0);
+  assert_int_equal(s.materials[mask->nested].type, PC_MAT_PHONG); /* map_Ks counts as non-zero */
+  assert_int_equal(s.materials[s.shapes[1].material].type, PC_MAT_CONDUCTOR);
+  near3(s.materials[s.shapes[2].material].reflectance.value, v3s(0.5f), 0);
+  pc_scene_free(&s);
+  pc_scene_load_opts strict = {.strict = true};
+  char body[512];
+  snprintf(body, sizeof body, SENSOR "\n<shape type=\"obj\"><string name=\"filename\" value=\"sub/g.obj\"/></shape>");
+  assert_int_not_equal(load_body_opts(&t, body, &strict, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "missing.png"));
+  /* a malformed library names its file and line */
+  assert_int_equal(th_write_str(sub, "m.mtl", "newmtl masked\nKd 0.5\n"), 0);
+  assert_int_not_equal(obj_scene(&t, "", &s, &e), 0);
+  assert_non_null(strstr(e.msg, "m.mtl:2: 'Kd' needs 3 finite numbers"));
+  assert_int_equal(th_write_str(sub, "m.mtl", "newmtl masked\nd 2\n"), 0);
+  assert_int_not_equal(obj_scene(&t, "", &s, &e), 0);
+  assert_non_null(strstr(e.msg, "m.mtl:2: 'd' must lie in [0, 1]"));
+  /* a missing library: the meshes keep the default (a warning) */
+  assert_int_equal(th_write_str(sub, "g.obj", "mtllib none.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl a\nf 1 2 3\n"), 0);
+  assert_int_equal(obj_scene(&t, "", &s, &e), 0);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
  * instance's toWorld after their own; the group itself is not rendered. */
 static void test_instances(void **state) {
@@ -1190,7 +1313,7 @@ int main(void) {
       cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
       cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
-      cmocka_unit_test(test_mixes),
+      cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
