@@ -48,9 +48,8 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     if (prev->kind == PC_VTX_SURFACE) {
       cos_out = v3_absdot(prev->ng, da);
       if (!delta) {
-        const pc_material *pm = &s->materials[prev->material];
         float pf, pr;
-        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pf, &pr);
+        pc_bsdf_pdfs_out(&prev->out, s->textures, &prev->sh, da, &pf, &pr);
         /* The offset origin turns the edge by about eps / distance. A lobe narrower than that
          * (a near-specular rough surface, e.g. roughdielectric alpha 1e-4) would find its own
          * sample impossible along the edge and lose the path: it keeps the sampled pdfs. */
@@ -83,6 +82,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->ng = h.ng;
     cur->sh = pc_shading_from_hit(s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
+    cur->out = pc_bsdf_out_make(m, &cur->sh, cur->wo);
     cur->beta = beta;
     cur->material = shape->material;
     cur->light = shape->light;
