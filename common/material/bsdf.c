@@ -216,7 +216,7 @@ pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo
 /* The pair (o's wo, wi) in the shading frame, not yet turned over; false where every query of
  * the pair, either way round, is zero (a bumpmap's wi on different sides of its two frames, or
  * the sides of the shading and geometric normals disagree). */
-static bool out_pair(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, local_pair *p) {
+static inline bool out_pair(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, local_pair *p) {
   if (!o->m || (o->bump && !bump_side(sh, wi))) return false;
   p->wo = o->local;
   p->wi = frame_to_local(&sh->sh, wi);
@@ -256,8 +256,17 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   *pdf = *pdf_rev = 0.f;
   if (!out_pair(o, sh, wi, &p)) return v3s(0.f);
   local_pair q = oriented(o->m, p);
-  *pdf = pdf_local(o->m, texs, sh, q);
-  *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+  if (o->m->type == PC_MAT_DIFFUSE) {
+    /* The connections' commonest query, without the lobe dispatch: the cosine-weighted pdfs of
+     * pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped pair's
+     * orientation is q's; a pair on two sides has pdfs 0 either way). */
+    if (!(q.wo.z > 0.f && q.wi.z > 0.f)) return v3s(0.f);
+    *pdf = q.wi.z * PC_INV_PI;
+    *pdf_rev = q.wo.z * PC_INV_PI;
+  } else {
+    *pdf = pdf_local(o->m, texs, sh, q);
+    *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+  }
   return eval_local(o->m, texs, sh, q, mode);
 }
 
