@@ -207,7 +207,7 @@ pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo
   pc_bsdf_out o;
   o.m = unwrap(m, sh, wo);
   o.bump = o.m && o.m != m;
-  if (o.m && pc_bsdf_is_delta(o.m)) o.m = NULL;
+  o.delta = o.m && pc_bsdf_is_delta(o.m);
   o.local = frame_to_local(&sh->sh, wo);
   o.g = v3_dot(wo, sh->ng);
   return o;
@@ -217,7 +217,7 @@ pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo
  * the pair, either way round, is zero (a bumpmap's wi on different sides of its two frames, or
  * the sides of the shading and geometric normals disagree). */
 static inline bool out_pair(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, local_pair *p) {
-  if (!o->m || (o->bump && !bump_side(sh, wi))) return false;
+  if (!o->m || o->delta || (o->bump && !bump_side(sh, wi))) return false;
   p->wo = o->local;
   p->wi = frame_to_local(&sh->sh, wi);
   p->go = o->g;
@@ -241,13 +241,26 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
   return pdf_local(o.m, texs, sh, oriented(o.m, p));
 }
 
+/* Both pdfs of pair p, q = oriented(o->m, p). A diffuse pair, the commonest query, skips the lobe
+ * dispatch: pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped
+ * pair's orientation is q's; a pair on two sides has pdfs 0 either way). */
+static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, local_pair p,
+                             local_pair q, float *pdf, float *pdf_rev) {
+  if (o->m->type == PC_MAT_DIFFUSE) {
+    bool above = q.wo.z > 0.f && q.wi.z > 0.f;
+    *pdf = above ? q.wi.z * PC_INV_PI : 0.f;
+    *pdf_rev = above ? q.wo.z * PC_INV_PI : 0.f;
+  } else {
+    *pdf = pdf_local(o->m, texs, sh, q);
+    *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+  }
+}
+
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
                       float *pdf_rev) {
   local_pair p;
   *pdf = *pdf_rev = 0.f;
-  if (!out_pair(o, sh, wi, &p)) return;
-  *pdf = pdf_local(o->m, texs, sh, oriented(o->m, p));
-  *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+  if (out_pair(o, sh, wi, &p)) pdfs_pair(o, texs, sh, p, oriented(o->m, p), pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
@@ -256,17 +269,7 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   *pdf = *pdf_rev = 0.f;
   if (!out_pair(o, sh, wi, &p)) return v3s(0.f);
   local_pair q = oriented(o->m, p);
-  if (o->m->type == PC_MAT_DIFFUSE) {
-    /* The connections' commonest query, without the lobe dispatch: the cosine-weighted pdfs of
-     * pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped pair's
-     * orientation is q's; a pair on two sides has pdfs 0 either way). */
-    if (!(q.wo.z > 0.f && q.wi.z > 0.f)) return v3s(0.f);
-    *pdf = q.wi.z * PC_INV_PI;
-    *pdf_rev = q.wo.z * PC_INV_PI;
-  } else {
-    *pdf = pdf_local(o->m, texs, sh, q);
-    *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
-  }
+  pdfs_pair(o, texs, sh, p, q, pdf, pdf_rev);
   return eval_local(o->m, texs, sh, q, mode);
 }
 
@@ -284,11 +287,17 @@ vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_sh
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
-  const pc_material *m_top = m;
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  return pc_bsdf_sample_out(&o, texs, sh, u0, u1, u2, mode, out);
+}
+
+bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, float u0, float u1,
+                        float u2, pc_transport mode, pc_bsdf_sampled *out) {
+  const pc_material *m = o->m;
   *out = (pc_bsdf_sampled){0};
-  if (!(m = unwrap(m, sh, wo))) return false;
-  vec3 lo = frame_to_local(&sh->sh, wo);
-  float go = v3_dot(wo, sh->ng);
+  if (!m) return false;
+  vec3 lo = o->local;
+  float go = o->g;
   float zsign = flips(m, lo.z) ? -1.f : 1.f;
   lo.z *= zsign;
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
@@ -300,7 +309,7 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
    * last bit. */
   s.wi = frame_to_local(&sh->sh, wi);
   s.wi.z *= zsign;
-  if (!sides_agree(lo.z, s.wi.z, go, gi) || (m != m_top && !bump_side(sh, wi))) return false;
+  if (!sides_agree(lo.z, s.wi.z, go, gi) || (o->bump && !bump_side(sh, wi))) return false;
   vec3 f;
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));

@@ -146,6 +146,7 @@ void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading
 typedef struct pc_bsdf_out {
   const pc_material *m; /* what the queries evaluate (a bumpmap's wrapped material); NULL: all zero */
   bool bump;            /* a bumpmap's: wi must be on the same side of both frames too */
+  bool delta;           /* m is all delta lobes: only sampling answers */
   vec3 local;           /* wo in the shading frame (not turned over by twosided) */
   float g;              /* wo . ng */
 } pc_bsdf_out;
@@ -154,6 +155,8 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
                            pc_transport mode, float *pdf, float *pdf_rev);
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
                       float *pdf_rev);
+bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, float u0, float u1,
+                        float u2, pc_transport mode, pc_bsdf_sampled *out);
 /* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);

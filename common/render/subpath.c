@@ -100,7 +100,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     if (!(q > 0.f) || pc_rng_f(rng) >= q) break;
     pc_bsdf_sampled bs;
     float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
-    if (!pc_bsdf_sample(m, s->textures, &cur->sh, cur->wo, u0, u1, u2, mode, &bs)) break;
+    if (!pc_bsdf_sample_out(&cur->out, s->textures, &cur->sh, u0, u1, u2, mode, &bs)) break;
     if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
     beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, cur->sh.sh.n) / (bs.pdf * q)));
     if (!v3_is_finite(beta) || v3_is_zero(beta)) break;
