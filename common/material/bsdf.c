@@ -163,16 +163,6 @@ typedef struct local_pair {
   float go, gi; /* cosines with the geometric normal (sign irrelevant: only products used) */
 } local_pair;
 
-/* The pair in the shading frame, not yet turned over; false if the sides disagree (then every
- * query of the pair, either way round, is zero). */
-static bool to_local(const pc_shading *sh, vec3 wo, vec3 wi, local_pair *p) {
-  p->wo = frame_to_local(&sh->sh, wo);
-  p->wi = frame_to_local(&sh->sh, wi);
-  p->go = v3_dot(wo, sh->ng);
-  p->gi = v3_dot(wi, sh->ng);
-  return sides_agree(p->wo.z, p->wi.z, p->go, p->gi);
-}
-
 /* The pair as the lobes see it: turned over if twosided says so for its wo. */
 static local_pair oriented(const pc_material *m, local_pair p) {
   if (flips(m, p.wo.z)) {
@@ -205,62 +195,109 @@ static float pdf_local(const pc_material *m, const pc_texture *texs, const pc_sh
  * crosses between the two frames, grazing to the bumped surface. */
 static bool bump_side(const pc_shading *sh, vec3 w) { return v3_dot(w, sh->nb) * v3_dot(w, sh->sh.n) > 0.f; }
 
-/* The material a query of (wo, wi) evaluates: a bumpmap's wrapped one (the shading frame is
- * already the bumped one, see pc_shading_make), or NULL where the query is zero. */
-static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec3 wo, const vec3 *wi) {
+/* The material a query from wo evaluates: a bumpmap's wrapped one (the shading frame is already
+ * the bumped one, see pc_shading_make), or NULL where every query is zero. */
+static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec3 wo) {
   if (m->type != PC_MAT_BUMPMAP) return m; /* (a twosided bumpmap's frame is on wo's side already) */
-  if (!m->inner || m->inner->type == PC_MAT_BUMPMAP || !bump_side(sh, wo) || (wi && !bump_side(sh, *wi))) return NULL;
+  if (!m->inner || m->inner->type == PC_MAT_BUMPMAP || !bump_side(sh, wo)) return NULL;
   return m->inner;
+}
+
+pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo) {
+  pc_bsdf_out o;
+  o.m = unwrap(m, sh, wo);
+  o.bump = o.m && o.m != m;
+  o.delta = o.m && pc_bsdf_is_delta(o.m);
+  o.local = frame_to_local(&sh->sh, wo);
+  o.g = v3_dot(wo, sh->ng);
+  return o;
+}
+
+/* The pair (o's wo, wi) in the shading frame, not yet turned over; false where every query of
+ * the pair, either way round, is zero (a bumpmap's wi on different sides of its two frames, or
+ * the sides of the shading and geometric normals disagree). */
+static inline bool out_pair(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, local_pair *p) {
+  if (!o->m || o->delta || (o->bump && !bump_side(sh, wi))) return false;
+  p->wo = o->local;
+  p->wi = frame_to_local(&sh->sh, wi);
+  p->go = o->g;
+  p->gi = v3_dot(wi, sh->ng);
+  return sides_agree(p->wo.z, p->wi.z, p->go, p->gi);
 }
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi, pc_transport mode) {
   local_pair p;
-  if (!(m = unwrap(m, sh, wo, &wi))) return v3s(0.f);
-  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return v3s(0.f);
-  return eval_local(m, texs, sh, oriented(m, p), mode);
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  if (!out_pair(&o, sh, wi, &p)) return v3s(0.f);
+  return eval_local(o.m, texs, sh, oriented(o.m, p), mode);
 }
 
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi) {
   local_pair p;
-  if (!(m = unwrap(m, sh, wo, &wi))) return 0.f;
-  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, &p)) return 0.f;
-  return pdf_local(m, texs, sh, oriented(m, p));
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  if (!out_pair(&o, sh, wi, &p)) return 0.f;
+  return pdf_local(o.m, texs, sh, oriented(o.m, p));
 }
 
-/* Both pdfs of the pair; false (pdfs 0) where every query is zero. */
-static bool pdfs_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
-                       local_pair *p, float *pdf, float *pdf_rev) {
+/* Both pdfs of pair p, q = oriented(o->m, p). A diffuse pair, the commonest query, skips the lobe
+ * dispatch: pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped
+ * pair's orientation is q's; a pair on two sides has pdfs 0 either way). */
+static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, local_pair p,
+                             local_pair q, float *pdf, float *pdf_rev) {
+  if (o->m->type == PC_MAT_DIFFUSE) {
+    bool above = q.wo.z > 0.f && q.wi.z > 0.f;
+    *pdf = above ? q.wi.z * PC_INV_PI : 0.f;
+    *pdf_rev = above ? q.wo.z * PC_INV_PI : 0.f;
+  } else {
+    *pdf = pdf_local(o->m, texs, sh, q);
+    *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+  }
+}
+
+void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
+                      float *pdf_rev) {
+  local_pair p;
   *pdf = *pdf_rev = 0.f;
-  if (!(m = unwrap(m, sh, wo, &wi))) return false;
-  if (pc_bsdf_is_delta(m) || !to_local(sh, wo, wi, p)) return false;
-  *pdf = pdf_local(m, texs, sh, oriented(m, *p));
-  *pdf_rev = pdf_local(m, texs, sh, oriented(m, swapped(*p)));
-  return true;
+  if (out_pair(o, sh, wi, &p)) pdfs_pair(o, texs, sh, p, oriented(o->m, p), pdf, pdf_rev);
+}
+
+vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
+                           pc_transport mode, float *pdf, float *pdf_rev) {
+  local_pair p;
+  *pdf = *pdf_rev = 0.f;
+  if (!out_pair(o, sh, wi, &p)) return v3s(0.f);
+  local_pair q = oriented(o->m, p);
+  pdfs_pair(o, texs, sh, p, q, pdf, pdf_rev);
+  return eval_local(o->m, texs, sh, q, mode);
 }
 
 void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
                   float *pdf, float *pdf_rev) {
-  local_pair p;
-  pdfs_local(m, texs, sh, wo, wi, &p, pdf, pdf_rev);
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  pc_bsdf_pdfs_out(&o, texs, sh, wi, pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                        vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
-  local_pair p;
-  if (!pdfs_local(m, texs, sh, wo, wi, &p, pdf, pdf_rev)) return v3s(0.f);
-  m = unwrap(m, sh, wo, &wi);
-  return eval_local(m, texs, sh, oriented(m, p), mode);
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  return pc_bsdf_eval_pdfs_out(&o, texs, sh, wi, mode, pdf, pdf_rev);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
-  const pc_material *m_top = m;
+  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  return pc_bsdf_sample_out(&o, texs, sh, u0, u1, u2, mode, out);
+}
+
+bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, float u0, float u1,
+                        float u2, pc_transport mode, pc_bsdf_sampled *out) {
+  const pc_material *m = o->m;
   *out = (pc_bsdf_sampled){0};
-  if (!(m = unwrap(m, sh, wo, NULL))) return false;
-  vec3 lo = frame_to_local(&sh->sh, wo);
-  float go = v3_dot(wo, sh->ng);
+  if (!m) return false;
+  vec3 lo = o->local;
+  float go = o->g;
   float zsign = flips(m, lo.z) ? -1.f : 1.f;
   lo.z *= zsign;
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
@@ -272,7 +309,7 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
    * last bit. */
   s.wi = frame_to_local(&sh->sh, wi);
   s.wi.z *= zsign;
-  if (!sides_agree(lo.z, s.wi.z, go, gi) || (m != m_top && !bump_side(sh, wi))) return false;
+  if (!sides_agree(lo.z, s.wi.z, go, gi) || (o->bump && !bump_side(sh, wi))) return false;
   vec3 f;
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));

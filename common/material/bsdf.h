@@ -139,6 +139,24 @@ vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_sh
 /* pc_bsdf_pdf(wo, wi) in *pdf and pc_bsdf_pdf(wi, wo) in *pdf_rev. */
 void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
                   float *pdf, float *pdf_rev);
+
+/* The wo side of the queries above, brought into the shading frame once: a path vertex answers
+ * many queries with the same wo (each connection, and the pdfs of the edge it extends along).
+ * The *_out queries return bit for bit what the plain ones return for that wo. */
+typedef struct pc_bsdf_out {
+  const pc_material *m; /* what the queries evaluate (a bumpmap's wrapped material); NULL: all zero */
+  bool bump;            /* a bumpmap's: wi must be on the same side of both frames too */
+  bool delta;           /* m is all delta lobes: only sampling answers */
+  vec3 local;           /* wo in the shading frame (not turned over by twosided) */
+  float g;              /* wo . ng */
+} pc_bsdf_out;
+pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo);
+vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
+                           pc_transport mode, float *pdf, float *pdf_rev);
+void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
+                      float *pdf_rev);
+bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, float u0, float u1,
+                        float u2, pc_transport mode, pc_bsdf_sampled *out);
 /* Samples wi with three uniform numbers; returns false if no direction (absorbed). */
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);

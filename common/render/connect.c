@@ -72,7 +72,7 @@ bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vert
   c->rays++;
   /* A vertex on the environment is at infinity in direction -lv->wo from the eye vertex. */
   if (lv->kind == PC_VTX_ENV) return pc_scene_escapes(c->scene, ev->p, ev->ng, v3_neg(lv->wo));
-  return pc_scene_visible(c->scene, lv->p, lv->ng, ev->p, ev->ng);
+  return pc_scene_visible_eps(c->scene, lv->p, lv->ng, lv->eps, ev->p, ev->ng, ev->eps);
 }
 
 bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,
@@ -115,8 +115,7 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
       pdf_l_fwd = cos_l * PC_INV_PI;
     }
   } else {
-    const pc_material *m = &s->materials[lv->material];
-    fl = v3_scale(pc_bsdf_eval_pdfs(m, s->textures, &lv->sh, lv->wo, w, PC_IMPORTANCE, &pdf_l_fwd, &pdf_l_rev),
+    fl = v3_scale(pc_bsdf_eval_pdfs_out(&lv->out, s->textures, &lv->sh, w, PC_IMPORTANCE, &pdf_l_fwd, &pdf_l_rev),
                   v3_absdot(w, lv->sh.sh.n));
     if (v3_is_zero(fl)) return false;
     cos_l = v3_absdot(w, lv->ng);
@@ -135,8 +134,7 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
     fe = v3s(pdf_e_fwd);
     cos_e = 0.f; /* the pinhole cannot be hit */
   } else {
-    const pc_material *m = &s->materials[ev->material];
-    fe = v3_scale(pc_bsdf_eval_pdfs(m, s->textures, &ev->sh, ev->wo, we, PC_RADIANCE, &pdf_e_fwd, &pdf_e_rev),
+    fe = v3_scale(pc_bsdf_eval_pdfs_out(&ev->out, s->textures, &ev->sh, we, PC_RADIANCE, &pdf_e_fwd, &pdf_e_rev),
                   v3_absdot(w, ev->sh.sh.n));
     if (v3_is_zero(fe)) return false;
     cos_e = v3_absdot(w, ev->ng);

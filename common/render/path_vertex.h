@@ -46,9 +46,11 @@ typedef struct pc_path_vertex {
   pc_vertex_kind kind;
   vec3 p;
   vec3 ng;         /* geometric normal (zero for the camera and point lights) */
+  float eps;       /* pc_offset_eps(p) where ng is not zero: rays leave and reach p that far off */
   pc_shading sh;   /* surfaces */
   vec3 wo;         /* unit direction toward the previous vertex of the sub-path (surfaces);
                       PC_VTX_ENV: the direction its light travels into the scene */
+  pc_bsdf_out out; /* surfaces: wo as the BSDF queries of every connection here need it */
   vec3 beta;       /* sub-path contribution / pdf up to this vertex, excluding its own scattering;
                       light vertex: Le (or intensity) / (choice pdf * area pdf) */
   int material;    /* surfaces */

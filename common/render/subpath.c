@@ -21,7 +21,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
   pc_transport mode = light_side ? PC_IMPORTANCE : PC_RADIANCE;
   while (nv < max_vertices) {
     const pc_path_vertex *prev = &v[nv - 1];
-    vec3 o = v3_is_zero(prev->ng) ? prev->p : pc_offset_origin(s, prev->p, prev->ng, dir);
+    vec3 o = v3_is_zero(prev->ng) ? prev->p : pc_offset_by(prev->p, prev->ng, dir, prev->eps);
     pc_hit h;
     c->rays++;
     bool escaped = !pc_scene_intersect(s, o, dir, INFINITY, &h);
@@ -48,9 +48,8 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     if (prev->kind == PC_VTX_SURFACE) {
       cos_out = v3_absdot(prev->ng, da);
       if (!delta) {
-        const pc_material *pm = &s->materials[prev->material];
         float pf, pr;
-        pc_bsdf_pdfs(pm, s->textures, &prev->sh, prev->wo, da, &pf, &pr);
+        pc_bsdf_pdfs_out(&prev->out, s->textures, &prev->sh, da, &pf, &pr);
         /* The offset origin turns the edge by about eps / distance. A lobe narrower than that
          * (a near-specular rough surface, e.g. roughdielectric alpha 1e-4) would find its own
          * sample impossible along the edge and lose the path: it keeps the sampled pdfs. */
@@ -81,8 +80,10 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->kind = PC_VTX_SURFACE;
     cur->p = h.p;
     cur->ng = h.ng;
+    cur->eps = pc_offset_eps(s, h.p);
     cur->sh = pc_shading_from_hit(s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
+    cur->out = pc_bsdf_out_make(m, &cur->sh, cur->wo);
     cur->beta = beta;
     cur->material = shape->material;
     cur->light = shape->light;
@@ -100,7 +101,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     if (!(q > 0.f) || pc_rng_f(rng) >= q) break;
     pc_bsdf_sampled bs;
     float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
-    if (!pc_bsdf_sample(m, s->textures, &cur->sh, cur->wo, u0, u1, u2, mode, &bs)) break;
+    if (!pc_bsdf_sample_out(&cur->out, s->textures, &cur->sh, u0, u1, u2, mode, &bs)) break;
     if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
     beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, cur->sh.sh.n) / (bs.pdf * q)));
     if (!v3_is_finite(beta) || v3_is_zero(beta)) break;
@@ -135,6 +136,7 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
     out->kind = PC_VTX_ENV;
     out->p = s->scene_center;
     out->ng = v3s(0.f);
+    out->eps = 0.f;
     out->wo = v3_neg(d);
     out->beta = pa > 0.f ? v3_scale(pc_env_le(l, d), 1.f / pa) : v3s(0.f);
     out->mis_near = pa > 0.f ? pc_mis(n, 1.f / pa) : 0.f;
@@ -146,6 +148,7 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   out->kind = PC_VTX_LIGHT;
   out->p = lp.p;
   out->ng = lp.n;
+  out->eps = pc_offset_eps(s, lp.p);
   out->wo = v3s(0.f);
   /* A spot's profile enters with the emitted direction (pc_light_subpath, pc_connect). */
   out->beta = v3_scale(pc_light_is_delta_pos(l) ? l->intensity : l->radiance, 1.f / pa);
@@ -199,6 +202,7 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
   v0->kind = PC_VTX_CAMERA;
   v0->p = cam->pos;
   v0->ng = v3s(0.f);
+  v0->eps = 0.f;
   v0->wo = v3s(0.f);
   v0->beta = v3s(1.f); /* We cos / pdf, per pixel */
   v0->material = -1;

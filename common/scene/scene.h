@@ -126,5 +126,13 @@ bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb);
 bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
 /* Ray origin offset off a surface, on the side of direction d. */
 vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
+/* The distance pc_offset_origin moves point p by, for callers that keep it with the point (a path
+ * vertex leaves or receives a ray per connection), and the offset with it. */
+float pc_offset_eps(const pc_scene *s, vec3 p);
+static inline vec3 pc_offset_by(vec3 p, vec3 ng, vec3 d, float eps) {
+  return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
+}
+/* pc_scene_visible with each end's pc_offset_eps given (ea, eb). */
+bool pc_scene_visible_eps(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb);
 
 #endif

@@ -290,10 +290,11 @@ bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *h
   return true;
 }
 
-vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
-  float eps = 1e-4f * fmaxf(1.f, fmaxf(v3_maxabs(p), s->scene_radius * 1e-2f));
-  return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
+float pc_offset_eps(const pc_scene *s, vec3 p) {
+  return 1e-4f * fmaxf(1.f, fmaxf(v3_maxabs(p), s->scene_radius * 1e-2f));
 }
+
+vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) { return pc_offset_by(p, ng, d, pc_offset_eps(s, p)); }
 
 /* Whether nothing blocks the segment o + t d, t in [0, tfar). */
 static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
@@ -316,9 +317,13 @@ bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
   return unoccluded(s, v3_is_zero(ng) ? p : pc_offset_origin(s, p, ng, d), d, INFINITY);
 }
 
-bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
+bool pc_scene_visible_eps(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb) {
   vec3 ab = v3_sub(b, a);
-  vec3 o = v3_is_zero(na) ? a : pc_offset_origin(s, a, na, ab);
-  vec3 t = v3_is_zero(nb) ? b : pc_offset_origin(s, b, nb, v3_neg(ab));
+  vec3 o = v3_is_zero(na) ? a : pc_offset_by(a, na, ab, ea);
+  vec3 t = v3_is_zero(nb) ? b : pc_offset_by(b, nb, v3_neg(ab), eb);
   return unoccluded(s, o, v3_sub(t, o), 1.f - 1e-4f);
+}
+
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
+  return pc_scene_visible_eps(s, a, na, pc_offset_eps(s, a), b, nb, pc_offset_eps(s, b));
 }
