@@ -131,7 +131,7 @@ static void test_grid(void **state) {
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
   /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4 */
-  script b = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.3, [4] = 0.2, [8] = 0.25}};
+  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
   run_script(&b, &p);
   assert_int_equal(b.calls, 5);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
