@@ -247,9 +247,8 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
 static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, local_pair p,
                              local_pair q, float *pdf, float *pdf_rev) {
   if (o->m->type == PC_MAT_DIFFUSE) {
-    bool above = q.wo.z > 0.f && q.wi.z > 0.f;
-    *pdf = above ? q.wi.z * PC_INV_PI : 0.f;
-    *pdf_rev = above ? q.wo.z * PC_INV_PI : 0.f;
+    *pdf = pc_diffuse_pdf(NULL, q.wo, q.wi);
+    *pdf_rev = pc_diffuse_pdf(NULL, q.wi, q.wo);
   } else {
     *pdf = pdf_local(o->m, texs, sh, q);
     *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));

@@ -11,13 +11,13 @@
  * dielectric, 5 and 8 a smooth aluminium conductor, anything else a diffuse of Kd (black when
  * Kd is not given); then a bump map wraps it, and a mask wraps that. Each is built as the
  * equivalent XML element and read by the ordinary BSDF reader, so every check applies. */
-#include <errno.h>
-#include <math.h>
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "file_read.h"
+#include "parse.h"
 #include "scene_xml_ctx.h"
 
 #define MTL_MAX_FILE ((size_t)64 << 20)
@@ -63,13 +63,7 @@ static bool is_space(char ch) { return ch == ' ' || ch == '\t' || ch == '\r' || 
 static char *trimmed(const char *s, const char *end) {
   while (s < end && is_space(*s)) s++;
   while (end > s && is_space(end[-1])) end--;
-  size_t len = (size_t)(end - s);
-  char *out = len <= MTL_MAX_NAME ? malloc(len + 1) : NULL;
-  if (out) {
-    memcpy(out, s, len);
-    out[len] = 0;
-  }
-  return out;
+  return (size_t)(end - s) <= MTL_MAX_NAME ? strndup(s, (size_t)(end - s)) : NULL;
 }
 
 /* The next whitespace-separated token of [*s, end), malloc'd; NULL at the end of the line. */
@@ -85,10 +79,9 @@ static char *token(const char **s, const char *end) {
 static int numbers(pc_sx *c, const pc_sx_mtl *lib, int line, const char *key, const char *s, const char *end, float *out,
                    int count) {
   for (int i = 0; i < count; i++) {
-    char *t = token(&s, end), *endp = NULL;
-    errno = 0;
-    double v = t ? strtod(t, &endp) : 0;
-    bool ok = t && endp && *endp == 0 && errno == 0 && isfinite(v);
+    char *t = token(&s, end);
+    double v;
+    bool ok = t && pc_parse_f64(t, -FLT_MAX, FLT_MAX, &v);
     free(t);
     if (!ok)
       return pc_errf(c->e, PC_EPARSE, "%s:%d: '%s' needs %d finite number%s", lib->display, line, key, count, count > 1 ? "s" : "");
@@ -234,6 +227,13 @@ typedef struct xb {
   int line;
 } xb;
 
+/* Adds child as the last child of parent. */
+static void append(pc_xml_node *parent, pc_xml_node *child) {
+  pc_xml_node **p = &parent->first;
+  while (*p) p = &(*p)->next;
+  *p = child;
+}
+
 static pc_xml_node *el(xb *b, pc_xml_node *parent, const char *name, const char *a1, const char *v1, const char *a2,
                        const char *v2) {
   pc_xml_node *n = calloc(1, sizeof *n);
@@ -253,11 +253,7 @@ static pc_xml_node *el(xb *b, pc_xml_node *parent, const char *name, const char 
     pc_xml_free(n);
     return NULL;
   }
-  if (parent) {
-    pc_xml_node **p = &parent->first;
-    while (*p) p = &(*p)->next;
-    *p = n;
-  }
+  if (parent) append(parent, n);
   return n;
 }
 
@@ -340,9 +336,7 @@ static int material_tree(pc_sx *c, xb *b, const pc_sx_mtl *lib, const mtl_entry 
     pc_xml_node *w = el(b, NULL, "bsdf", "type", "bumpmap", NULL, NULL);
     if (w) {
       bitmap_el(b, w, NULL, bump, true);
-      pc_xml_node **p = &w->first;
-      while (*p) p = &(*p)->next;
-      *p = bsdf;
+      append(w, bsdf);
       bsdf = w;
     }
   }
@@ -352,9 +346,7 @@ static int material_tree(pc_sx *c, xb *b, const pc_sx_mtl *lib, const mtl_entry 
     if (w) {
       if (m->map_d) rc = map_el(c, b, lib, m, w, "opacity", m->map_d);
       else number_el(b, w, "spectrum", "opacity", &m->d, 1);
-      pc_xml_node **p = &w->first;
-      while (*p) p = &(*p)->next;
-      *p = bsdf;
+      append(w, bsdf);
       bsdf = w;
     }
   }
