@@ -10,10 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* What a lookup reads of record r, packed into 40 bytes. Its PMF is at mass[2*r*V ..), its CMF
+ * right after it. */
 typedef struct pc_irec_record {
-  pc_irec_site site;
-  size_t offset; /* PMF at mass[offset .. offset+V), CMF right after it */
-  double total;  /* unnormalized importance sum; 0: sees no light vertex */
+  vec3 p, n, wi;
+  bool lambertian;
+  bool seen; /* its importance sum is > 0: it has a distribution */
 } pc_irec_record;
 
 /* The first bad callback value a thread met during a build (record < 0: none). */
@@ -27,6 +29,7 @@ struct pc_irec_store {
   size_t max_bytes;
   int R, V;
   pc_irec_record *rec;
+  double *total;        /* per record: unnormalized importance sum; 0: sees no light vertex */
   vec3 *pos;            /* record positions, the kd-tree's input */
   size_t rec_cap;
   float *mass;          /* all PMFs and CMFs: 2*R*V floats */
@@ -40,19 +43,22 @@ struct pc_irec_store {
   uint32_t epoch;       /* build counter: cached neighbour sets of older builds are stale */
   int cache_k;          /* neighbours memoised per cell (the knn given at creation) */
   size_t cache_stride;  /* bytes per cache entry */
-  unsigned char *cache; /* per thread: PC_IREC_CACHE_CELLS entries */
+  unsigned char *cache; /* per thread: PC_IREC_CACHE_CELLS entries, each on its own cache lines */
 };
 
-/* A memoised neighbour set: the cache_k nearest records of one cell's centre. */
+/* A memoised neighbour set: the cache_k nearest records of one cell's centre, and how many of
+ * them have a distribution (none: the lookup is over without reading a record). The entries
+ * are cache-line aligned, so a probe that hits reads one line for knn <= 12. */
 typedef struct cell_entry {
   uint64_t key;
   uint32_t epoch;
-  int n;
+  int16_t n, seen;
   int idx[];
 } cell_entry;
+#define CACHE_LINE 64
 
 static size_t per_record_bytes(void) {
-  return sizeof(pc_irec_record) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
+  return sizeof(pc_irec_record) + sizeof(double) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
 }
 
 static size_t fixed_bytes(const pc_irec_store *s) {
@@ -78,12 +84,17 @@ int pc_irec_create(int nthreads, int knn, size_t max_bytes, pc_irec_store **out,
   *out = NULL;
   if (nthreads < 1 || nthreads > 4096) return pc_errf(e, PC_EINVAL, "importance records: thread count %d out of range 1..4096", nthreads);
   if (knn < 1 || knn > PC_IREC_MAX_KNN) return pc_errf(e, PC_EINVAL, "importance records: knn %d out of range 1..%d", knn, PC_IREC_MAX_KNN);
-  size_t stride = (sizeof(cell_entry) + (size_t)knn * sizeof(int) + 7) & ~(size_t)7;
+  size_t stride = (sizeof(cell_entry) + (size_t)knn * sizeof(int) + CACHE_LINE - 1) & ~(size_t)(CACHE_LINE - 1);
+  size_t cache_bytes = (size_t)nthreads * PC_IREC_CACHE_CELLS * stride;
   pc_irec_store *s = calloc(1, sizeof *s);
   if (s) s->terr = calloc((size_t)nthreads, sizeof *s->terr);
-  if (s) s->cache = calloc((size_t)nthreads * PC_IREC_CACHE_CELLS, stride);
+  if (s) s->cache = aligned_alloc(CACHE_LINE, cache_bytes);
+  if (s && s->cache) memset(s->cache, 0, cache_bytes);
   if (!s || !s->terr || !s->cache) {
-    if (s) free(s->terr);
+    if (s) {
+      free(s->terr);
+      free(s->cache);
+    }
     free(s);
     return pc_errf(e, PC_ENOMEM, "importance records: out of memory");
   }
@@ -97,11 +108,13 @@ int pc_irec_create(int nthreads, int knn, size_t max_bytes, pc_irec_store **out,
 
 static void release_buffers(pc_irec_store *s) {
   free(s->rec);
+  free(s->total);
   free(s->pos);
   free(s->mass);
   free(s->scratch);
   pc_kdtree_free(&s->tree);
   s->rec = NULL;
+  s->total = NULL;
   s->pos = NULL;
   s->mass = NULL;
   s->scratch = NULL;
@@ -129,9 +142,9 @@ size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight) {
 
 int pc_irec_count(const pc_irec_store *s) { return s->R; }
 int pc_irec_light_count(const pc_irec_store *s) { return s->V; }
-const float *pc_irec_pmf(const pc_irec_store *s, int r) { return s->mass + s->rec[r].offset; }
-const float *pc_irec_cmf(const pc_irec_store *s, int r) { return s->mass + s->rec[r].offset + (size_t)s->V; }
-double pc_irec_total(const pc_irec_store *s, int r) { return s->rec[r].total; }
+const float *pc_irec_pmf(const pc_irec_store *s, int r) { return s->mass + 2 * (size_t)r * (size_t)s->V; }
+const float *pc_irec_cmf(const pc_irec_store *s, int r) { return pc_irec_pmf(s, r) + s->V; }
+double pc_irec_total(const pc_irec_store *s, int r) { return s->total[r]; }
 
 /* Fills one PMF/CMF row for the eye vertex z. Returns the importance sum, or -1 after noting
  * the first bad value in *te. */
@@ -168,6 +181,7 @@ static double fill_row(pc_irec_importance_fn fn, void *user, int thread, const p
 
 typedef struct build_job {
   pc_irec_store *s;
+  const pc_irec_site *sites;
   pc_irec_importance_fn fn;
   void *user;
 } build_job;
@@ -175,9 +189,9 @@ typedef struct build_job {
 static void build_record(void *arg, int thread, int r) {
   build_job *j = arg;
   pc_irec_store *s = j->s;
-  pc_irec_record *rec = &s->rec[r];
-  float *pmf = s->mass + rec->offset;
-  rec->total = fill_row(j->fn, j->user, thread, &rec->site, s->V, pmf, pmf + s->V, r, &s->terr[thread]);
+  float *pmf = s->mass + 2 * (size_t)r * (size_t)s->V;
+  s->total[r] = fill_row(j->fn, j->user, thread, &j->sites[r], s->V, pmf, pmf + s->V, r, &s->terr[thread]);
+  s->rec[r].seen = s->total[r] > 0.0;
 }
 
 /* Grows the buffers to the build's needs, never past the limit: capacities kept from an
@@ -199,9 +213,11 @@ static int reserve(pc_irec_store *s, int R, int V, pc_err *e) {
   if (want_rec > s->rec_cap) {
     pc_irec_record *r = realloc(s->rec, want_rec * sizeof *r);
     if (r) s->rec = r;
+    double *t = realloc(s->total, want_rec * sizeof *t);
+    if (t) s->total = t;
     vec3 *p = realloc(s->pos, want_rec * sizeof *p);
     if (p) s->pos = p;
-    if (!r || !p) return pc_errf(e, PC_ENOMEM, "importance records: out of memory for %d records", R);
+    if (!r || !t || !p) return pc_errf(e, PC_ENOMEM, "importance records: out of memory for %d records", R);
     s->rec_cap = want_rec;
   }
   if (want_mass > s->mass_cap) {
@@ -261,16 +277,15 @@ int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int
   int rc = reserve(s, nrecords, nlight, e);
   if (rc != PC_OK) return rc;
   for (int r = 0; r < nrecords; r++) {
-    s->rec[r].site = sites[r];
-    s->rec[r].offset = 2 * (size_t)r * (size_t)nlight;
-    s->rec[r].total = 0.0;
+    s->rec[r] = (pc_irec_record){sites[r].p, sites[r].n, sites[r].wi, sites[r].lambertian, false};
+    s->total[r] = 0.0;
     s->pos[r] = sites[r].p;
   }
   rc = pc_kdtree_build(&s->tree, s->pos, nrecords, e);
   if (rc != PC_OK) return rc;
   for (int t = 0; t < s->nthreads; t++) s->terr[t].record = -1;
   s->V = nlight;
-  build_job job = {s, fn, user};
+  build_job job = {s, sites, fn, user};
   if (nlight > 0) {
     if (pool) pc_pool_run(pool, nrecords, build_record, &job);
     else
@@ -316,32 +331,49 @@ static void normalize_weights(pc_irec_lookup *L) {
 /* Cell coordinates within +-2^20 pack into one 63-bit key. */
 #define CELL_RANGE 1048576.f
 
+/* How many of the n records idx[] have a distribution. */
+static int count_seen(const pc_irec_store *s, const int *idx, int n) {
+  int seen = 0;
+  for (int j = 0; j < n; j++) seen += s->rec[idx[j]].seen;
+  return seen;
+}
+
 /* The knn nearest records of the centre of z's cell (of z itself when the build has no cell
  * size or z lies absurdly far out): a pure function of the position, so the lookup does not
- * depend on which thread asks or in what order. The cache_k-neighbour sets are memoised per
- * thread: neighbouring pixels mostly share a cell, and the kd-tree search is the costliest
- * part of a lookup. */
-static int neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *idx) {
+ * depend on which thread asks or in what order. Returns their indices (in `buf`, or in the
+ * memo) and count, and in *seen how many of them have a distribution. The cache_k-neighbour
+ * sets are memoised per thread: neighbouring pixels mostly share a cell, and the kd-tree search
+ * is the costliest part of a lookup. */
+static const int *neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *buf, int *count, int *seen) {
   float d2[PC_IREC_MAX_KNN];
-  if (!(s->cell > 0.f)) return pc_kdtree_knn(&s->tree, p, knn, idx, d2);
-  vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
-  f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
-  if (!(fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE))
-    return pc_kdtree_knn(&s->tree, p, knn, idx, d2);
-  vec3 centre = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
-  if (knn != s->cache_k) return pc_kdtree_knn(&s->tree, centre, knn, idx, d2);
-  uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
-                 (uint64_t)(int64_t)(f.z + CELL_RANGE);
-  uint64_t h = key * 0x9E3779B97F4A7C15ull;
-  size_t slot = (size_t)(h >> 40) & (PC_IREC_CACHE_CELLS - 1);
-  cell_entry *c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
-  if (c->epoch != s->epoch || c->key != key) {
-    c->n = pc_kdtree_knn(&s->tree, centre, knn, c->idx, d2);
-    c->key = key;
-    c->epoch = s->epoch;
+  vec3 q = p;
+  cell_entry *c = NULL;
+  if (s->cell > 0.f) {
+    vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
+    f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
+    if (fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE) {
+      q = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
+      if (knn == s->cache_k) {
+        uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
+                       (uint64_t)(int64_t)(f.z + CELL_RANGE);
+        uint64_t h = key * 0x9E3779B97F4A7C15ull;
+        size_t slot = (size_t)(h >> 40) & (PC_IREC_CACHE_CELLS - 1);
+        c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
+        if (c->epoch != s->epoch || c->key != key) {
+          c->n = (int16_t)pc_kdtree_knn(&s->tree, q, knn, c->idx, d2);
+          c->seen = (int16_t)count_seen(s, c->idx, c->n);
+          c->key = key;
+          c->epoch = s->epoch;
+        }
+        *count = c->n;
+        *seen = c->seen;
+        return c->idx;
+      }
+    }
   }
-  for (int j = 0; j < c->n; j++) idx[j] = c->idx[j];
-  return c->n;
+  *count = pc_kdtree_knn(&s->tree, q, knn, buf, d2);
+  *seen = count_seen(s, buf, *count);
+  return buf;
 }
 
 void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
@@ -352,23 +384,24 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   if (s->V == 0 || s->R == 0) return;
   if (knn < 1) knn = 1;
   if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
-  int idx[PC_IREC_MAX_KNN];
+  int buf[PC_IREC_MAX_KNN], k, seen;
   double d[PC_IREC_MAX_KNN], dsum = 0.0;
-  int k = neighbours(s, thread, z->p, knn, idx);
+  const int *idx = neighbours(s, thread, z->p, knn, buf, &k, &seen);
+  if (seen == 0) return; /* none of them has a distribution */
   for (int j = 0; j < k; j++) {
-    d[j] = v3_len(v3_sub(z->p, s->pos[idx[j]]));
+    d[j] = v3_len(v3_sub(z->p, s->rec[idx[j]].p));
     dsum += d[j];
   }
   for (int j = 0; j < k; j++) {
     const pc_irec_record *rec = &s->rec[idx[j]];
-    if (rec->total <= 0.0) continue; /* no distribution to contribute */
-    double cn = v3_dot(z->n, rec->site.n), cw = z->lambertian && rec->site.lambertian ? 1.0 : v3_dot(z->wi, rec->site.wi);
+    if (!rec->seen) continue; /* no distribution to contribute */
+    double cn = v3_dot(z->n, rec->n), cw = z->lambertian && rec->lambertian ? 1.0 : v3_dot(z->wi, rec->wi);
     double w = 0.0;
     /* The distance factor ranks records against each other; a lone record keeps factor 1. */
     if (cn > 0.0 && cw > 0.0) w = cn * cw * (k > 1 && dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);
     L->w[L->n] = w;
-    L->pmf[L->n] = s->mass + rec->offset;
-    L->cmf[L->n] = s->mass + rec->offset + (size_t)s->V;
+    L->pmf[L->n] = pc_irec_pmf(s, idx[j]);
+    L->cmf[L->n] = L->pmf[L->n] + s->V;
     L->n++;
   }
   if (L->n > 0) normalize_weights(L);
