@@ -28,8 +28,9 @@
 #include "vecmath.h"
 
 #define PC_IREC_MAX_KNN PC_KDTREE_MAX_K
-/* Memoised neighbour sets per thread (a power of two). */
-#define PC_IREC_CACHE_CELLS 8192
+/* Memoised neighbour sets per thread. */
+#define PC_IREC_CACHE_BITS 13
+#define PC_IREC_CACHE_CELLS (1 << PC_IREC_CACHE_BITS)
 /* Cell size as a fraction of the median record-neighbourhood radius. */
 #define PC_IREC_CELL_FRACTION 0.5f
 
