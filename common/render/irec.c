@@ -28,6 +28,7 @@ struct pc_irec_store {
   int nthreads;
   size_t max_bytes;
   int R, V;
+  int nseen;            /* records with a distribution: with none, every lookup is uniform */
   pc_irec_record *rec;
   double *total;        /* per record: unnormalized importance sum; 0: sees no light vertex */
   vec3 *pos;            /* record positions, the kd-tree's input */
@@ -269,6 +270,7 @@ static void set_cell(pc_irec_store *s) {
 int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int nlight, pc_irec_importance_fn fn,
                   void *user, pc_pool *pool, pc_err *e) {
   s->R = 0;
+  s->nseen = 0;
   s->V = 0;
   s->tree.n = 0;
   if (nrecords < 0 || nlight < 0) return pc_errf(e, PC_EINVAL, "importance records: negative count (%d records, %d light vertices)", nrecords, nlight);
@@ -302,6 +304,8 @@ int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int
                    bad->v, bad->record, (double)bad->value);
   }
   s->R = nrecords;
+  s->nseen = 0;
+  for (int r = 0; r < nrecords; r++) s->nseen += s->rec[r].seen;
   set_cell(s);
   return PC_OK;
 }
@@ -382,7 +386,7 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   L->V = s->V;
   L->u = uniform_mix;
   L->n = 0;
-  if (s->V == 0 || s->R == 0) return;
+  if (s->V == 0 || s->nseen == 0) return;
   if (knn < 1) knn = 1;
   if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
   int buf[PC_IREC_MAX_KNN], k, seen;
