@@ -103,12 +103,15 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     for (int v = 0; v < p->nv; v++) add_inner(c, x, y, &p->lv[v], ev, inv_m);
     return;
   }
-  pc_irec_site z = pc_pcbpt_site(c->scene, ev);
   pc_irec_lookup L;
   if (set->pmf_mode == PC_PMF_EXACT) {
+    pc_path_vertex unit = *ev; /* pc_pcbpt_importance wants throughput 1 */
+    unit.beta = v3s(1.f);
+    pc_irec_site z = pc_pcbpt_site(c->scene, &unit);
     if (pc_irec_lookup_exact(p->store, c->thread, &z, pc_pcbpt_importance, c->pcbpt, set->uniform_mix, &L, NULL) != PC_OK)
       return;
   } else {
+    pc_irec_site z = pc_pcbpt_site(c->scene, ev);
     pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
   }
   /* The draws' component choices are stratified: each draw alone follows p_conn (so every

@@ -54,7 +54,10 @@ pc_irec_site pc_pcbpt_site(const pc_scene *scene, const pc_path_vertex *v);
 
 /* Unnormalized connection importance of stored light vertex v for the eye vertex behind z:
  * luminance(light throughput * f_conn) times the connection's MIS weight, shadow ray included
- * (a pc_irec_importance_fn; user is the pc_pcbpt). */
+ * (a pc_irec_importance_fn; user is the pc_pcbpt). The eye vertex must have throughput beta = 1:
+ * its eye sub-path's own throughput is common to every light vertex (it cancels in the PMF,
+ * Popov et al. eq. 12) and is left out so its colour does not skew the luminance; the caller
+ * sets it once per site rather than this copying the vertex for every light vertex. */
 float pc_pcbpt_importance(void *user, int thread, const pc_irec_site *z, int v);
 
 #endif
