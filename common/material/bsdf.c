@@ -268,6 +268,9 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   *pdf = *pdf_rev = 0.f;
   if (!out_pair(o, sh, wi, &p)) return v3s(0.f);
   local_pair q = oriented(o->m, p);
+  /* A diffuse pair through the surface: value and both pdfs are 0 (pc_diffuse_eval and _pdf),
+   * as the full query would find; PCBPT's connections to its stored vertices end here often. */
+  if (o->m->type == PC_MAT_DIFFUSE && !(q.wo.z > 0.f && q.wi.z > 0.f)) return v3s(0.f);
   pdfs_pair(o, texs, sh, p, q, pdf, pdf_rev);
   return eval_local(o->m, texs, sh, q, mode);
 }
