@@ -22,6 +22,7 @@
 
 struct pc_renderer {
   const pc_scene *scene;
+  pc_scene *view;           /* a moving scene's view at the current iteration's time, else NULL */
   pc_render_settings set;
   pc_pool *pool;
   pc_film scratch;     /* the iteration being rendered */
@@ -134,8 +135,16 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   if (threads == 0) threads = pc_cpu_count();
   pc_renderer *r = calloc(1, sizeof *r);
   if (!r) return pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
-  r->scene = scene;
   r->set = *settings;
+  if (pc_scene_moves(scene)) {
+    rc = pc_scene_view_create(scene, &r->view, e);
+    if (rc != PC_OK) {
+      free(r);
+      return rc;
+    }
+    scene = r->view;
+  }
+  r->scene = scene;
   r->tiles_x = (settings->width + TILE - 1) / TILE;
   r->tiles_y = (settings->height + TILE - 1) / TILE;
   rc = pc_film_init(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
@@ -203,6 +212,7 @@ void pc_renderer_destroy(pc_renderer *r) {
   free(r->verts);
   pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
+  pc_scene_view_destroy(r->view);
   free(r);
 }
 
@@ -358,6 +368,10 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
                      r->scratch.layers[i].name);
   for (uint64_t k = 0; k < count; k++) {
     double t0 = now_seconds();
+    if (r->view) {
+      int rc = pc_scene_view_set_time(r->view, pc_scene_time(r->view, r->set.seed, first + k), e);
+      if (rc != PC_OK) return rc;
+    }
     for (int i = 0; i < nthreads; i++) {
       r->tctx[i].iteration = first + k;
       r->tctx[i].rays = 0;

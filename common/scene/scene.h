@@ -8,6 +8,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "anim.h"
 #include "bsdf.h"
 #include "camera.h"
 #include "error.h"
@@ -27,6 +28,14 @@ typedef struct pc_shape {
   int material;          /* index into materials */
   int light;             /* index into lights if this shape is an area emitter, else -1 */
 } pc_shape;
+
+/* A shape whose toWorld is an <animation>: its shape in object space (the scene's shapes[shape]
+ * holds it moved to one time of the shutter). */
+typedef struct pc_motion {
+  int shape;
+  pc_anim anim;
+  pc_shape object;
+} pc_motion;
 
 /* PC_METHOD_AUTO is a choice, not an estimator: a pilot resolves it to bdpt or pcbpt with
  * parameters (common/render/pilot.h) before anything renders; the renderer refuses it. */
@@ -49,6 +58,12 @@ typedef struct pc_scene {
   pc_method method;           /* from <integrator type=...>: path, bdpt or pcbpt */
   int max_depth;              /* Mitsuba maxDepth: -1 infinite, 1 = emitters seen directly */
   int sample_count;           /* the <sampler>'s sampleCount (0: none): default iteration count */
+  /* Motion blur: each iteration renders the scene at one time drawn uniformly in the sensor's
+   * [shutter_open, shutter_close] (Mitsuba samples a time per path the same way); a renderer
+   * moves the animated shapes and sensor of its own view (pc_scene_view). */
+  float shutter_open, shutter_close;
+  pc_motion *motions; int nmotions;
+  pc_anim camera_anim;        /* n == 0: the sensor does not move */
   /* every file the scene read (itself first), for bundles: its real path, and its name below
    * root as the scene reaches it (a link inside the folder keeps its own name, so the unpacked
    * bundle holds every name the scene uses) */
@@ -103,6 +118,20 @@ void pc_scene_free(pc_scene *s);
 
 const char *pc_method_name(pc_method m);
 int pc_method_parse(const char *name, pc_method *out); /* "pt" or "path", "lt", "bdpt", ... */
+
+/* Motion blur (scene_motion.c). True if the scene changes during the shutter. */
+bool pc_scene_moves(const pc_scene *s);
+/* The time iteration `iteration` of job `seed` renders at (shutter_open for a still scene). */
+float pc_scene_time(const pc_scene *s, uint64_t seed, uint64_t iteration);
+/* Places the animated shapes and sensor of a loaded scene at `time` (pc_scene_build places them
+ * at shutter_open); without Embree data yet, only the plain data. */
+int pc_scene_place(pc_scene *s, float time, pc_err *e);
+/* A view of a built scene that a renderer moves to its iteration's time: the static shapes and
+ * everything else are shared with `s`, which must outlive it. */
+int pc_scene_view_create(const pc_scene *s, pc_scene **out, pc_err *e);
+/* Moves the view's animated shapes and sensor to `time`. */
+int pc_scene_view_set_time(pc_scene *view, float time, pc_err *e);
+void pc_scene_view_destroy(pc_scene *view);
 
 /* A ray hit with everything shading needs. */
 typedef struct pc_hit {

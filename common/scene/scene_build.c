@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "scene.h"
+#include "scene_embree.h"
 
 typedef struct embree_error {
   int failed;
@@ -80,6 +81,43 @@ static int build_lights(pc_scene *s, pc_err *e) {
   return PC_OK;
 }
 
+int pc_scene_attach_shape(const pc_scene *s, void *rtc_scene, int i, pc_err *e) {
+  RTCDevice dev = s->rtc_device;
+  const embree_error *ee = s->rtc_error;
+  const pc_shape *sh = &s->shapes[i];
+  RTCGeometry g;
+  if (sh->kind == PC_SHAPE_SPHERE) {
+    if (!rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_POINT_GEOMETRY_SUPPORTED))
+      return pc_errf(e, PC_EEMBREE, "%s: this Embree build has no sphere geometry", s->path);
+    g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, 1) : NULL;
+    if (!v) goto fail;
+    v[0] = sh->center.x; v[1] = sh->center.y; v[2] = sh->center.z; v[3] = sh->radius;
+  } else {
+    const pc_mesh *m = &sh->mesh;
+    g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, m->nverts) : NULL;
+    uint32_t *ix = v ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, m->ntris) : NULL;
+    if (!ix) goto fail;
+    memcpy(v, m->p, sizeof(vec3) * m->nverts);
+    memcpy(ix, m->idx, sizeof(uint32_t) * 3 * (size_t)m->ntris);
+  }
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(rtc_scene, g, (unsigned)i);
+  rtcReleaseGeometry(g);
+  if (ee->failed) return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->msg);
+  return PC_OK;
+fail:
+  if (g) rtcReleaseGeometry(g);
+  return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->failed ? ee->msg : "cannot create geometry");
+}
+
+int pc_scene_commit(const pc_scene *s, void *rtc_scene, pc_err *e) {
+  const embree_error *ee = s->rtc_error;
+  rtcCommitScene(rtc_scene);
+  return ee->failed ? pc_errf(e, PC_EEMBREE, "%s: %s", s->path, ee->msg) : PC_OK;
+}
+
 static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   RTCDevice dev = rtcNewDevice("verbose=0");
   if (!dev) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
@@ -90,39 +128,16 @@ static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   s->rtc_scene = scn;
   rtcSetSceneFlags(scn, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scn, RTC_BUILD_QUALITY_HIGH);
-  for (int i = 0; i < s->nshapes; i++) {
-    const pc_shape *sh = &s->shapes[i];
-    RTCGeometry g;
-    if (sh->kind == PC_SHAPE_SPHERE) {
-      if (!rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_POINT_GEOMETRY_SUPPORTED))
-        return pc_errf(e, PC_EEMBREE, "%s: this Embree build has no sphere geometry", s->path);
-      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-      float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, 1) : NULL;
-      if (!v) goto fail;
-      v[0] = sh->center.x; v[1] = sh->center.y; v[2] = sh->center.z; v[3] = sh->radius;
-    } else {
-      const pc_mesh *m = &sh->mesh;
-      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-      float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, m->nverts) : NULL;
-      uint32_t *ix = v ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, m->ntris) : NULL;
-      if (!ix) goto fail;
-      memcpy(v, m->p, sizeof(vec3) * m->nverts);
-      memcpy(ix, m->idx, sizeof(uint32_t) * 3 * (size_t)m->ntris);
-    }
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(scn, g, (unsigned)i);
-    rtcReleaseGeometry(g);
-    if (ee->failed) return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->msg);
-    continue;
-  fail:
-    if (g) rtcReleaseGeometry(g);
-    return pc_errf(e, PC_EEMBREE, "%s: shape %d: %s", s->path, i, ee->failed ? ee->msg : "cannot create geometry");
-  }
-  rtcCommitScene(scn);
-  if (ee->failed) return pc_errf(e, PC_EEMBREE, "%s: %s", s->path, ee->msg);
+  int rc = PC_OK;
+  for (int i = 0; i < s->nshapes && rc == PC_OK; i++) rc = pc_scene_attach_shape(s, scn, i, e);
+  if (rc == PC_OK) rc = pc_scene_commit(s, scn, e);
+  if (rc != PC_OK) return rc;
   struct RTCBounds b;
   rtcGetSceneBounds(scn, &b);
   vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
+  /* the bounding sphere holds the animated shapes at every time (light paths from the
+   * environment start outside it) */
+  pc_scene_motion_bounds(s, &lo, &hi);
   s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
   s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
   return PC_OK;
@@ -132,6 +147,8 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
   if (s->nshapes == 0) return pc_errf(e, PC_EINVAL, "%s: the scene has no shapes", s->path);
   if (s->camera.width < 1 || s->camera.height < 1)
     return pc_errf(e, PC_EINVAL, "%s: the scene has no sensor with a film", s->path);
+  int rc = pc_scene_place(s, s->shutter_open, e);
+  if (rc != PC_OK) return rc;
   pc_camera_prepare(&s->camera);
   if (!(s->camera.image_area > 0.f) || !isfinite(s->camera.image_area))
     return pc_errf(e, PC_EINVAL, "%s: camera field of view %.3g is out of range", s->path, s->camera.fov_deg);
@@ -171,7 +188,7 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
   embree_error *ee = calloc(1, sizeof *ee);
   if (!ee) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
   s->rtc_error = ee;
-  int rc = build_embree(s, ee, e);
+  rc = build_embree(s, ee, e);
   /* After the geometry: the environment's light paths need the bounding sphere. */
   return rc != PC_OK ? rc : build_lights(s, e);
 }
@@ -186,6 +203,12 @@ void pc_scene_free(pc_scene *s) {
     free(s->lights[i].tri_cdf);
     pc_light_free(&s->lights[i]);
   }
+  for (int i = 0; i < s->nmotions; i++) {
+    pc_anim_free(&s->motions[i].anim);
+    pc_mesh_free(&s->motions[i].object.mesh);
+  }
+  free(s->motions);
+  pc_anim_free(&s->camera_anim);
   free(s->shapes);
   free(s->materials);
   free(s->textures);

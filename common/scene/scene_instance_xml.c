@@ -34,8 +34,11 @@ int pc_sx_shapegroup(pc_sx *c, const pc_xml_node *n) {
     if (type && (strcasecmp(type, "shapegroup") == 0 || strcmp(type, "instance") == 0))
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape 'shapegroup': a nested '%s': not modelled by pcbpt", c->file,
                      ch->line, type);
-    int first = c->s->nshapes;
+    int first = c->s->nshapes, motions = c->s->nmotions;
     if ((rc = pc_sx_shape(c, ch))) return rc;
+    if (c->s->nmotions != motions)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape 'shapegroup': a moving shape in a group: Mitsuba refuses it too (nested instancing)",
+                     c->file, ch->line);
     /* move what the child appended out of the scene into the group */
     for (int i = first; i < c->s->nshapes; i++) {
       pc_shape *sh = &c->s->shapes[i];
@@ -84,12 +87,13 @@ static int place(pc_sx *c, const pc_xml_node *n, const pc_shape *src, const mat4
   return rc;
 }
 
-int pc_sx_instance(pc_sx *c, const pc_xml_node *n) {
+static int instance(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
   const char *what = "shape 'instance'";
-  mat4 xf = mat4_identity();
-  pc_param p[] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0}};
+  const pc_anim *anim = &to_world->anim;
+  pc_param p[] = {{"toWorld", PC_P_MOTION, to_world, 0, 0}};
   int rc = pc_sx_params(c, n, what, p, 1), group = -1;
   if (rc) return rc;
+  mat4 xf = to_world->xf;
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (pc_sx_is_param(ch, p, 1)) continue;
     if (strcmp(ch->name, "ref") != 0) return pc_sx_unexpected(c, ch, what);
@@ -104,8 +108,17 @@ int pc_sx_instance(pc_sx *c, const pc_xml_node *n) {
     group = r->index;
   }
   if (group < 0) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: refers to no shapegroup", c->file, n->line, what);
-  for (int i = c->group_first[group]; i < c->group_first[group + 1] && !rc; i++) rc = place(c, n, &c->group_shapes[i], &xf);
+  /* a moving instance keeps each shape in the group's space, moved per iteration */
+  for (int i = c->group_first[group]; i < c->group_first[group + 1] && !rc; i++)
+    if (!(rc = place(c, n, &c->group_shapes[i], &xf)) && anim->n) rc = pc_sx_add_motion(c, n, what, anim);
   if (rc) return rc;
   const char *id = pc_xml_attr(n, "id");
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
+}
+
+int pc_sx_instance(pc_sx *c, const pc_xml_node *n) {
+  pc_sx_xf to_world = {.xf = mat4_identity()};
+  int rc = instance(c, n, &to_world);
+  pc_anim_free(&to_world.anim);
+  return rc;
 }

@@ -172,18 +172,24 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   pc_camera *cam = &c->s->camera;
   float fov = 0;
   const char *axis = "x";
-  mat4 xf = mat4_identity();
+  mat4 xf;
+  pc_sx_xf cx = {.xf = mat4_identity()};
   /* pcbpt does not clip, which only differs for geometry closer than nearClip or beyond
-   * farClip; focusDistance does nothing in a pinhole camera; a still image has no shutter. */
+   * farClip; focusDistance does nothing in a pinhole camera. */
+  pc_scene *s = c->s;
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
-                  {"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
+                  {"toWorld", PC_P_MOTION, &cx, 0, 0},
                   {"nearClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
                   {"farClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
                   {"focusDistance", PC_P_IGNORED, "a pinhole camera has no focus", 0, 0},
-                  {"shutterOpen", PC_P_IGNORED, "pcbpt renders a still image", 0, 0},
-                  {"shutterClose", PC_P_IGNORED, "pcbpt renders a still image", 0, 0}};
+                  {"shutterOpen", PC_P_FLOAT, &s->shutter_open, 0, 0},
+                  {"shutterClose", PC_P_FLOAT, &s->shutter_close, 0, 0}};
   const int np = 8;
-  if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
+  rc = pc_sx_params(c, n, what, p, np);
+  pc_anim_free(&s->camera_anim);
+  s->camera_anim = cx.anim;
+  xf = cx.xf;
+  if (rc) return rc;
   bool have_film = false;
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
     if (pc_sx_is_param(ch, p, np)) continue;
@@ -210,7 +216,16 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   if (!cam->fov_axis)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: unknown fovAxis '%s' (x, y, diagonal, smaller, larger)", c->file, p[1].line,
                    what, axis);
-  if (!is_rigid(&xf))
+  if (!(s->shutter_close >= s->shutter_open))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: shutterClose %g is before shutterOpen %g", c->file, n->line, what,
+                   (double)s->shutter_close, (double)s->shutter_open);
+  /* a moving sensor stays rigid between rigid keyframes of one stretch */
+  bool rigid = is_rigid(&xf) && pc_anim_same_scale(&s->camera_anim);
+  for (int k = 0; rigid && k < s->camera_anim.n; k++) {
+    mat4 m = pc_anim_eval(&s->camera_anim, s->camera_anim.k[k].time);
+    rigid = is_rigid(&m);
+  }
+  if (!rigid)
     return pc_errf(c->e, PC_EUNSUPPORTED,
                    "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt",
                    c->file, p[2].line, what);
@@ -315,6 +330,7 @@ typedef struct mesh_opts {
   const pc_param *smooth; /* maxSmoothAngle when given */
   float smooth_angle;
   mat4 xf;
+  const pc_anim *anim;    /* a moving toWorld (xf is then the identity), or NULL */
 } mesh_opts;
 
 /* A loaded mesh made into a shape's mesh as Mitsuba's TriMesh does: texture coordinates flipped,
@@ -353,6 +369,33 @@ static int add_shape_with_light(pc_sx *c, const pc_xml_node *n, pc_shape *sh, bo
   l.sampling_weight = weight;
   l.shape = c->s->nshapes - 1;
   return add_light(c, n, &l, &c->s->shapes[c->s->nshapes - 1].light);
+}
+
+int pc_sx_add_motion(pc_sx *c, const pc_xml_node *n, const char *what, const pc_anim *anim) {
+  pc_scene *s = c->s;
+  for (int k = 0; s->shapes[s->nshapes - 1].kind == PC_SHAPE_SPHERE && k < anim->n; k++) {
+    const double *sc = anim->k[k].s;
+    if (fabs(sc[0] - sc[1]) > 1e-5 * fabs(sc[0]) || fabs(sc[0] - sc[2]) > 1e-5 * fabs(sc[0]))
+      return pc_errf(c->e, PC_EUNSUPPORTED,
+                     "%s:%d: %s: a moving toWorld that does not scale uniformly (a sphere must stay a sphere)", c->file,
+                     n->line, what);
+  }
+  int rc = pc_sx_grow(c, (void **)&s->motions, &c->cap_motions, s->nmotions + 1, sizeof *s->motions);
+  if (rc) return rc;
+  pc_motion *mo = &s->motions[s->nmotions];
+  memset(mo, 0, sizeof *mo);
+  mo->shape = s->nshapes - 1;
+  mo->object = s->shapes[mo->shape];
+  mo->object.mesh = (pc_mesh){0};
+  mo->anim.k = malloc(sizeof *anim->k * (size_t)anim->n);
+  if (!mo->anim.k || (mo->object.kind == PC_SHAPE_MESH && pc_mesh_copy(&s->shapes[mo->shape].mesh, &mo->object.mesh))) {
+    free(mo->anim.k);
+    return pc_errf(c->e, PC_ENOMEM, "%s:%d: out of memory for an animation", c->file, n->line);
+  }
+  memcpy(mo->anim.k, anim->k, sizeof *anim->k * (size_t)anim->n);
+  mo->anim.n = mo->anim.cap = anim->n;
+  s->nmotions++;
+  return 0;
 }
 
 /* A BSDF child of a shape: the material and the name it was given (NULL: none). */
@@ -400,15 +443,16 @@ static int obj_shapes(pc_sx *c, const pc_xml_node *n, const char *what, const ch
     sh.mesh = obj.meshes[i].mesh;
     obj.meshes[i].mesh = (pc_mesh){0};
     if (!rc && (rc = finish_mesh(c, n, what, o, &sh.mesh))) pc_mesh_free(&sh.mesh);
-    if (!rc) rc = add_shape_with_light(c, n, &sh, emits, radiance, weight);
-    if (rc) pc_mesh_free(&sh.mesh);
+    if (!rc && !(rc = add_shape_with_light(c, n, &sh, emits, radiance, weight)) && o->anim) rc = pc_sx_add_motion(c, n, what, o->anim);
+    else if (rc) pc_mesh_free(&sh.mesh);
   }
   pc_sx_mtl_free(lib);
   pc_obj_free(&obj);
   return rc;
 }
 
-int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
+static int shape(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
+  const pc_anim *anim = &to_world->anim;
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
@@ -428,7 +472,7 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   int shape_index = is_obj ? -1 : 0;
   vec3 center = v3s(0);
   float radius = 1.f;
-  pc_param p[10] = {{"toWorld", PC_P_TRANSFORM, &o.xf, 0, 0}, {"flipNormals", PC_P_BOOL, &o.flip_normals, 0, 0}};
+  pc_param p[10] = {{"toWorld", PC_P_MOTION, to_world, 0, 0}, {"flipNormals", PC_P_BOOL, &o.flip_normals, 0, 0}};
   int np = 2;
   if (is_file) {
     p[np++] = (pc_param){"filename", PC_P_STRING, &filename, 0, 0};
@@ -446,6 +490,8 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
   }
   if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
   if (is_file && p[np - 1].set) o.smooth = &p[np - 1];
+  o.xf = to_world->xf;
+  if (anim->n) o.anim = anim;
   int nchildren = 0;
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) nchildren++;
   shape_bsdf *bsdfs = calloc((size_t)(nchildren ? nchildren : 1), sizeof *bsdfs);
@@ -483,6 +529,9 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
       rc = pc_sx_unexpected(c, ch, what);
     }
   }
+  if (!rc && emits && anim->n)
+    rc = pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: an emitter on a moving shape: Mitsuba refuses it too (an instanced emitter)",
+                 c->file, n->line, what);
   if (!rc && is_obj) {
     if (!filename) rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'filename' is required", c->file, n->line, what);
     else rc = obj_shapes(c, n, what, filename, collapse, shape_index, load_materials, &o, bsdfs, nb, emits, radiance, weight);
@@ -521,8 +570,16 @@ int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
     }
   }
   if ((rc = add_shape_with_light(c, n, &sh, emits, radiance, weight))) return rc;
+  if (anim->n && (rc = pc_sx_add_motion(c, n, what, anim))) return rc;
   const char *id = pc_xml_attr(n, "id");
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, c->s->nshapes - 1, n->line) : 0;
+}
+
+int pc_sx_shape(pc_sx *c, const pc_xml_node *n) {
+  pc_sx_xf to_world = {.xf = mat4_identity()};
+  int rc = shape(c, n, &to_world);
+  pc_anim_free(&to_world.anim);
+  return rc;
 }
 
 /* Mitsuba's `constant` and `envmap` (light.h, light_env.c). */

@@ -42,7 +42,7 @@ typedef struct pc_sx {
   int nparams, cap_params;
   int default_material;     /* Mitsuba's diffuse 0.5 for shapes without a BSDF, -1 until needed */
   bool have_env;            /* an environment emitter was declared (Mitsuba allows one) */
-  int cap_shapes, cap_materials, cap_textures, cap_lights;
+  int cap_shapes, cap_materials, cap_textures, cap_lights, cap_motions;
   unsigned long long file_bytes; /* sizes of the files noted so far, against opts->max_file_bytes */
   /* shapegroups (scene_instance_xml.c): their shapes in object space, kept out of the scene,
    * group g being group_first[g] .. group_first[g + 1] - 1 (ngroups + 1 entries) */
@@ -63,7 +63,8 @@ typedef enum {
   PC_P_COLOR_SIGNED, /* the same, negative <rgb> and <spectrum> values kept (pc_xv_color_signed) */
   PC_P_SLOT,      /* a colour or a texture (nested, or <ref name=.. id=..>) -> pc_tex_slot */
   PC_P_POINT,     /* <point> -> vec3 */
-  PC_P_TRANSFORM, /* <transform> -> mat4 */
+  PC_P_TRANSFORM, /* <transform>, or an <animation> that does not move -> mat4 */
+  PC_P_MOTION,    /* <transform> or <animation> -> pc_sx_xf (the caller frees its anim) */
   PC_P_IOR,       /* <float> or <string> with a Mitsuba IOR name -> float */
   PC_P_IGNORED,   /* any value, accepted with a warning; out is the reason (const char *).
                      The name "*" matches every parameter the list does not name. */
@@ -72,10 +73,17 @@ typedef enum {
 typedef struct pc_param {
   const char *name;
   pc_param_kind kind;
-  void *out;   /* int*, float*, bool*, const char**, vec3*, pc_tex_slot*, vec3*, mat4*, float* */
+  void *out;   /* int*, float*, bool*, const char**, vec3*, pc_tex_slot*, vec3*, mat4*, pc_sx_xf*, float* */
   bool set;    /* filled by pc_sx_params */
   int line;
 } pc_param;
+
+/* A PC_P_MOTION value: a <transform> (anim.n == 0), or an <animation> that moves (xf the
+ * identity); a static <animation> is the plain transform Mitsuba makes of it. */
+typedef struct pc_sx_xf {
+  mat4 xf;
+  pc_anim anim;
+} pc_sx_xf;
 
 /* "what" strings for messages: e.g. "bsdf 'diffuse'". */
 #define PC_SX_WHAT_MAX 96
@@ -134,6 +142,10 @@ int pc_sx_bsdf(pc_sx *c, const pc_xml_node *n, int *index);
 /* A <shape> appended to the scene (scene_xml.c), and a shape appended as is. */
 int pc_sx_shape(pc_sx *c, const pc_xml_node *n);
 int pc_sx_add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh);
+/* Keeps the scene's last shape, as it is now, as the object-space shape `anim` moves (Mitsuba
+ * wraps a shape with a moving toWorld in an animated instance); a sphere's motion must scale
+ * uniformly. */
+int pc_sx_add_motion(pc_sx *c, const pc_xml_node *n, const char *what, const pc_anim *anim);
 /* True if m is a rotation, uniform scale and translation; *s the scale. */
 bool pc_sx_is_similarity(const mat4 *m, double *s);
 /* Mitsuba's `shapegroup` (kept aside) and `instance` (its shapes copied into the scene through

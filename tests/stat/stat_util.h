@@ -4,6 +4,7 @@
 #ifndef PC_STAT_UTIL_H
 #define PC_STAT_UTIL_H
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -128,6 +129,18 @@ static inline double stat_se(const stat_blocks *st, int b) {
   double m = stat_mean(st, b);
   double var = (st->sum2[b] / st->n - m * m) * st->n / (st->n - 1);
   return sqrt(var > 0 ? var / st->n : 0);
+}
+/* The largest difference between two estimates' block means, in standard errors of the
+ * difference (0 where both are exact and equal; blocks with no spread must agree exactly,
+ * else the result is infinite). */
+static inline double stat_largest_z(const stat_blocks *a, const stat_blocks *b) {
+  double worst = 0;
+  for (int k = 0; k < a->nblocks; k++) {
+    double se = sqrt(stat_se(a, k) * stat_se(a, k) + stat_se(b, k) * stat_se(b, k));
+    double d = fabs(stat_mean(a, k) - stat_mean(b, k)), z = se > 0 ? d / se : (d > 0 ? INFINITY : 0);
+    if (z > worst) worst = z;
+  }
+  return worst;
 }
 static inline void stat_free(stat_blocks *st) {
   free(st->sum);

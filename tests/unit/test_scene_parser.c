@@ -517,7 +517,6 @@ static const bad_case warn_cases[] = {
     {"<sensor type=\"perspective\">" FOV "\n<sampler type=\"ldsampler\"><integer name=\"sampleCount\" value=\"16\"/></sampler></sensor>", 3, "sampleCount 16"},
     {"<sensor type=\"perspective\">" FOV "\n<float name=\"focusDistance\" value=\"3\"/></sensor>", 3, "focusDistance"},
     {"<sensor type=\"perspective\">" FOV "\n<float name=\"nearClip\" value=\"0.1\"/></sensor>", 3, "nearClip"},
-    {"<sensor type=\"perspective\">" FOV "\n<float name=\"shutterOpen\" value=\"0\"/></sensor>", 3, "shutterOpen"},
     {"\n<integer name=\"maxDepth\" value=\"5\"/>" SENSOR, 3, "scene: parameter 'maxDepth'"},
     {"<bsdf type=\"conductor\">\n<string name=\"distribution\" value=\"ggx\"/></bsdf>" SENSOR, 3, "parameter 'distribution' ignored"},
     {"<bsdf type=\"plastic\">\n<float name=\"alpha\" value=\"0.1\"/></bsdf>" SENSOR, 3, "does not read it either"},
@@ -1097,6 +1096,139 @@ static void test_instances(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's AnimatedTransform: a keyframe T * R * S comes back at its own time; rotation is
+ * slerped, translation and scale lerped, and times outside the keys clamp. */
+static void test_animation(void **state) {
+  (void)state;
+  pc_err e = {0};
+  pc_anim a = {0};
+  double c = cos(M_PI / 4), sn = sin(M_PI / 4);
+  /* time 2: rotate 90 degrees about y, scale (1, 2, 3), translate (4, 5, 6) */
+  mat4 k1 = {{{0, 0, 3, 4}, {0, 2, 0, 5}, {-1, 0, 0, 6}, {0, 0, 0, 1}}};
+  mat4 k0 = mat4_identity();
+  assert_int_equal(pc_anim_append(&a, 2.0, &k1, &e), 0);
+  assert_int_equal(pc_anim_append(&a, 0.0, &k0, &e), 0);
+  assert_int_equal(pc_anim_finish(&a, &e), 0);
+  assert_false(pc_anim_is_static(&a));
+  for (int t = 0; t < 2; t++) {
+    mat4 m = pc_anim_eval(&a, t ? 2.0 : 0.0), want = t ? k1 : k0;
+    for (int r = 0; r < 3; r++)
+      for (int k = 0; k < 4; k++) assert_true(fabs(m.m[r][k] - want.m[r][k]) < 1e-9);
+  }
+  /* halfway: 45 degrees about y, scale (1, 1.5, 2), translation (2, 2.5, 3) */
+  mat4 m = pc_anim_eval(&a, 1.0);
+  mat4 want = {{{c * 1, 0, sn * 2, 2}, {0, 1.5, 0, 2.5}, {-sn * 1, 0, c * 2, 3}, {0, 0, 0, 1}}};
+  for (int r = 0; r < 3; r++)
+    for (int k = 0; k < 4; k++) assert_true(fabs(m.m[r][k] - want.m[r][k]) < 1e-9);
+  m = pc_anim_eval(&a, 7.0);
+  assert_true(fabs(m.m[0][3] - 4) < 1e-12 && fabs(m.m[2][0] + 1) < 1e-9);
+  m = pc_anim_eval(&a, -3.0);
+  assert_true(fabs(m.m[0][0] - 1) < 1e-12 && m.m[0][3] == 0);
+  assert_true(fabs(pc_anim_max_scale(&a) - 3) < 1e-9);
+  /* a mirror is a proper rotation with a negative stretch, as Mitsuba flips both factors */
+  mat4 mirror = {{{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+  assert_int_equal(pc_anim_append(&a, 5.0, &mirror, &e), 0);
+  assert_int_equal(pc_anim_finish(&a, &e), 0);
+  m = pc_anim_eval(&a, 5.0);
+  for (int r = 0; r < 3; r++)
+    for (int k = 0; k < 3; k++) assert_true(fabs(m.m[r][k] - mirror.m[r][k]) < 1e-9);
+  mat4 singular = {{{0, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+  assert_int_not_equal(pc_anim_append(&a, 9.0, &singular, &e), 0);
+  assert_int_equal(pc_anim_append(&a, 2.0, &k0, &e), 0);
+  assert_int_not_equal(pc_anim_finish(&a, &e), 0);
+  assert_non_null(strstr(e.msg, "two keyframes at time 2"));
+  pc_anim_free(&a);
+}
+
+#define KEY(t, body) "<transform time=\"" #t "\">" body "</transform>"
+
+static void test_motion_params(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body =
+      "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><float name=\"shutterOpen\" value=\"0.5\"/>"
+      "<float name=\"shutterClose\" value=\"1.5\"/><animation name=\"toWorld\">" KEY(0, "<translate z=\"-5\"/>")
+          KEY(2, "<translate x=\"1\" z=\"-5\"/>") "</animation></sensor>\n"
+      "<shape type=\"sphere\"><float name=\"radius\" value=\"0.5\"/><animation name=\"toWorld\">"
+      KEY(0, "<translate x=\"-1\"/>") KEY(1, "<scale value=\"2\"/><translate x=\"1\"/>") "</animation></shape>\n"
+      /* one key, or equal keys: the plain transform Mitsuba makes of it */
+      "<shape type=\"rectangle\"><animation name=\"toWorld\">" KEY(3, "<translate y=\"7\"/>") "</animation>"
+      "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n"
+      "<shape type=\"shapegroup\" id=\"g\"><shape type=\"cube\"/><shape type=\"sphere\"/></shape>\n"
+      "<shape type=\"instance\"><ref id=\"g\"/><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<translate y=\"1\"/>")
+      "</animation></shape>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_true(s.shutter_open == 0.5f && s.shutter_close == 1.5f);
+  assert_int_equal(s.camera_anim.n, 2);
+  assert_int_equal(s.nshapes, 4);
+  assert_int_equal(s.nmotions, 3);
+  assert_int_equal(s.motions[0].shape, 0);
+  assert_int_equal(s.motions[1].shape, 2);
+  assert_int_equal(s.motions[2].shape, 3);
+  float mean_y = 0;
+  for (uint32_t i = 0; i < s.shapes[1].mesh.nverts; i++) mean_y += s.shapes[1].mesh.p[i].y / (float)s.shapes[1].mesh.nverts;
+  assert_true(fabsf(mean_y - 7) < 1e-5f);
+  assert_true(pc_scene_moves(&s));
+  float t0 = pc_scene_time(&s, 1, 0), t1 = pc_scene_time(&s, 1, 1);
+  assert_true(t0 >= 0.5f && t0 < 1.5f && t1 >= 0.5f && t1 < 1.5f && t0 != t1);
+  assert_true(pc_scene_time(&s, 1, 0) == t0);
+  /* built: placed at shutterOpen; a view moves to its own time, the scene stays */
+  assert_int_equal(pc_scene_build(&s, &e), 0);
+  near3(s.shapes[0].center, v3(0, 0, 0), 1e-6f);
+  assert_true(fabsf(s.shapes[0].radius - 0.75f) < 1e-6f);
+  near3(s.camera.pos, v3(0.25f, 0, -5), 1e-6f);
+  pc_scene *v;
+  assert_int_equal(pc_scene_view_create(&s, &v, &e), 0);
+  assert_int_equal(pc_scene_view_set_time(v, 1.0f, &e), 0);
+  near3(v->shapes[0].center, v3(1, 0, 0), 1e-6f);
+  assert_true(fabsf(v->shapes[0].radius - 1.f) < 1e-6f);
+  near3(v->camera.pos, v3(0.5f, 0, -5), 1e-6f);
+  near3(v->shapes[3].center, v3(0, 1, 0), 1e-6f);
+  near3(s.shapes[0].center, v3(0, 0, 0), 1e-6f);
+  pc_hit h;
+  assert_true(pc_scene_intersect(v, v3(1, 0, -5), v3(0, 0, 1), 100.f, &h) && h.shape == 0);
+  assert_false(pc_scene_intersect(&s, v3(1.8f, 0, -5), v3(0, 0, 1), 100.f, &h) && h.shape == 0);
+  pc_scene_view_destroy(v);
+  /* the bounding sphere holds the sphere at every time */
+  assert_true(v3_len(v3_sub(v3(2, 0, 0), s.scene_center)) <= s.scene_radius);
+  pc_scene_free(&s);
+  const struct { const char *body, *want; } bad[] = {
+      {"<shape type=\"rectangle\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<translate x=\"1\"/>") "</animation>"
+       "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>", "an emitter on a moving shape"},
+      {"<emitter type=\"point\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<translate x=\"1\"/>") "</animation></emitter>",
+       "a moving 'toWorld' (motion blur): not modelled"},
+      {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"cube\"><animation name=\"toWorld\">" KEY(0, "")
+       KEY(1, "<translate x=\"1\"/>") "</animation></shape></shape>", "nested instancing"},
+      {"<shape type=\"sphere\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<scale x=\"2\"/>") "</animation></shape>",
+       "does not scale uniformly"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\">" KEY(1, "") KEY(1, "<translate x=\"1\"/>") "</animation></shape>",
+       "two keyframes at time 1"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\"><transform/></animation></shape>", "lacks its time"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\"><rotate x=\"1\" angle=\"3\"/></animation></shape>", "holds <transform"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\">" KEY(0, "<scale x=\"0\"/>") "</animation></shape>", "singular"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\">" KEY(nan, "") "</animation></shape>", "time"},
+      {"<shape type=\"cube\"><animation name=\"toWorld\"></animation></shape>", "without keyframes"},
+  };
+  char buf[2048];
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    snprintf(buf, sizeof buf, SENSOR "%s", bad[i].body);
+    assert_int_not_equal(load_body(&t, buf, &s, &e), 0);
+    if (!strstr(e.msg, bad[i].want)) print_error("case %zu: %s\n", i, e.msg);
+    assert_non_null(strstr(e.msg, bad[i].want));
+    assert_non_null(strstr(e.msg, "scene.xml:"));
+  }
+  const char *shutter = "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><float name=\"shutterOpen\" value=\"2\"/>"
+                        "<float name=\"shutterClose\" value=\"1\"/></sensor>";
+  assert_int_not_equal(load_body(&t, shutter, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "shutterClose 1 is before shutterOpen 2"));
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -1314,6 +1446,7 @@ int main(void) {
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
       cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
+      cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
