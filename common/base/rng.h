@@ -27,7 +27,7 @@ static inline uint32_t pc_rng_u32(pc_rng *r) {
 static inline float pc_rng_f(pc_rng *r) { return (float)(pc_rng_u32(r) >> 8) * 0x1p-24f; }
 
 /* Purposes keep streams of different kinds of paths apart. */
-enum { PC_STREAM_EYE = 1, PC_STREAM_LIGHT = 2, PC_STREAM_CACHE = 3, PC_STREAM_CONNECT = 4, PC_STREAM_MISC = 5, PC_STREAM_TIME = 6 };
+enum { PC_STREAM_EYE = 1, PC_STREAM_LIGHT = 2, PC_STREAM_CACHE = 3, PC_STREAM_CONNECT = 4, PC_STREAM_MISC = 5, PC_STREAM_TIME = 6, PC_STREAM_LENS = 7 };
 
 static inline pc_rng pc_rng_make(uint64_t seed, uint64_t iteration, uint32_t purpose, uint64_t index) {
   pc_rng r;

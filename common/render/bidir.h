@@ -67,8 +67,9 @@ void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_pa
 void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
 void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
 
-/* Light tracing: connects light vertices v[0..nl-1] to the camera, splats into c->splat. */
-void pc_lt_splat(pc_tctx *c, const pc_path_vertex *v, int nl);
+/* Light tracing: connects light vertices v[0..nl-1] of light path `index` to the camera (a thin
+ * lens at lens points keyed by index), splats into c->splat. */
+void pc_lt_splat(pc_tctx *c, const pc_path_vertex *v, int nl, uint64_t index);
 
 /* The pixel an eye sub-path belongs to; pc_emitter_hit (a pc_emitter_hit_fn taking one as
  * `user`) adds the weighted s=0 contribution to layer pt. */

@@ -128,7 +128,7 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
   float cos_e, pdf_e_fwd, pdf_e_rev = 0.f;
   if (ev->kind == PC_VTX_CAMERA) {
     const pc_camera *cam = &s->camera;
-    if (!pc_camera_raster(cam, we, &out->px, &out->py)) return false;
+    if (!pc_camera_raster_from(cam, ev->p, we, &out->px, &out->py)) return false;
     float cz = v3_dot(we, cam->dir);
     pdf_e_fwd = 1.f / (cam->image_area * cz * cz * cz);
     fe = v3s(pdf_e_fwd);

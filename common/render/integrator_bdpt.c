@@ -15,7 +15,7 @@ void pc_bdpt_pixel(pc_tctx *c, int x, int y) {
   double t0 = pc_stamp(timed);
   int nl = pc_light_subpath(c, n, j % c->n_light, c->light_path);
   double t1 = pc_stamp(timed);
-  if (j < c->n_light) pc_lt_splat(c, c->light_path, nl);
+  if (j < c->n_light) pc_lt_splat(c, c->light_path, nl, j);
   double t2 = pc_stamp(timed);
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, j);
   pc_pixel_target h = {x, y};

@@ -6,8 +6,11 @@
  * light-traced paths have weight 1. BDPT uses the same splats with its full MIS weights. */
 #include "bidir.h"
 
-void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl) {
+void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl, uint64_t index) {
   const pc_camera *cam = &c->scene->camera;
+  /* a thin lens: each connection to the camera samples its own lens point */
+  pc_rng lens = {0, 0};
+  if (cam->aperture_radius > 0.f) lens = pc_rng_make(c->set->seed, c->iteration, PC_STREAM_LENS, index);
   pc_path_vertex eye = {0};
   eye.kind = PC_VTX_CAMERA;
   eye.p = cam->pos;
@@ -18,6 +21,10 @@ void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl) {
   for (int i = 0; i < nl; i++) {
     /* The lt method weighs only path length 1 (against s=0); BDPT weighs every length. */
     bool weighted = c->weighted && (!lt_method || lv[i].depth == 1);
+    if (cam->aperture_radius > 0.f) {
+      float u1 = pc_rng_f(&lens), u2 = pc_rng_f(&lens);
+      eye.p = pc_camera_lens_point(cam, u1, u2);
+    }
     pc_connection k;
     if (!pc_connect(c, &c->counts, &lv[i], &eye, weighted, &k)) continue;
     pc_film_queue_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
@@ -30,7 +37,7 @@ void pc_lt_light_path(pc_tctx *c, uint64_t index) {
   double t0 = pc_stamp(timed);
   int nl = pc_light_subpath(c, &c->counts, index, c->light_path);
   double t1 = pc_stamp(timed);
-  pc_lt_splat(c, c->light_path, nl);
+  pc_lt_splat(c, c->light_path, nl, index);
   if (timed) {
     c->t_paths += PC_TIMED_EVERY * (t1 - t0);
     c->t_lt += PC_TIMED_EVERY * (pc_seconds() - t1);

@@ -138,7 +138,7 @@ void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
   double t0 = pc_stamp(timed);
   int nl = j < c->n_light ? pc_light_subpath(c, n, j, c->light_path) : 0;
   double t1 = pc_stamp(timed);
-  if (nl > 0) pc_lt_splat(c, c->light_path, nl);
+  if (nl > 0) pc_lt_splat(c, c->light_path, nl, j);
   double t2 = pc_stamp(timed);
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, j);
   pc_rng crng = pc_rng_make(set->seed, c->iteration, PC_STREAM_CONNECT, j);

@@ -82,8 +82,7 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
   const pc_render_settings *set = c->set;
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, (uint64_t)y * (uint64_t)s->camera.width + (uint64_t)x);
   float px = (float)x + pc_rng_f(&rng), py = (float)y + pc_rng_f(&rng);
-  vec3 o = s->camera.pos;
-  vec3 d = pc_camera_ray_dir(&s->camera, px, py);
+  vec3 d, o = pc_camera_sample_ray(&s->camera, px, py, &rng, &d);
   vec3 beta = v3s(1.f);
   float prev_pdf = 0.f; /* solid-angle pdf (with continuation) of the last BSDF sample */
   bool prev_delta = true; /* the camera cannot be reached by NEE: full weight at depth 1 */

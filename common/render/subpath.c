@@ -197,10 +197,10 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
                    pc_emitter_hit_fn hit, void *user) {
   const pc_camera *cam = &c->scene->camera;
   float px = (float)x + pc_rng_f(rng), py = (float)y + pc_rng_f(rng);
-  vec3 d = pc_camera_ray_dir(cam, px, py);
+  vec3 d;
   pc_path_vertex *v0 = &v[0];
   v0->kind = PC_VTX_CAMERA;
-  v0->p = cam->pos;
+  v0->p = pc_camera_sample_ray(cam, px, py, rng, &d);
   v0->ng = v3s(0.f);
   v0->eps = 0.f;
   v0->wo = v3s(0.f);

@@ -1,4 +1,4 @@
-/* camera.c: the pinhole perspective sensor (Mitsuba conventions, see camera.h). */
+/* camera.c: the perspective and thin-lens sensors (Mitsuba conventions, see camera.h). */
 #include "camera.h"
 
 void pc_camera_prepare(pc_camera *c) {
@@ -58,4 +58,42 @@ float pc_camera_pdf_dir(const pc_camera *c, vec3 dir) {
   if (!pc_camera_raster(c, dir, &px, &py)) return 0.f;
   float cz = v3_dot(dir, c->dir);
   return 1.f / (c->image_area * cz * cz * cz);
+}
+
+vec3 pc_camera_lens_point(const pc_camera *c, float u1, float u2) {
+  if (!(c->aperture_radius > 0.f)) return c->pos;
+  /* Shirley's concentric map keeps the disk's strata compact */
+  float a = 2.f * u1 - 1.f, b = 2.f * u2 - 1.f, r, phi;
+  if (a == 0.f && b == 0.f) return c->pos;
+  if (fabsf(a) > fabsf(b)) r = a, phi = (PC_PI / 4.f) * (b / a);
+  else r = b, phi = (PC_PI / 2.f) - (PC_PI / 4.f) * (a / b);
+  r *= c->aperture_radius;
+  return v3_add(c->pos, v3_add(v3_scale(c->right, r * cosf(phi)), v3_scale(c->up, r * sinf(phi))));
+}
+
+vec3 pc_camera_lens_dir(const pc_camera *c, vec3 lens, float px, float py) {
+  vec3 d = pc_camera_ray_dir(c, px, py);
+  if (!(c->aperture_radius > 0.f)) return d;
+  vec3 focus = v3_madd(c->pos, d, c->focus_distance / v3_dot(d, c->dir));
+  return v3_norm(v3_sub(focus, lens));
+}
+
+bool pc_camera_raster_from(const pc_camera *c, vec3 lens, vec3 dir, float *px, float *py) {
+  if (!(c->aperture_radius > 0.f)) return pc_camera_raster(c, dir, px, py);
+  float cz = v3_dot(dir, c->dir);
+  if (!(cz > 0.f)) return false;
+  /* the lens lies in the plane through pos across dir: the ray meets the plane in focus at
+   * depth focus_distance, where the pinhole ray of the same pixel meets it too */
+  vec3 focus = v3_madd(lens, dir, c->focus_distance / cz);
+  return pc_camera_raster(c, v3_sub(focus, c->pos), px, py);
+}
+
+vec3 pc_camera_sample_ray(const pc_camera *c, float px, float py, pc_rng *rng, vec3 *dir) {
+  vec3 o = c->pos;
+  if (c->aperture_radius > 0.f) {
+    float u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
+    o = pc_camera_lens_point(c, u1, u2);
+  }
+  *dir = pc_camera_lens_dir(c, o, px, py);
+  return o;
 }

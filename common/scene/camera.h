@@ -1,12 +1,16 @@
-/* camera.h: Mitsuba's pinhole `perspective` sensor: ray generation, the importance function
- * We and its pdfs, and the t=1 connection (sampling the camera from a scene point) that light
- * tracing needs. Camera space follows Mitsuba: +z forward, +y up, +x to the LEFT of the image
+/* camera.h: Mitsuba's `perspective` (pinhole) and `thinlens` sensors: ray generation, the
+ * importance function We and its pdfs, and the t=1 connection (sampling the camera from a scene
+ * point) that light tracing needs. A thin lens is a pinhole whose rays leave a uniformly sampled
+ * point of a disk toward the point of the plane in focus the pinhole ray would reach; the
+ * direction pdf from a lens point is then the pinhole's, and the lens area cancels between We
+ * and the lens pdf, so every method treats both alike but for the lens point. Camera space follows Mitsuba: +z forward, +y up, +x to the LEFT of the image
  * (so toWorld from <lookat> renders unmirrored). */
 #ifndef PC_CAMERA_H
 #define PC_CAMERA_H
 
 #include <stdbool.h>
 
+#include "rng.h"
 #include "vecmath.h"
 
 typedef struct pc_camera {
@@ -15,6 +19,8 @@ typedef struct pc_camera {
   int width, height;
   float fov_deg;       /* along fov_axis */
   char fov_axis;       /* 'x', 'y', 'd' (diagonal), 's' (smaller), 'l' (larger) */
+  float aperture_radius; /* thinlens: world-space lens radius; 0 for the pinhole */
+  float focus_distance;  /* thinlens: distance along dir of the plane in focus */
   /* derived by pc_camera_prepare */
   float tan_half_x, tan_half_y; /* half extents of the image plane at distance 1 */
   float image_area;             /* area of the image plane at distance 1 */
@@ -25,6 +31,16 @@ void pc_camera_prepare(pc_camera *c);
 /* Primary ray through raster position (px, py) in [0,W)x[0,H), (0,0) the top-left corner. */
 vec3 pc_camera_ray_dir(const pc_camera *c, float px, float py);
 
+/* A point of the lens from a uniform sample of [0,1)^2 (the pinhole: pos). */
+vec3 pc_camera_lens_point(const pc_camera *c, float u1, float u2);
+/* The direction of the ray from lens point `lens` through raster position (px, py) (the
+ * pinhole: pc_camera_ray_dir). */
+vec3 pc_camera_lens_dir(const pc_camera *c, vec3 lens, float px, float py);
+/* The primary ray through raster position (px, py): returns its origin and sets *dir. A thin
+ * lens draws its lens point from rng; the pinhole draws nothing. */
+vec3 pc_camera_sample_ray(const pc_camera *c, float px, float py, pc_rng *rng, vec3 *dir);
+/* Raster position of direction dir leaving lens point `lens` (the pinhole: pc_camera_raster). */
+bool pc_camera_raster_from(const pc_camera *c, vec3 lens, vec3 dir, float *px, float *py);
 /* Raster position of a world direction from the camera; false if outside the image or behind. */
 bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py);
 

@@ -265,6 +265,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"shape 'sphere'", " center radius toWorld flipNormals "},
       {"shape 'instance'", " toWorld "},
       {"sensor 'perspective'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip "},
+      {"sensor 'thinlens'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip focusDistance apertureRadius "},
   };
   /* read by Mitsuba, but only to steer its sampling */
   if (strcmp(name, "sampleVisible") == 0 || strcmp(name, "maxAnisotropy") == 0 || strcmp(name, "cache") == 0)

@@ -166,25 +166,34 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
   if (rc) return rc;
-  if (strcmp(type, "perspective") != 0)
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: sensor '%s': not modelled by pcbpt (perspective)", c->file, n->line, type);
-  const char *what = "sensor 'perspective'";
+  bool lens = strcmp(type, "thinlens") == 0;
+  if (strcmp(type, "perspective") != 0 && !lens)
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: sensor '%s': not modelled by pcbpt (perspective, thinlens)", c->file,
+                   n->line, type);
+  const char *what = lens ? "sensor 'thinlens'" : "sensor 'perspective'";
   pc_camera *cam = &c->s->camera;
-  float fov = 0;
+  float fov = 0, far_clip = 1e4f, aperture = 0.f;
   const char *axis = "x";
   mat4 xf;
   pc_sx_xf cx = {.xf = mat4_identity()};
   /* pcbpt does not clip, which only differs for geometry closer than nearClip or beyond
-   * farClip; focusDistance does nothing in a pinhole camera. */
+   * farClip (which is also a thin lens's default focus distance, as in Mitsuba); focusDistance
+   * does nothing in a pinhole camera. */
   pc_scene *s = c->s;
+  cam->focus_distance = -1.f;
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
                   {"toWorld", PC_P_MOTION, &cx, 0, 0},
                   {"nearClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
                   {"farClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
                   {"focusDistance", PC_P_IGNORED, "a pinhole camera has no focus", 0, 0},
                   {"shutterOpen", PC_P_FLOAT, &s->shutter_open, 0, 0},
-                  {"shutterClose", PC_P_FLOAT, &s->shutter_close, 0, 0}};
-  const int np = 8;
+                  {"shutterClose", PC_P_FLOAT, &s->shutter_close, 0, 0},
+                  {"apertureRadius", PC_P_FLOAT, &aperture, 0, 0}};
+  if (lens) {
+    p[4] = (pc_param){"farClip", PC_P_FLOAT, &far_clip, 0, 0};
+    p[5] = (pc_param){"focusDistance", PC_P_FLOAT, &cam->focus_distance, 0, 0};
+  }
+  const int np = lens ? 9 : 8;
   rc = pc_sx_params(c, n, what, p, np);
   pc_anim_free(&s->camera_anim);
   s->camera_anim = cx.anim;
@@ -229,6 +238,23 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
     return pc_errf(c->e, PC_EUNSUPPORTED,
                    "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt",
                    c->file, p[2].line, what);
+  cam->aperture_radius = 0.f;
+  if (lens) {
+    if (p[4].set && (rc = pc_sx_warn(c, n, "%s: farClip: pcbpt does not clip (it is the default focusDistance)", what)))
+      return rc;
+    if (!p[5].set) cam->focus_distance = far_clip;
+    if (!p[8].set)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'apertureRadius' is required", c->file, n->line, what);
+    if (!(aperture >= 0.f) || !isfinite(aperture))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: apertureRadius must be finite and not negative", c->file, p[8].line, what);
+    if (!(cam->focus_distance > 0.f) || !isfinite(cam->focus_distance))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: focusDistance must be positive and finite", c->file,
+                     p[5].set ? p[5].line : p[4].line, what);
+    /* Mitsuba makes a zero aperture an epsilon one, i.e. a pinhole */
+    if (aperture == 0.f && (rc = pc_sx_warn(c, n, "%s: a zero apertureRadius renders as a pinhole, as in Mitsuba", what)))
+      return rc;
+    cam->aperture_radius = aperture;
+  }
   cam->fov_deg = fov;
   cam->to_world = xf;
   return 0;

@@ -13,6 +13,7 @@
 #include "render.h"
 #include "render_flags.h"
 #include "scene.h"
+#include "../unit/test_helpers_fs.h"
 
 /* Per-block statistics over iterations: block b of layer `layer` (-1 = beauty), channel mean
  * (luminance-free: the average of R, G and B). */
@@ -146,6 +147,61 @@ static inline void stat_free(stat_blocks *st) {
   free(st->sum);
   free(st->sum2);
   memset(st, 0, sizeof *st);
+}
+
+/* The rest of a sensor (its frame and a 32x32 film) looking at a diffuse floor lit by a small
+ * area light from above, for agreement tests to put their subject on. */
+#define STAT_VIEW_OF_LIT_FLOOR \
+  "<transform name=\"toWorld\"><lookat origin=\"0, 1, 3\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>" \
+  "<film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" value=\"32\"/></film></sensor>" \
+  "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale value=\"3\"/><rotate x=\"1\" angle=\"-90\"/></transform>" \
+  "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6\"/></bsdf></shape>" \
+  "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale value=\"0.3\"/><rotate x=\"1\" angle=\"90\"/>" \
+  "<translate y=\"2\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"20\"/></emitter></shape>"
+
+/* A scene written as dir/scene.xml, rendered by `m` at res x res with the given seed and
+ * maxDepth (0: the scene's) for `iterations` into st (blocks of bs); the scene is kept in *keep
+ * when given, else freed. 0 on success. */
+static inline int stat_render_xml(const char *dir, const char *xml, pc_method m, int res, uint64_t seed, int max_depth,
+                                  int iterations, int bs, stat_blocks *st, pc_scene *keep) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/scene.xml", dir);
+  if (th_write_str(dir, "scene.xml", xml)) return -1;
+  pc_render_request req;
+  pc_scene scene;
+  int rc = stat_load_file(path, NULL, m, res, seed, &req, &scene);
+  if (rc) return rc;
+  if (max_depth) req.set.max_depth = max_depth;
+  rc = stat_render_blocks(&scene, &req.set, 2, 0, iterations, -1, bs, st);
+  if (keep) *keep = scene;
+  else pc_scene_free(&scene);
+  return rc;
+}
+
+/* Renders the scene with pt and with lt, bdpt, cbdpt and pcbpt (as stat_render_xml), prints
+ * each one's largest block difference from pt as "<label> <method> vs pt: ...", and returns
+ * the largest of them (infinite if a render fails). */
+static inline double stat_agreement(const char *dir, const char *xml, const char *label, int res, uint64_t seed,
+                                    int max_depth, int iterations, int bs) {
+  stat_blocks ref = {0};
+  if (stat_render_xml(dir, xml, PC_METHOD_PT, res, seed, max_depth, iterations, bs, &ref, NULL)) return INFINITY;
+  const pc_method methods[] = {PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT};
+  double worst = 0;
+  for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
+    stat_blocks st = {0};
+    double mk = INFINITY;
+    int lit = 0;
+    if (!stat_render_xml(dir, xml, methods[k], res, seed, max_depth, iterations, bs, &st, NULL)) {
+      mk = stat_largest_z(&ref, &st);
+      for (int b = 0; b < st.nblocks; b++) lit += stat_mean(&st, b) > 0;
+    }
+    printf("%s %-5s vs pt: largest block difference %.2f standard errors over %d blocks (%d lit)\n", label,
+           pc_method_name(methods[k]), mk, st.nblocks, lit);
+    if (mk > worst) worst = mk;
+    stat_free(&st);
+  }
+  stat_free(&ref);
+  return worst;
 }
 
 #endif

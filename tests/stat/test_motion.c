@@ -15,7 +15,6 @@
 #include <math.h>
 
 #include "stat_util.h"
-#include "../unit/test_helpers_fs.h"
 
 #define RES 32
 #define BLOCK 4
@@ -50,18 +49,7 @@ static const char *bar_still =
     "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0\"/></bsdf></shape>";
 
 static int render(const char *dir, const char *xml, pc_method m, int iterations, int block, stat_blocks *st, pc_scene *keep) {
-  char path[256];
-  snprintf(path, sizeof path, "%s/scene.xml", dir);
-  if (th_write_str(dir, "scene.xml", xml)) return -1;
-  pc_render_request req;
-  pc_scene scene;
-  int rc = stat_load_file(path, NULL, m, RES, 41, &req, &scene);
-  if (rc) return rc;
-  req.set.max_depth = 4;
-  rc = stat_render_blocks(&scene, &req.set, 2, 0, iterations, -1, block, st);
-  if (keep) *keep = scene;
-  else pc_scene_free(&scene);
-  return rc;
+  return stat_render_xml(dir, xml, m, RES, 41, 4, iterations, block, st, keep);
 }
 
 /* The fraction of the shutter during which the bar covers x on its plane (relative to the
@@ -136,31 +124,12 @@ static void test_agreement(void **state) {
   const char *xml =
       "<scene version=\"0.6.0\"><sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/>"
       "<float name=\"shutterOpen\" value=\"0.25\"/><float name=\"shutterClose\" value=\"0.75\"/>"
-      "<transform name=\"toWorld\"><lookat origin=\"0, 1, 3\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>"
-      "<film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" value=\"32\"/></film></sensor>"
-      "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale value=\"3\"/><rotate x=\"1\" angle=\"-90\"/></transform>"
-      "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6\"/></bsdf></shape>"
-      "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale value=\"0.3\"/><rotate x=\"1\" angle=\"90\"/>"
-      "<translate y=\"2\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"20\"/></emitter></shape>"
+      STAT_VIEW_OF_LIT_FLOOR
       "<shape type=\"cube\"><animation name=\"toWorld\">"
       "<transform time=\"0\"><scale value=\"0.3\"/><translate x=\"-0.8\" y=\"0.3\"/></transform>"
       "<transform time=\"1\"><scale value=\"0.3\"/><rotate y=\"1\" angle=\"90\"/><translate x=\"0.8\" y=\"0.5\"/></transform>"
       "</animation><bsdf type=\"roughplastic\"><float name=\"alpha\" value=\"0.2\"/></bsdf></shape></scene>";
-  enum { IT = 512, BL = 8 };
-  stat_blocks ref = {0};
-  assert_int_equal(render(dir, xml, PC_METHOD_PT, IT, BL, &ref, NULL), 0);
-  const pc_method methods[] = {PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT};
-  double worst = 0;
-  for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
-    stat_blocks st = {0};
-    assert_int_equal(render(dir, xml, methods[k], IT, BL, &st, NULL), 0);
-    double mk = stat_largest_z(&ref, &st);
-    printf("moving cube %-5s vs pt: largest block difference %.2f standard errors over %d blocks\n", pc_method_name(methods[k]),
-           mk, st.nblocks);
-    if (mk > worst) worst = mk;
-    stat_free(&st);
-  }
-  stat_free(&ref);
+  double worst = stat_agreement(dir, xml, "moving cube", RES, 41, 4, 512, 8);
   th_rm_rf(dir);
   assert_true(worst < 4.5);
 }

@@ -12,7 +12,6 @@
 #include <math.h>
 
 #include "stat_util.h"
-#include "../unit/test_helpers_fs.h"
 
 #define D 1.0          /* spot height above the floor */
 #define INTENSITY 2.0
@@ -38,17 +37,7 @@ static const char *scene_more =
 
 static int render(const char *dir, const char *xml, pc_method m, int res, int iterations, int block, stat_blocks *st,
                   pc_scene *keep) {
-  char path[256];
-  snprintf(path, sizeof path, "%s/scene.xml", dir);
-  if (th_write_str(dir, "scene.xml", xml)) return -1;
-  pc_render_request req;
-  pc_scene scene;
-  int rc = stat_load_file(path, NULL, m, res, 31, &req, &scene);
-  if (rc) return rc;
-  rc = stat_render_blocks(&scene, &req.set, 2, 0, iterations, -1, block, st);
-  if (keep) *keep = scene;
-  else pc_scene_free(&scene);
-  return rc;
+  return stat_render_xml(dir, xml, m, res, 31, 0, iterations, block, st, keep);
 }
 
 /* The analytic radiance of the floor at horizontal distance rho from below the spot, and
@@ -109,22 +98,7 @@ static void test_agreement(void **state) {
   char dir[] = "/tmp/pcbpt_spot_XXXXXX", xml[8192];
   assert_non_null(mkdtemp(dir));
   snprintf(xml, sizeof xml, "%s%s</scene>", scene_head, scene_more);
-  enum { RES = 32, IT = 256, BLOCK = 8 };
-  stat_blocks ref = {0};
-  assert_int_equal(render(dir, xml, PC_METHOD_PT, RES, IT, BLOCK, &ref, NULL), 0);
-  const pc_method methods[] = {PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT};
-  double worst = 0;
-  for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
-    stat_blocks st = {0};
-    assert_int_equal(render(dir, xml, methods[k], RES, IT, BLOCK, &st, NULL), 0);
-    double mk = stat_largest_z(&ref, &st), lit = 0;
-    for (int b = 0; b < st.nblocks; b++) lit += stat_mean(&st, b) > 0;
-    printf("spot scene %-5s vs pt: largest block difference %.2f standard errors over %d blocks (%.0f lit)\n",
-           pc_method_name(methods[k]), mk, st.nblocks, lit);
-    if (mk > worst) worst = mk;
-    stat_free(&st);
-  }
-  stat_free(&ref);
+  double worst = stat_agreement(dir, xml, "spot scene", 32, 31, 0, 256, 8);
   th_rm_rf(dir);
   assert_true(worst < 4.5);
 }

@@ -1,6 +1,6 @@
 /* test_camera.c: the pinhole camera's importance function and pdfs integrate correctly, ray
- * generation and raster projection are inverse, and the Mitsuba lookat frame renders
- * unmirrored. */
+ * generation and raster projection are inverse (for a thin lens too, from every lens point),
+ * and the Mitsuba lookat frame renders unmirrored. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -73,6 +73,37 @@ static void test_raster_roundtrip(void **state) {
   }
 }
 
+/* A thin lens: rays from any lens point through a raster position meet at one point of the
+ * plane in focus, and project back to that raster position; the pinhole draws no lens sample. */
+static void test_thin_lens(void **state) {
+  (void)state;
+  pc_camera c = make_camera(64, 48, 40.f, 'x');
+  pc_rng rng = pc_rng_make(3, 0, PC_STREAM_MISC, 0), before = rng;
+  vec3 d, o = pc_camera_sample_ray(&c, 10.5f, 20.25f, &rng, &d);
+  assert_true(o.x == c.pos.x && o.y == c.pos.y && o.z == c.pos.z);
+  vec3 d0 = pc_camera_ray_dir(&c, 10.5f, 20.25f);
+  assert_true(d.x == d0.x && d.y == d0.y && d.z == d0.z);
+  assert_true(rng.state == before.state);
+  c.aperture_radius = 0.3f;
+  c.focus_distance = 5.f;
+  float far = 0.f;
+  for (int i = 0; i < 1000; i++) {
+    float px = 64 * pc_rng_f(&rng), py = 48 * pc_rng_f(&rng), rx, ry;
+    o = pc_camera_sample_ray(&c, px, py, &rng, &d);
+    vec3 off = v3_sub(o, c.pos);
+    assert_true(v3_len(off) <= 0.3f * 1.0001f && fabsf(v3_dot(off, c.dir)) < 1e-5f);
+    far = fmaxf(far, v3_len(off));
+    /* the ray reaches the focus plane where the pinhole ray of the pixel does */
+    vec3 p = v3_madd(o, d, 5.f / v3_dot(d, c.dir));
+    vec3 q = pc_camera_ray_dir(&c, px, py);
+    q = v3_madd(c.pos, q, 5.f / v3_dot(q, c.dir));
+    assert_true(v3_len(v3_sub(p, q)) < 1e-4f);
+    assert_true(pc_camera_raster_from(&c, o, d, &rx, &ry));
+    assert_true(fabsf(rx - px) < 2e-3f && fabsf(ry - py) < 2e-3f);
+  }
+  assert_true(far > 0.29f);
+}
+
 static void test_fov_axes(void **state) {
   (void)state;
   pc_camera c = make_camera(80, 40, 60.f, 'x');
@@ -101,6 +132,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_importance_integrates_to_one),
       cmocka_unit_test(test_raster_roundtrip),
+      cmocka_unit_test(test_thin_lens),
       cmocka_unit_test(test_fov_axes),
       cmocka_unit_test(test_lookat_orientation),
   };

@@ -1229,6 +1229,46 @@ static void test_motion_params(void **state) {
   th_rm_rf(t.root);
 }
 
+static void test_thinlens_params(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const struct { const char *params; float aperture, focus; } good[] = {
+      {"<float name=\"apertureRadius\" value=\"0.1\"/><float name=\"focusDistance\" value=\"3\"/>", 0.1f, 3.f},
+      {"<float name=\"apertureRadius\" value=\"0.2\"/>", 0.2f, 1e4f},
+      {"<float name=\"apertureRadius\" value=\"0.2\"/><float name=\"farClip\" value=\"50\"/>", 0.2f, 50.f},
+      {"<float name=\"apertureRadius\" value=\"0\"/>", 0.f, 1e4f},
+  };
+  char buf[1024];
+  for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+    snprintf(buf, sizeof buf, "<sensor type=\"thinlens\"><float name=\"fov\" value=\"45\"/>%s</sensor>", good[i].params);
+    int rc = load_body(&t, buf, &s, &e);
+    if (rc) print_error("%s\n", e.msg);
+    assert_int_equal(rc, 0);
+    assert_true(s.camera.aperture_radius == good[i].aperture && s.camera.focus_distance == good[i].focus);
+    pc_scene_free(&s);
+  }
+  const struct { const char *params, *want; } bad[] = {
+      {"", "'apertureRadius' is required"},
+      {"<float name=\"apertureRadius\" value=\"-1\"/>", "apertureRadius must be finite and not negative"},
+      {"<float name=\"apertureRadius\" value=\"1\"/><float name=\"focusDistance\" value=\"0\"/>", "focusDistance must be positive"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    snprintf(buf, sizeof buf, "<sensor type=\"thinlens\"><float name=\"fov\" value=\"45\"/>%s</sensor>", bad[i].params);
+    assert_int_not_equal(load_body(&t, buf, &s, &e), 0);
+    if (!strstr(e.msg, bad[i].want)) print_error("case %zu: %s\n", i, e.msg);
+    assert_non_null(strstr(e.msg, bad[i].want));
+  }
+  /* a pinhole has no lens, whatever it is given */
+  assert_int_equal(load_body(&t, "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>"
+                                 "<float name=\"focusDistance\" value=\"3\"/></sensor>", &s, &e), 0);
+  assert_true(s.camera.aperture_radius == 0.f);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 static void test_bitmap_texture(void **state) {
   (void)state;
   tmp t;
@@ -1447,6 +1487,7 @@ int main(void) {
       cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
+      cmocka_unit_test(test_thinlens_params),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
