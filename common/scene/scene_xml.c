@@ -180,7 +180,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
    * farClip (which is also a thin lens's default focus distance, as in Mitsuba); focusDistance
    * does nothing in a pinhole camera. */
   pc_scene *s = c->s;
-  cam->focus_distance = -1.f;
+  cam->focus_distance = 0.f;
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
                   {"toWorld", PC_P_MOTION, &cx, 0, 0},
                   {"nearClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
