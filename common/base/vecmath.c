@@ -35,3 +35,16 @@ bool mat4_inverse(const mat4 *a, mat4 *out) {
       if (!isfinite(out->m[i][j])) return false;
   return true;
 }
+
+vec2 pc_sample_concentric_disk(float u1, float u2) {
+  float a = 2.f * u1 - 1.f, b = 2.f * u2 - 1.f, r, phi;
+  if (a == 0.f && b == 0.f) return (vec2){0.f, 0.f};
+  if (a * a > b * b) {
+    r = a;
+    phi = (PC_PI / 4.f) * (b / a);
+  } else {
+    r = b;
+    phi = (PC_PI / 2.f) - (PC_PI / 4.f) * (a / b);
+  }
+  return (vec2){r * cosf(phi), r * sinf(phi)};
+}

@@ -102,4 +102,8 @@ static inline vec3 mat4_normal(const mat4 *inv, vec3 n) {
 /* General inverse by Gauss-Jordan with partial pivoting; returns false when singular. */
 bool mat4_inverse(const mat4 *a, mat4 *out);
 
+/* A point of the unit disk from a uniform sample of [0,1)^2 by Shirley's concentric map, which
+ * keeps strata compact (cosine-weighted hemisphere sampling and the thin lens use it). */
+vec2 pc_sample_concentric_disk(float u1, float u2);
+
 #endif

@@ -2,17 +2,8 @@
 #include "bsdf_lobes.h"
 
 vec3 pc_sample_cosine_hemisphere(float u1, float u2) {
-  float a = 2.f * u1 - 1.f, b = 2.f * u2 - 1.f, r, phi;
-  if (a == 0.f && b == 0.f) return v3(0.f, 0.f, 1.f);
-  if (a * a > b * b) {
-    r = a;
-    phi = (PC_PI / 4.f) * (b / a);
-  } else {
-    r = b;
-    phi = (PC_PI / 2.f) - (PC_PI / 4.f) * (a / b);
-  }
-  float x = r * cosf(phi), y = r * sinf(phi);
-  return v3(x, y, sqrtf(fmaxf(0.f, 1.f - x * x - y * y)));
+  vec2 d = pc_sample_concentric_disk(u1, u2);
+  return v3(d.x, d.y, sqrtf(fmaxf(0.f, 1.f - d.x * d.x - d.y * d.y)));
 }
 
 vec3 pc_diffuse_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {

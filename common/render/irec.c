@@ -342,6 +342,14 @@ static int count_seen(const pc_irec_store *s, const int *idx, int n) {
   return seen;
 }
 
+/* The kd-tree's knn nearest records of q into buf. */
+static const int *search(const pc_irec_store *s, vec3 q, int knn, int *buf, int *count, int *seen) {
+  float d2[PC_IREC_MAX_KNN];
+  *count = pc_kdtree_knn(&s->tree, q, knn, buf, d2);
+  *seen = count_seen(s, buf, *count);
+  return buf;
+}
+
 /* The knn nearest records of the centre of z's cell (of z itself when the build has no cell
  * size or z lies absurdly far out): a pure function of the position, so the lookup does not
  * depend on which thread asks or in what order. Returns their indices (in `buf`, or in the
@@ -349,36 +357,30 @@ static int count_seen(const pc_irec_store *s, const int *idx, int n) {
  * sets are memoised per thread: neighbouring pixels mostly share a cell, and the kd-tree search
  * is the costliest part of a lookup. */
 static const int *neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *buf, int *count, int *seen) {
-  float d2[PC_IREC_MAX_KNN];
-  vec3 q = p;
-  cell_entry *c = NULL;
-  if (s->cell > 0.f) {
-    vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
-    f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
-    if (fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE) {
-      q = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
-      if (knn == s->cache_k) {
-        uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
-                       (uint64_t)(int64_t)(f.z + CELL_RANGE);
-        /* Fibonacci hashing: the product's top bits mix every bit of the key. (Its middle bits
-         * did not: 1.9% of the lookups missed on collisions with ~900 cells in use, now 0.2%.) */
-        size_t slot = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - PC_IREC_CACHE_BITS));
-        c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
-        if (c->epoch != s->epoch || c->key != key) {
-          c->n = (int16_t)pc_kdtree_knn(&s->tree, q, knn, c->idx, d2);
-          c->seen = (int16_t)count_seen(s, c->idx, c->n);
-          c->key = key;
-          c->epoch = s->epoch;
-        }
-        *count = c->n;
-        *seen = c->seen;
-        return c->idx;
-      }
-    }
+  if (!(s->cell > 0.f)) return search(s, p, knn, buf, count, seen);
+  vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
+  f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
+  if (!(fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE))
+    return search(s, p, knn, buf, count, seen);
+  vec3 centre = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
+  if (knn != s->cache_k) return search(s, centre, knn, buf, count, seen);
+  uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
+                 (uint64_t)(int64_t)(f.z + CELL_RANGE);
+  /* Fibonacci hashing: the product's top bits mix every bit of the key. (Its middle bits did
+   * not: 1.9% of the lookups missed on collisions with ~900 cells in use, now 0.2%.) */
+  size_t slot = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - PC_IREC_CACHE_BITS));
+  cell_entry *c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
+  if (c->epoch != s->epoch || c->key != key) {
+    int n, sn;
+    search(s, centre, knn, c->idx, &n, &sn);
+    c->n = (int16_t)n;
+    c->seen = (int16_t)sn;
+    c->key = key;
+    c->epoch = s->epoch;
   }
-  *count = pc_kdtree_knn(&s->tree, q, knn, buf, d2);
-  *seen = count_seen(s, buf, *count);
-  return buf;
+  *count = c->n;
+  *seen = c->seen;
+  return c->idx;
 }
 
 void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,

@@ -62,13 +62,9 @@ float pc_camera_pdf_dir(const pc_camera *c, vec3 dir) {
 
 vec3 pc_camera_lens_point(const pc_camera *c, float u1, float u2) {
   if (!(c->aperture_radius > 0.f)) return c->pos;
-  /* Shirley's concentric map keeps the disk's strata compact */
-  float a = 2.f * u1 - 1.f, b = 2.f * u2 - 1.f, r, phi;
-  if (a == 0.f && b == 0.f) return c->pos;
-  if (fabsf(a) > fabsf(b)) r = a, phi = (PC_PI / 4.f) * (b / a);
-  else r = b, phi = (PC_PI / 2.f) - (PC_PI / 4.f) * (a / b);
-  r *= c->aperture_radius;
-  return v3_add(c->pos, v3_add(v3_scale(c->right, r * cosf(phi)), v3_scale(c->up, r * sinf(phi))));
+  vec2 d = pc_sample_concentric_disk(u1, u2);
+  float r = c->aperture_radius;
+  return v3_add(c->pos, v3_add(v3_scale(c->right, r * d.x), v3_scale(c->up, r * d.y)));
 }
 
 vec3 pc_camera_lens_dir(const pc_camera *c, vec3 lens, float px, float py) {

@@ -94,29 +94,25 @@ int pc_scene_view_create(const pc_scene *s, pc_scene **out, pc_err *e) {
     if (s->shapes[k].kind == PC_SHAPE_MESH && pc_mesh_copy(&s->shapes[k].mesh, &shapes[k].mesh) != 0)
       rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for a moving view", s->path);
   }
-  RTCScene scn = NULL;
-  if (rc == PC_OK) {
-    scn = rtcNewScene(s->rtc_device);
+  if (rc == PC_OK && s->nmotions == 0) {
+    /* only the sensor moves: the scene's geometry serves as it is */
+    rtcRetainScene(s->rtc_scene);
+    v->rtc_scene = s->rtc_scene;
+  } else if (rc == PC_OK) {
+    /* every shape starts as the scene's geometry; pc_scene_view_set_time replaces the moving
+     * ones, so only they are rebuilt per iteration */
+    RTCScene scn = rtcNewScene(s->rtc_device);
+    v->rtc_scene = scn;
     if (!scn) rc = pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree scene for a moving view", s->path);
-  }
-  v->rtc_scene = scn;
-  if (rc == PC_OK) {
-    /* only the moving geometry is rebuilt per iteration */
-    rtcSetSceneFlags(scn, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
-    rtcSetSceneBuildQuality(scn, RTC_BUILD_QUALITY_LOW);
-    char *moving = calloc((size_t)s->nshapes, 1);
-    if (!moving) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for a moving view", s->path);
-    for (int i = 0; moving && i < s->nmotions; i++) moving[s->motions[i].shape] = 1;
-    for (int i = 0; rc == PC_OK && i < s->nshapes; i++) {
-      if (moving[i]) {
-        rc = pc_scene_attach_shape(v, scn, i, e);
-      } else {
-        RTCGeometry g = rtcGetGeometry(s->rtc_scene, (unsigned)i);
-        if (!g) rc = pc_errf(e, PC_EEMBREE, "%s: shape %d has no Embree geometry", s->path, i);
-        else rtcAttachGeometryByID(scn, g, (unsigned)i);
-      }
+    if (scn) {
+      rtcSetSceneFlags(scn, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
+      rtcSetSceneBuildQuality(scn, RTC_BUILD_QUALITY_LOW);
     }
-    free(moving);
+    for (int i = 0; rc == PC_OK && i < s->nshapes; i++) {
+      RTCGeometry g = rtcGetGeometry(s->rtc_scene, (unsigned)i);
+      if (!g) rc = pc_errf(e, PC_EEMBREE, "%s: shape %d has no Embree geometry", s->path, i);
+      else rtcAttachGeometryByID(scn, g, (unsigned)i);
+    }
     if (rc == PC_OK) rc = pc_scene_commit(v, scn, e);
   }
   if (rc != PC_OK) {
@@ -129,6 +125,7 @@ int pc_scene_view_create(const pc_scene *s, pc_scene **out, pc_err *e) {
 
 int pc_scene_view_set_time(pc_scene *v, float time, pc_err *e) {
   int rc = pc_scene_place(v, time, e);
+  if (rc != PC_OK || v->nmotions == 0) return rc;
   for (int i = 0; i < v->nmotions && rc == PC_OK; i++) {
     unsigned id = (unsigned)v->motions[i].shape;
     rtcDetachGeometry(v->rtc_scene, id);
