@@ -212,12 +212,15 @@ int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_
 }
 
 int pc_client_submit_request(pc_client *cl, const char *name, const uint8_t *hash, const pc_render_request *req,
-                             const char *auto_report, int priority, uint64_t *job, pc_err *e) {
+                             const char *auto_report, uint64_t prior_group, double prior_amount, int priority,
+                             uint64_t *job, pc_err *e) {
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&req->set, &ps, &psb);
   ps.halt_noise = req->halt_noise;
   ps.auto_report = (char *)auto_report;
+  ps.prior_group = prior_amount > 0 ? prior_group : 0;
+  ps.prior_amount = prior_amount > 0 ? prior_amount : 0;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = (char *)name;
   sub.bundle_hash.data = (uint8_t *)hash;

@@ -29,9 +29,11 @@ int pc_client_send_bundle(pc_client *cl, const uint8_t *blob, size_t n, const ui
  * priority) and waits for its reply: *job is the new job's id. */
 int pc_client_submit(pc_client *cl, const Pcbpt__Submit *sub, uint64_t *job, pc_err *e);
 /* A render job of an uploaded bundle: req's settings, --spp, --time and --halt-noise, with
- * --method auto's report (may be ""). */
+ * --method auto's report (may be "") and its pilot's films to mix in (prior_group 0: none;
+ * coordinator/job_prior.c). */
 int pc_client_submit_request(pc_client *cl, const char *name, const uint8_t *hash, const pc_render_request *req,
-                             const char *auto_report, int priority, uint64_t *job, pc_err *e);
+                             const char *auto_report, uint64_t prior_group, double prior_amount, int priority,
+                             uint64_t *job, pc_err *e);
 /* Asks for the status of `job` (0: every job); *out is a STATUS_REPLY envelope the caller frees
  * with pcbpt__envelope__free_unpacked. */
 int pc_client_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **out, pc_err *e);

@@ -100,26 +100,16 @@ int pc_cmd_submit(int argc, char **argv) {
   const char *base = strrchr(scene_path, '/');
   pc_pilot_farm fp = {.cl = &cl, .hash = hash, .name = o.name ? o.name : base ? base + 1 : scene_path, .priority = (int)o.priority};
   char report[1024] = "";
+  double prior_amount = 0;
   if (!rc && req.method_auto) {
     /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
      * them; the client waits for them and takes each one's cost from its worker-seconds */
-    pc_pilot pilot;
-    double slice;
-    uint64_t min_it;
-    pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
-    rc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_farm_render, &fp, &e);
-    if (!rc) {
-      uint64_t seed = req.set.seed;
-      req.set = pilot.c[pilot.best].set;
-      req.set.seed = seed;
-      pc_pilot_report(&pilot, report, sizeof report);
-      fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
-      if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot.seconds);
-    }
-    pc_pilot_free(&pilot);
+    double pilot_s;
+    rc = pc_pilot_farm_choose(&fp, &req, report, sizeof report, &pilot_s, &prior_amount, &e);
+    if (!rc) fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
   }
   uint64_t job = 0;
-  if (!rc) rc = pc_client_submit_request(&cl, fp.name, hash, &req, report, fp.priority, &job, &e);
+  if (!rc) rc = pc_client_submit_request(&cl, fp.name, hash, &req, report, fp.pilot_group, prior_amount, fp.priority, &job, &e);
   pc_client_close(&cl);
   if (rc) {
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);

@@ -16,7 +16,7 @@
 #include "client.h"
 #include "embedded.h"
 #include "image.h"
-#include "pilot.h"
+#include "pilot_farm.h"
 #include "render.h"
 #include "thread_pool.h"
 #include "wire_settings.h"
@@ -127,13 +127,6 @@ static int job_status(pc_client *cl, uint64_t job, Pcbpt__Envelope **env, Pcbpt_
   return 0;
 }
 
-static int submit_job(pc_client *cl, const char *scene_path, const uint8_t *blob, size_t n, const uint8_t *hash,
-                      const pc_render_request *req, const char *auto_report, uint64_t *job, pc_err *e) {
-  int rc = pc_client_send_bundle(cl, blob, n, hash, e);
-  if (rc) return rc;
-  return pc_client_submit_request(cl, scene_path, hash, req, auto_report, 0, job, e);
-}
-
 /* Asks the coordinator to finish the job with what is rendered (Ctrl-C). */
 static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT, *in = NULL;
@@ -148,20 +141,31 @@ static int halt_job(pc_client *cl, uint64_t job, pc_err *e) {
   return rc;
 }
 
-/* Submits the job to the embedded farm, shows progress until it ends and fetches the image to
- * `out`. *secs is the wall time from submission to the end of the job. */
+/* Runs --method auto's pilot on the embedded farm (its candidates are jobs there, like a
+ * farm's: pilot_farm.h), submits the job, shows progress until it ends and fetches the image
+ * to `out`. *secs is the wall time from submission to the end of the job, *pilot_s the
+ * pilot's. */
 static int run_job(pc_embedded *farm, int threads, const char *scene_path, const uint8_t *blob, size_t blob_n,
-                   const uint8_t *hash, const pc_render_request *req, const char *auto_report, const char *out,
-                   progress_state *prog, double *secs, pc_err *e) {
+                   const uint8_t *hash, pc_render_request *req, const char *out, progress_state *prog, double *secs,
+                   double *pilot_s, pc_err *e) {
   pc_client cl;
   int rc = pc_client_connect(farm->hostport, farm->token, &cl, e);
   if (rc) return rc;
   uint64_t job = 0;
+  bool halted = false;
+  char auto_report[1024] = "";
+  pc_pilot_farm fp = {.cl = &cl, .hash = hash, .name = scene_path};
+  double prior_amount = 0;
+  rc = pc_client_send_bundle(&cl, blob, blob_n, hash, e);
+  if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
+  if (!rc && req->method_auto && (rc = pc_pilot_farm_choose(&fp, req, auto_report, sizeof auto_report, pilot_s, &prior_amount, e)) == 0) {
+    printf("auto: %s\n", auto_report);
+    fflush(stdout);
+    prog->seconds = req->seconds;
+  }
   double t0 = now_s();
   prog->t0 = t0;
-  bool halted = false;
-  rc = submit_job(&cl, scene_path, blob, blob_n, hash, req, auto_report, &job, e);
-  if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
+  if (!rc) rc = pc_client_submit_request(&cl, scene_path, hash, req, auto_report, fp.pilot_group, prior_amount, 0, &job, e);
   while (!rc) {
     Pcbpt__Envelope *env = NULL;
     Pcbpt__JobStatus *st = NULL;
@@ -268,8 +272,6 @@ int pc_cmd_render(int argc, char **argv) {
   pc_embedded farm;
   bool farm_up = false;
   char *out_owned = NULL, *png = NULL;
-  char auto_report[1024] = "";
-  pc_pilot pilot;
   /* the scene is checked here so a bad one is one clear line, before any farm starts */
   if (pc_cli_load_scene("render", &req, scene_path, &scene, &err) != PC_OK) goto fail;
   if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
@@ -281,28 +283,7 @@ int pc_cmd_render(int argc, char **argv) {
     if (pc_renderer_create(&scene, &req.set, 1, &probe, &err) != PC_OK) goto fail;
     pc_renderer_destroy(probe);
   }
-  double t_start = now_s(), pilot_s = 0;
-  if (req.method_auto) {
-    /* the pilot renders in this process on the scene already built (render's one worker
-     * would render it with the same threads); its wall time is taken from a --time budget */
-    pc_pilot_local local = {.scene = &scene, .threads = (int)threads};
-    double slice;
-    uint64_t min_it;
-    pc_pilot_budget(req.seconds, req.spp, &slice, &min_it);
-    int prc = pc_pilot_run(&pilot, &req.set, slice, min_it, pc_pilot_local_render, &local, &err);
-    if (prc == PC_OK) {
-      pc_render_settings chosen = pilot.c[pilot.best].set;
-      chosen.seed = req.set.seed;
-      req.set = chosen;
-      pc_pilot_report(&pilot, auto_report, sizeof auto_report);
-    }
-    pc_pilot_free(&pilot);
-    if (prc != PC_OK) goto fail;
-    printf("auto: %s\n", auto_report);
-    fflush(stdout);
-    pilot_s = now_s() - t_start;
-    if (req.seconds > 0) req.seconds = pc_pilot_remaining(req.seconds, pilot_s);
-  }
+  double pilot_s = 0;
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);
   if (!out) out = out_owned = default_out(scene_path);
@@ -322,7 +303,7 @@ int pc_cmd_render(int argc, char **argv) {
   if (pc_embedded_start(&farm, &err) != PC_OK) goto fail;
   farm_up = true;
   double secs = 0;
-  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, auto_report, out, &prog, &secs, &err);
+  int rc = run_job(&farm, (int)threads, scene_path, blob, blob_n, hash, &req, out, &prog, &secs, &pilot_s, &err);
 
   pc_embedded_stop(&farm);
   farm_up = false;

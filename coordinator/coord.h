@@ -68,6 +68,12 @@ typedef struct pc_job {
   uint32_t snaps_queued;     /* snapshot times passed (and queued for) so far */
   uint32_t snaps_queued_n;   /* snapshot files queued so far */
   double film_seconds;       /* worker-seconds of the uploads in the film (ops only) */
+  /* --method auto (job_prior.c, docs/auto.md): a pilot candidate's film goes to pilot_group
+   * when done; a job with a prior_group shows the mix of that group's film and its own */
+  uint64_t pilot_group, prior_group;
+  double prior_amount;       /* the pilot's share, in the unit of the job's budget (proto) */
+  bool prior_ready;          /* prior holds the pilot's film (from activation on) */
+  pc_film prior;
   uint32_t ranges_rerun;     /* ranges taken back from a vanished or silent worker */
   pc_job_state state;
   uint64_t next_iter, done, ckpt_gen;
@@ -140,6 +146,16 @@ struct pc_peer {
   struct pc_peer *next;
 };
 
+/* A pilot's films kept for the job that will show them (job_prior.c). */
+typedef struct pc_pilot_films {
+  uint64_t group;
+  pc_film film;              /* the group's done candidates, mixed by iterations */
+  double worker_seconds;
+  double since;              /* pc_coord_now() of the first */
+  struct pc_pilot_films *next;
+} pc_pilot_films;
+#define PC_COORD_MAX_PILOT_FILMS 8 /* groups kept at once: a pilot whose job never came is dropped */
+
 struct pc_coord {
   uv_loop_t *loop;
   uv_tcp_t listener;
@@ -149,6 +165,7 @@ struct pc_coord {
   char data_dir[256];
   uint8_t key[PC_AUTH_KEY];
   pc_job *jobs;
+  pc_pilot_films *pilot_films;
   pc_peer *peers;
   int bound_port;            /* after listen (for --listen HOST:0) */
   uv_async_t wake;           /* pc_coord_stop from another thread */
@@ -193,6 +210,17 @@ int pc_store_load(pc_coord *c, pc_err *e);
  * budget * PC_JOB_SNAPSHOT_FIRST^((K - k) / K), so with the image at the budget the K + 1
  * points are evenly spaced in log time. */
 double pc_job_snapshot_time(const pc_job *j, int k);
+/* job_prior.c: a done pilot candidate's film joins its group (taken from the job); a job with
+ * a prior_group takes that group's film at activation (or, after a restart, the copy it saved
+ * then). The pilot's weight in an image of the job after `elapsed` seconds whose uploads
+ * carry film_seconds worker-seconds (snapshot_at > 0: a study snapshot planned at that many),
+ * 0 without a prior; the film the job shows (its own, or the mix made in *tmp); the estimate of the mix. */
+void pc_prior_keep(pc_coord *c, pc_job *j);
+void pc_prior_attach(pc_coord *c, pc_job *j);
+double pc_prior_weight(const pc_job *j, double film_seconds, double elapsed, double snapshot_at);
+int pc_prior_shown(const pc_job *j, double weight, pc_film *tmp, const pc_film **shown, pc_err *e);
+bool pc_prior_relmse_estimate(const pc_job *j, double weight, double *out);
+void pc_prior_free_all(pc_coord *c);
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
 /* The data dir could not be written for j (a checkpoint, with op, or a range): j pauses and

@@ -44,6 +44,7 @@ struct pc_op {
   double relmse_est;         /* merge: the film's estimated relMSE after it (< 0: cannot tell) */
   uint64_t est_iterations;   /* ... over this many iterations */
   pc_render_stats stats;     /* merge: the upload's; checkpoint: the job's merged total */
+  double snap_at;            /* snapshot: the worker-seconds it was planned at */
   /* checkpoint */
   uint64_t gen;
   bool write_exr;
@@ -61,7 +62,7 @@ void pc_job_path(const pc_coord *c, const pc_job *j, const char *leaf, char *out
 }
 
 static void op_start(pc_job *j);
-static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, pc_err *e);
+static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, double snap_at, pc_err *e);
 
 /* Appends op to j's queue; op_after starts the next op of the queue. */
 static void append_op(pc_job *j, pc_op *op) {
@@ -98,10 +99,11 @@ static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
   return 0;
 }
 
-/* The film's estimated relMSE (-1 when it cannot tell) and the iterations behind it. */
-static void film_estimate(const pc_film *f, double *relmse, uint64_t *iterations) {
-  if (!pc_film_relmse_estimate(f, relmse)) *relmse = -1;
-  *iterations = f->layers[PC_LAYER_PT].count;
+/* The estimated relMSE of the image the job shows (-1 when it cannot tell) and the job's
+ * iterations. */
+static void film_estimate(const pc_job *j, double *relmse, uint64_t *iterations) {
+  if (!pc_prior_relmse_estimate(j, pc_prior_weight(j, j->film_seconds, j->elapsed, 0), relmse)) *relmse = -1;
+  *iterations = j->film.layers[PC_LAYER_PT].count;
 }
 
 /* --halt-noise (docs/variance.md): the estimate is looked at only from NOISE_MIN_ITERATIONS
@@ -135,6 +137,7 @@ static void check_study(pc_coord *c, pc_job *j) {
       op->c = c;
       op->j = j;
       op->snap_k = ++j->snaps_queued_n;
+      op->snap_at = pc_job_snapshot_time(j, k);
       op->wall = j->elapsed;
       j->snaps_queued = (uint32_t)k + 1;
       append_op(j, op); /* (called from op_after, which starts it) */
@@ -163,6 +166,9 @@ void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
   j->study_group = s->study_group;
   j->group_workers = s->group_workers;
   j->halt_worker_seconds = s->halt_worker_seconds;
+  j->pilot_group = s->pilot_group;
+  j->prior_group = s->prior_group;
+  j->prior_amount = s->prior_amount;
   j->snapshots = s->snapshots <= PC_JOB_MAX_SNAPSHOTS ? s->snapshots : PC_JOB_MAX_SNAPSHOTS;
 }
 
@@ -176,8 +182,8 @@ static void merge_work(uv_work_t *w) {
     return;
   }
   op->rc = pc_wire_film_add_z(op->buf, op->len, &j->film, judge_counts, op, &op->err);
-  if (!op->rc) film_estimate(&j->film, &op->relmse_est, &op->est_iterations);
   if (!op->rc) j->film_seconds += op->stats.t_total;
+  if (!op->rc) film_estimate(j, &op->relmse_est, &op->est_iterations);
 }
 
 /* The checkpoint streams into its file as it is compressed (no serialized copy of the film). */
@@ -220,7 +226,7 @@ static void ckpt_work(uv_work_t *w) {
   char img[600];
   snprintf(img, sizeof img, "%s/image.exr", dir);
   /* the image is written like the checkpoint: a failure is the data dir's (retried) */
-  if (write_image(j, img, &op->stats, j->elapsed, &op->err) != 0) op->rc = PC_EIO;
+  if (write_image(j, img, &op->stats, j->elapsed, 0, &op->err) != 0) op->rc = PC_EIO;
 }
 
 /* A study snapshot of the merged film (pc_job_snapshot_due). Its worker-seconds are those of
@@ -233,13 +239,18 @@ static void snap_work(uv_work_t *w) {
   pc_job_path(op->c, j, leaf, path, sizeof path);
   pc_render_stats st = j->stats_merged;
   st.t_total = j->film_seconds;
-  op->rc = write_image(j, path, &st, op->wall, &op->err);
+  op->rc = write_image(j, path, &st, op->wall, op->snap_at, &op->err);
 }
 
 /* The same header as a standalone `render` writes, plus the job id and, for studies, the
  * worker-seconds behind the film. */
-static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, pc_err *e) {
+static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, double snap_at, pc_err *e) {
   char idbuf[32], seed[32], version[64], pcbpt_flags[320];
+  pc_film mix;
+  const pc_film *shown;
+  double pilot_weight = pc_prior_weight(j, st->t_total, wall, snap_at);
+  int rc = pc_prior_shown(j, pilot_weight, &mix, &shown, e);
+  if (rc) return rc;
   pc_render_settings_pcbpt_flags(&j->set, pcbpt_flags, sizeof pcbpt_flags);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
@@ -260,6 +271,10 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.pmf_bytes", .type = PC_ATTR_DOUBLE, .d = (double)st->pmf_bytes},
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
+    /* how much of the image is the pilot's (docs/auto.md) */
+    {.name = "pcbpt.pilot_weight", .type = PC_ATTR_DOUBLE, .d = pilot_weight},
+    {.name = "pcbpt.pilot_iterations", .type = PC_ATTR_DOUBLE,
+     .d = j->prior_ready ? (double)j->prior.layers[PC_LAYER_PT].count : 0.0},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
     {.name = "pcbpt.pcbpt_flags", .type = PC_ATTR_STRING, .s = pcbpt_flags}, /* only when set */
     {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report},     /* only when set */
@@ -267,7 +282,9 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
   int nattrs = (int)(sizeof attrs / sizeof attrs[0]) - 2;
   if (pcbpt_flags[0]) attrs[nattrs++] = attrs[sizeof attrs / sizeof attrs[0] - 2];
   if (j->auto_report[0]) attrs[nattrs++] = attrs[sizeof attrs / sizeof attrs[0] - 1];
-  return pc_film_write_exr(&j->film, img, attrs, nattrs, e);
+  rc = pc_film_write_exr(shown, img, attrs, nattrs, e);
+  if (shown != &j->film) pc_film_free(&mix);
+  return rc;
 }
 
 static void free_range_list_closed(pc_job *j) {
@@ -487,8 +504,11 @@ static void op_after(uv_work_t *w, int status) {
   }
   if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
       j->film_ready) {
-    pc_film_free(&j->film);
+    pc_prior_keep(c, j); /* a pilot candidate's film goes to its group (pc_prior_keep takes it) */
+    if (j->film_ready) pc_film_free(&j->film);
     j->film_ready = false;
+    if (j->prior_ready) pc_film_free(&j->prior);
+    j->prior_ready = false;
   }
 }
 
@@ -644,10 +664,11 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
     free(z);
     if (rc) { pc_film_free(&j->film); return rc; }
   }
+  pc_prior_attach(c, j);
   uint64_t n;
-  film_estimate(&j->film, &j->relmse_est, &n);
   /* the checkpoint's film holds the committed uploads: their worker-seconds are stored */
   j->film_seconds = j->stats_merged.t_total;
+  film_estimate(j, &j->relmse_est, &n);
   for (int k = 0; k < (int)j->snapshots; k++)
     if (j->stats_merged.t_total >= pc_job_snapshot_time(j, k)) j->snaps_queued = (uint32_t)k + 1;
   j->film_ready = true;
@@ -726,6 +747,7 @@ void pc_job_free(pc_job *j) {
     free(a);
   }
   if (j->film_ready) pc_film_free(&j->film);
+  if (j->prior_ready) pc_film_free(&j->prior);
   free(j->settings_blob);
   free(j);
 }

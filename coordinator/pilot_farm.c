@@ -29,6 +29,7 @@ static int submit_candidate(pc_pilot_farm *fp, const pc_pilot_candidate *c, uint
   pc_wire_settings_to_proto(&set, &ps, &psb);
   ps.study_group = group;
   ps.group_workers = (uint32_t)workers;
+  if (c->counts && fp->keep) ps.pilot_group = fp->pilot_group;
   Pcbpt__Submit sub = PCBPT__SUBMIT__INIT;
   sub.name = name;
   sub.bundle_hash.data = (uint8_t *)fp->hash;
@@ -67,6 +68,10 @@ static int wait_candidate(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c
       c->seconds = j->worker_seconds;
       c->own_relmse = j->relmse_estimate;
       fp->worker_seconds += j->worker_seconds;
+      if (c->counts && done) {
+        fp->counted_worker_seconds += j->worker_seconds;
+        fp->counted_iterations += j->iterations_done;
+      }
       pcbpt__envelope__free_unpacked(in, NULL);
       return rc;
     }
@@ -130,7 +135,10 @@ static int batch(pc_pilot_farm *fp, const pc_pilot_candidate *c, int n, const ui
     if (iters[i]) rc = submit_candidate(fp, &c[i], c[i].set.seed ^ salt, group, workers, iters[i], &jobs[i], e);
   for (int i = 0; i < n && !rc; i++)
     if (iters[i]) {
-      if (&out[i] != &c[i]) memcpy(out[i].label, c[i].label, sizeof out[i].label);
+      if (&out[i] != &c[i]) {
+        memcpy(out[i].label, c[i].label, sizeof out[i].label);
+        out[i].counts = c[i].counts;
+      }
       rc = wait_candidate(fp, jobs[i], &out[i], e);
     }
   for (int i = 0; i < n && !rc; i++)
@@ -149,6 +157,8 @@ int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double second
   if (n > PC_PILOT_MAX) return pc_errf(e, PC_EINVAL, "auto pilot: %d candidates", n);
   int rc = farm_size(fp, &workers, e);
   if (rc) return rc;
+  fp->farm_size = workers;
+  while (fp->keep && !fp->pilot_group) randombytes_buf(&fp->pilot_group, sizeof fp->pilot_group);
   /* first the floor of iterations every candidate needs, which also measures its cost ... */
   for (int i = 0; i < n; i++) iters[i] = min_iterations;
   if ((rc = batch(fp, c, n, iters, 0, workers, c, e)) != 0) return rc;
@@ -169,5 +179,29 @@ int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double second
     free(second[i].mean);
     free(second[i].var);
   }
+  return rc;
+}
+
+int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report, size_t size, double *pilot_seconds,
+                         double *prior_amount, pc_err *e) {
+  double slice;
+  uint64_t min_it;
+  pc_pilot pilot;
+  pc_pilot_budget(req->seconds, req->spp, &slice, &min_it);
+  fp->keep = req->spp > 0 || req->seconds > 0;
+  *prior_amount = 0;
+  int rc = pc_pilot_run(&pilot, &req->set, slice, min_it, pc_pilot_farm_render, fp, e);
+  if (!rc) {
+    uint64_t seed = req->set.seed;
+    req->set = pilot.c[pilot.best].set;
+    req->set.seed = seed;
+    pc_pilot_report(&pilot, report, size);
+    *pilot_seconds = pilot.seconds;
+    /* in the unit of the job's budget (coordinator/job_prior.c) */
+    if (fp->pilot_group && req->spp > 0) *prior_amount = (double)fp->counted_iterations;
+    else if (fp->pilot_group && fp->farm_size > 0) *prior_amount = fp->counted_worker_seconds / fp->farm_size;
+    if (req->seconds > 0) req->seconds = pc_pilot_remaining(req->seconds, pilot.seconds);
+  }
+  pc_pilot_free(&pilot);
   return rc;
 }

@@ -19,7 +19,15 @@ typedef struct pc_pilot_farm {
   /* Farm size: each candidate is bound by slice x workers worker-seconds, on at most `workers`
    * workers at once (a study's farm size); 0: every worker connected. */
   int workers;
+  /* Whether the films of the candidates whose iterations count (pc_pilot_candidate.counts)
+   * are kept in a pilot group for the chosen job's image (coordinator/job_prior.c): only a job
+   * with a budget can fix the pilot's weight in advance (not --halt-noise alone). */
+  bool keep;
   double worker_seconds; /* out: the summed worker-seconds of every candidate's job */
+  double counted_worker_seconds; /* out: ... of the candidates that count */
+  uint64_t counted_iterations;   /* out: their iterations */
+  uint64_t pilot_group;  /* out: their group (0: none), the chosen job's prior_group */
+  int farm_size;         /* out: the workers the pilot counted on */
 } pc_pilot_farm;
 
 /* pc_pilot_render_fn: submits the candidates as jobs of one study group (interleaved by least
@@ -27,5 +35,15 @@ typedef struct pc_pilot_farm {
  * worker-seconds (the render seconds of its merged uploads), which on a shared farm measures
  * the candidate rather than the queue it waited in. */
 int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
+
+/* --method auto for a job request: runs the pilot on the farm (its budget from req's --time or
+ * --spp), gives req the winner's settings (its own seed kept) and what is left of --time, and
+ * writes the one-line report; *pilot_seconds is the pilot's wall time. The job is then to be
+ * submitted with fp->pilot_group as its prior_group and *prior_amount (0: no prior): the
+ * counted candidates' iterations with --spp; with --time their worker-seconds over the farm
+ * size, the wall time the farm would take to render them (the pilot's own wall time also
+ * holds its jobs' round trips, which would weigh its few iterations up to 3x too much). */
+int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report, size_t size, double *pilot_seconds,
+                         double *prior_amount, pc_err *e);
 
 #endif

@@ -524,6 +524,10 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
     pc_errf(&e, PC_EINVAL, "submit: snapshots need a worker-seconds budget and are at most %d", PC_JOB_MAX_SNAPSHOTS);
   else if (!(s->halt_seconds >= 0 && s->halt_seconds < 1e9)) pc_errf(&e, PC_EINVAL, "submit: bad --time");
   else if (!(s->settings->halt_noise >= 0 && s->settings->halt_noise <= 1e6)) pc_errf(&e, PC_EINVAL, "submit: bad --halt-noise");
+  else if (!(s->settings->prior_amount >= 0 && s->settings->prior_amount < 1e12))
+    pc_errf(&e, PC_EINVAL, "submit: bad prior_amount %g", s->settings->prior_amount);
+  else if (s->settings->prior_group && !(s->settings->prior_amount > 0))
+    pc_errf(&e, PC_EINVAL, "submit: a prior_group needs a prior_amount");
   if (e.code) {
     pc_wire_log("%s: %s", p->conn.peer, e.msg);
     send_error(p, e.msg);
@@ -904,6 +908,7 @@ void pc_coord_free(pc_coord *c) {
     c->jobs = j->next;
     pc_job_free(j);
   }
+  pc_prior_free_all(c);
   pc_store_close(c);
   sodium_memzero(c->key, sizeof c->key);
 }

@@ -67,6 +67,8 @@ int pc_study_farm_workers(pc_study_farm *f, int *n, pc_err *e) {
 typedef struct auto_choice {
   pc_render_settings set;
   double pilot_worker_seconds;
+  uint64_t pilot_group; /* its films the job's image mixes in, with this many worker-seconds */
+  double prior_amount;
   char report[1024];
 } auto_choice;
 
@@ -80,7 +82,7 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   double slice;
   uint64_t min_it;
   pc_pilot_budget(g->seconds, 0, &slice, &min_it);
-  pc_pilot_farm fp = {.cl = cl, .hash = g->hash, .name = g->scene_path, .workers = g->workers};
+  pc_pilot_farm fp = {.cl = cl, .hash = g->hash, .name = g->scene_path, .workers = g->workers, .keep = true};
   pc_pilot pilot;
   int rc = pc_pilot_run(&pilot, &base, slice, min_it, pc_pilot_farm_render, &fp, e);
   if (rc) {
@@ -90,6 +92,8 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   ac->set = pilot.c[pilot.best].set;
   ac->set.seed = g->seed;
   ac->pilot_worker_seconds = fp.worker_seconds;
+  ac->pilot_group = fp.pilot_group;
+  ac->prior_amount = fp.counted_worker_seconds; /* auto's budget is worker-seconds */
   pilot.seconds = fp.worker_seconds; /* the report gives the cost charged to the budget */
   pc_pilot_report(&pilot, ac->report, sizeof ac->report);
   pc_pilot_free(&pilot);
@@ -110,7 +114,11 @@ static int submit(pc_client *cl, const pc_study_group *g, const pc_study_method 
   Pcbpt__Settings ps;
   pc_wire_settings_buf psb;
   pc_wire_settings_to_proto(&set, &ps, &psb);
-  if (method->method == PC_METHOD_AUTO) ps.auto_report = (char *)ac->report;
+  if (method->method == PC_METHOD_AUTO) {
+    ps.auto_report = (char *)ac->report;
+    ps.prior_group = ac->prior_amount > 0 ? ac->pilot_group : 0;
+    ps.prior_amount = ac->prior_amount > 0 ? ac->prior_amount : 0;
+  }
   ps.study_group = group;
   ps.halt_worker_seconds = budget;
   ps.snapshots = (uint32_t)g->snapshots;

@@ -94,6 +94,19 @@ bool pc_film_max_complete(const pc_film *f);
  * layer `variance` (pc_film_variance) and the attribute pcbpt.relmse_estimate, and beauty_max
  * (unscaled) only when pc_film_max_complete. */
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e);
+/* One film of a mix and its weight (>= 0; 0: left out, counts included). */
+typedef struct pc_film_part {
+  const pc_film *film;
+  double weight;
+} pc_film_part;
+/* Makes out (initialized with the parts' shape and layers) the mix of the parts: each image
+ * layer the weighted sum of the parts' images, the counts the sums of the counts of the parts
+ * with a weight, beauty_sq such that pc_film_variance gives the sum of weight^2 x each part's
+ * variance (unknown when one part's is), beauty_max the largest of theirs. The weights are the
+ * caller's to make sum to 1. */
+int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e);
+/* What pc_film_relmse_estimate would give for the mix, without making it. */
+bool pc_film_mix_relmse_estimate(const pc_film_part *parts, int n, double *out);
 /* True if every sum is finite. */
 bool pc_film_is_finite(const pc_film *f);
 

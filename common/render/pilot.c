@@ -1,5 +1,5 @@
 /* pilot.c: the pilot of `--method auto` (pilot.h, docs/auto.md): the candidate grid, the
- * choice by efficiency, its one-line report, and the in-process renderer of candidates. */
+ * choice by efficiency and its one-line report. */
 #include "pilot.h"
 
 #include <math.h>
@@ -44,6 +44,7 @@ uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b
 static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k) {
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
+  c->counts = m == PC_METHOD_BDPT || k <= 2; /* stages 1 and 2 run whatever the data says */
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
@@ -205,78 +206,4 @@ void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
     n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g cost ms/it %.1f it %llu", c->label, c->efficiency,
                           c->relmse, ms, (unsigned long long)c->iterations);
   }
-}
-
-/* One candidate of pc_pilot_local_render. */
-typedef struct local_run {
-  pc_film film;
-  pc_renderer *r;
-  pc_render_stats st;
-  double cpu, cpu_first, wall;
-  bool done;
-} local_run;
-
-static int local_finish(pc_pilot_candidate *c, local_run *lr, pc_err *e) {
-  double cpu = lr->cpu;
-  uint64_t it = c->iterations;
-  /* the first iteration also warms caches and allocators: the cost per iteration comes from
-   * the others when there are any */
-  if (it >= 2 && cpu > lr->cpu_first) cpu = (cpu - lr->cpu_first) * (double)it / (double)(it - 1);
-  c->seconds = cpu;
-  if (!pc_film_relmse_estimate(&lr->film, &c->own_relmse)) c->own_relmse = -1;
-  size_t n = (size_t)lr->film.w * lr->film.h * 3;
-  float *mean = malloc(n * sizeof *mean), *var = malloc(n * sizeof *var);
-  int rc = PC_OK;
-  if (!mean || !var) rc = pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
-  if (!rc) {
-    pc_film_beauty(&lr->film, mean);
-    rc = pc_pilot_keep_image(c, lr->film.w, lr->film.h, mean, pc_film_variance(&lr->film, var) ? var : NULL, e);
-  }
-  free(mean);
-  free(var);
-  return rc;
-}
-
-int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e) {
-  const pc_pilot_local *l = user;
-  local_run *runs = calloc((size_t)n, sizeof *runs);
-  if (!runs) return pc_errf(e, PC_ENOMEM, "auto pilot: out of memory");
-  int rc = PC_OK, made = 0;
-  while (made < n) {
-    pc_render_settings s = c[made].set;
-    s.strategy_layers = 0;
-    if ((rc = pc_film_init(&runs[made].film, s.width, s.height, 0, e)) != 0) break;
-    if ((rc = pc_renderer_create(l->scene, &s, l->threads, &runs[made].r, e)) != 0) {
-      pc_film_free(&runs[made].film);
-      break;
-    }
-    made++;
-  }
-  /* round robin, one iteration at a time: a slow candidate overruns its slice by one iteration
-   * at most, and the machine's load falls on every candidate alike. The cost is the process's
-   * CPU time, not wall time: on a shared machine the wall time of a few iterations mostly
-   * measures the other processes (the renderer's phases all run on its pool, so on an idle
-   * machine CPU time / threads is the wall time) */
-  for (bool busy = true; busy && !rc;) {
-    busy = false;
-    for (int i = 0; i < n && !rc; i++) {
-      local_run *lr = &runs[i];
-      if (lr->done) continue;
-      double t0 = now_s(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
-      rc = pc_render_iterations(lr->r, c[i].iterations, 1, &lr->film, &lr->st, NULL, NULL, NULL, e);
-      lr->cpu += clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
-      lr->wall += now_s() - t0;
-      if (c[i].iterations == 0) lr->cpu_first = lr->cpu;
-      c[i].iterations++;
-      lr->done = c[i].iterations >= min_iterations && lr->wall >= seconds;
-      busy = busy || !lr->done;
-    }
-  }
-  for (int i = 0; i < n && !rc; i++) rc = local_finish(&c[i], &runs[i], e);
-  for (int i = 0; i < made; i++) {
-    pc_renderer_destroy(runs[i].r);
-    pc_film_free(&runs[i].film);
-  }
-  free(runs);
-  return rc;
 }

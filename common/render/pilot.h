@@ -44,9 +44,10 @@
 typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
+  bool counts;          /* rendered whatever the data says (stages 1 and 2): its iterations may
+                           count in the image (docs/auto.md); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
-  double seconds;       /* their cost: CPU seconds in this process (pc_pilot_local), worker-
-                           seconds of the candidate's job on a farm */
+  double seconds;       /* their cost: worker-seconds of the candidate's jobs on a farm */
   double own_relmse;    /* the image's own relMSE estimate (< 0: could not tell) */
   double relmse;        /* relMSE against the candidates' pooled mean (pc_pilot_choose; the
                            own estimate when no image was kept); < 0: could not tell */
@@ -102,12 +103,5 @@ void pc_pilot_choose(pc_pilot *p);
 
 /* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */
 void pc_pilot_report(const pc_pilot *p, char *buf, size_t size);
-
-/* The in-process renderer of candidates: renders on a built scene with `threads` threads. */
-typedef struct pc_pilot_local {
-  const pc_scene *scene;
-  int threads;
-} pc_pilot_local;
-int pc_pilot_local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
 
 #endif

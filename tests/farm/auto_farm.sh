@@ -1,8 +1,10 @@
 # auto_farm.sh: `submit --method auto` on a two-worker farm: the pilot's candidates run as
 # short jobs of their own that both workers render, the final job carries the winner's
 # settings (BDPT or PCBPT) and the pilot's report in `status --json` ("auto") and in the EXR
-# header (pcbpt.auto), and the pilot's iterations are not in the final image (its iteration
-# count is the final job's own).
+# header (pcbpt.auto). The job's iteration count is its own, and its image mixes in the films
+# of the pilot's candidates rendered whatever the data says (BDPT, K = 1, K = 2) with the
+# weight fixed at submission: a / (a + 64), a their iterations (coordinator/job_prior.c).
+# A second job's pilot films survive a SIGKILL of the coordinator (the saved prior).
 . "$(dirname "$0")/lib.inc"
 start_coord
 for w in w1 w2; do start_worker $w; done
@@ -33,4 +35,24 @@ done
 "$B/pcbpt-coord" fetch "$J" --out "$T/out.exr" $H >/dev/null || fail "fetch"
 grep -aq "pcbpt.auto" "$T/out.exr" || fail "no pcbpt.auto in the image header"
 grep -q "job $J: --method auto chose " "$T/coord.log" || fail "the coordinator's log does not say what auto chose"
+grep -q "job $J: its image includes its pilot's" "$T/coord.log" || fail "the job did not take its pilot's films"
+# the pilot's weight: its counted iterations a (pcbpt.pilot_iterations) against the 64 of the job
+check_weight() { # exr spp
+  read -r _ w a it < <("$B/tests/farm_tool" exr "$1" pcbpt.pilot_weight pcbpt.pilot_iterations pcbpt.iterations)
+  python3 -c "import sys; w, a, n, spp = map(float, sys.argv[1:]); sys.exit(not (a >= 6 and n == spp and abs(w - a / (a + spp)) < 1e-9))" \
+    "$w" "$a" "$it" "$2" || fail "$1: pilot weight $w with $a pilot iterations and $it of the job's (want a/(a+$2))"
+}
+check_weight "$T/out.exr" 64
+# a long job's pilot films are saved with it, so a restarted coordinator still mixes them in
+J2=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method auto --spp 3000 --width 32 --height 32 $H 2>"$T/submit2.err" | tail -1) \
+  || fail "submit 2: $(cat "$T/submit2.err")"
+for _ in $(seq 100); do [ -f "$T/data/jobs/$J2/prior" ] && break; sleep 0.1; done
+[ -f "$T/data/jobs/$J2/prior" ] || fail "job $J2 saved no prior"
+[ "$(job_field "$J2" state)" = running ] || fail "job $J2 was $(job_field "$J2" state) at the kill: nothing tested"
+kill -9 "$COORD"
+sleep 1
+start_coord "$PORT"
+timeout 100 "$B/pcbpt-coord" wait "$J2" $H >/dev/null || fail "wait 2"
+"$B/pcbpt-coord" fetch "$J2" --out "$T/out2.exr" $H >/dev/null || fail "fetch 2"
+check_weight "$T/out2.exr" 3000
 echo PASS

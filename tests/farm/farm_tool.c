@@ -29,6 +29,7 @@
 
 #include "bundle.h"
 #include "client.h"
+#include "image.h"
 #include "render.h"
 #include "render_flags.h"
 #include "scene.h"
@@ -154,6 +155,33 @@ static int cmd_relmse(int argc, char **argv) {
   printf("%.9g %.9g\n", est, meas / (double)n);
   free(b);
   pc_film_free(&f);
+  return rc;
+}
+
+/* An EXR the farm wrote: the beauty's mean over pixels and channels, then the values of the
+ * header attributes named. */
+static int cmd_exr(int argc, char **argv) {
+  if (argc < 2) { fprintf(stderr, "exr FILE [ATTR...]\n"); return 2; }
+  pc_exr_file x = {0};
+  pc_err e = {0};
+  if (pc_exr_read_layers(argv[1], &x, &e)) { fprintf(stderr, "exr: %s\n", e.msg); return 1; }
+  int rc = 1;
+  for (int i = 0; i < x.nlayers; i++)
+    if (x.names[i][0] == '\0') {
+      double s = 0;
+      size_t n = (size_t)x.w * x.h * 3;
+      for (size_t k = 0; k < n; k++) s += x.layers[i].rgb[k];
+      printf("%.9g", s / (double)n);
+      rc = 0;
+    }
+  for (int a = 2; a < argc && !rc; a++) {
+    const char *v = "-";
+    for (int i = 0; i < x.nattrs; i++)
+      if (strcmp(x.attr_names[i], argv[a]) == 0) v = x.attr_values[i];
+    printf(" %s", v);
+  }
+  printf("\n");
+  pc_exr_file_free(&x);
   return rc;
 }
 
@@ -486,13 +514,14 @@ int main(int argc, char **argv) {
   if (argc >= 4 && strcmp(argv[1], "exact") == 0) return cmd_exact(argc - 2, argv + 2);
   if (argc >= 2 && strcmp(argv[1], "mean") == 0) return cmd_mean(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "relmse") == 0) return cmd_relmse(argc - 1, argv + 1);
+  if (argc >= 2 && strcmp(argv[1], "exr") == 0) return cmd_exr(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "upload") == 0) return cmd_upload(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "bundle") == 0) return cmd_bundle(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "fail") == 0) return cmd_fail(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "cancelack") == 0) return cmd_cancelack(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "hoard") == 0) return cmd_hoard(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "badbundle") == 0) return cmd_badbundle(argc - 1, argv + 1);
-  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | relmse CKPT W H EXACT"
+  fprintf(stderr, "usage: farm_tool exact CKPT SCENE [flags] | mean CKPT W H EXPECT TOL | relmse CKPT W H EXACT | exr FILE [ATTR...]"
                   " | upload HOST:PORT TOKEN nan|size|huge|wrap | bundle HOST:PORT TOKEN | fail HOST:PORT TOKEN"
                   " | cancelack HOST:PORT TOKEN | hoard HOST:PORT TOKEN JOB SECONDS | badbundle HOST:PORT TOKEN KIND\n");
   return 2;

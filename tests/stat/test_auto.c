@@ -12,14 +12,18 @@
  *   0.433 against 0.197, 0.220, 0.243) at a lower cost per iteration, so no timing noise of a
  *   shared machine can reverse it; the pilot's 4 iterations (seed 5) measure 2.9x.
  * - unbiased: on the white furnace (exact 2 everywhere) the mean over seeds of auto's image
- *   (pilot, then the winner with the job's seed) is 2 within 4 standard errors of the seeds'
- *   spread: the choice never leaks into the image. */
+ *   (pilot, then the winner with the job's seed, and the counted candidates' films mixed in
+ *   with the weight the coordinator gives them under --spp: coordinator/job_prior.c) is 2
+ *   within 4 standard errors of the seeds' spread: the choice never leaks into the image.
+ * Candidates render in this process here (local_render), each keeping its film. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
 #include <math.h>
+
+#include <time.h>
 
 #include "pilot.h"
 #include "stat_util.h"
@@ -151,6 +155,53 @@ static void test_grid(void **state) {
   pc_pilot_free(&p);
 }
 
+/* Candidates rendered in this process, one iteration at a time round robin, each into a film
+ * of its own that is kept (films[k] for the k-th candidate the pilot made); the cost is the
+ * process's CPU time per iteration. */
+typedef struct local {
+  const pc_scene *scene;
+  int made;
+  pc_film films[PC_PILOT_MAX];
+} local;
+
+static double cpu_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_it, pc_err *e) {
+  (void)seconds;
+  local *l = user;
+  for (int i = 0; i < n; i++) {
+    pc_render_settings s = c[i].set;
+    s.strategy_layers = 0;
+    pc_film *f = &l->films[l->made++];
+    pc_renderer *r = NULL;
+    assert_int_equal(pc_film_init(f, s.width, s.height, 0, e), 0);
+    assert_int_equal(pc_renderer_create(l->scene, &s, 2, &r, e), 0);
+    pc_render_stats st = {0};
+    double c0 = cpu_s();
+    assert_int_equal(pc_render_iterations(r, 0, min_it, f, &st, NULL, NULL, NULL, e), 0);
+    c[i].seconds = cpu_s() - c0;
+    c[i].iterations = min_it;
+    pc_renderer_destroy(r);
+    size_t nv = (size_t)f->w * f->h * 3;
+    float *mean = malloc(nv * sizeof *mean), *var = malloc(nv * sizeof *var);
+    assert_non_null(mean);
+    assert_non_null(var);
+    pc_film_beauty(f, mean);
+    assert_int_equal(pc_pilot_keep_image(&c[i], f->w, f->h, mean, pc_film_variance(f, var) ? var : NULL, e), 0);
+    free(mean);
+    free(var);
+  }
+  return 0;
+}
+
+static void local_free(local *l) {
+  for (int i = 0; i < l->made; i++) pc_film_free(&l->films[i]);
+}
+
 static void load(const char *name, int res, uint64_t seed, pc_render_request *req, pc_scene *scene) {
   pc_render_request_default(req);
   req->set.width = req->set.height = res;
@@ -165,10 +216,11 @@ static void test_picks_winner(void **state) {
   pc_render_request req;
   pc_scene scene = {0};
   load("ajar-door", 48, 5, &req, &scene);
-  pc_pilot_local local = {.scene = &scene, .threads = 2};
+  local l = {.scene = &scene};
   pc_pilot p;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(&p, &req.set, 0, 4, pc_pilot_local_render, &local, &e), 0);
+  assert_int_equal(pc_pilot_run(&p, &req.set, 0, 4, local_render, &l, &e), 0);
+  local_free(&l);
   char line[1024];
   pc_pilot_report(&p, line, sizeof line);
   printf("ajar-door 48x48: %s\n", line);
@@ -193,20 +245,50 @@ static void test_unbiased(void **state) {
     pc_render_settings base = req.set;
     base.pcbpt_m = 20;
     base.cache_fraction = 0.05f;
-    pc_pilot_local local = {.scene = &scene, .threads = 2};
+    local l = {.scene = &scene};
     pc_pilot p;
     pc_err e = {0};
-    assert_int_equal(pc_pilot_run(&p, &base, 0, 2, pc_pilot_local_render, &local, &e), 0);
+    assert_int_equal(pc_pilot_run(&p, &base, 0, 2, local_render, &l, &e), 0);
     pc_render_settings chosen = p.c[p.best].set;
     chosen.seed = base.seed;
-    stat_blocks st = {0};
-    assert_int_equal(stat_render_blocks(&scene, &chosen, 2, 0, ITERATIONS, -1, RES, &st), 0);
-    double m = stat_mean(&st, 0);
+    /* the job's film, then the mix: the counted candidates by iterations (as the coordinator
+     * folds a pilot group), and that with weight a / (a + N), a their iterations, N the spp */
+    pc_film job, pilot, shown;
+    assert_int_equal(pc_film_init(&job, RES, RES, 0, &e), 0);
+    assert_int_equal(pc_film_init(&pilot, RES, RES, 0, &e), 0);
+    assert_int_equal(pc_film_init(&shown, RES, RES, 0, &e), 0);
+    pc_renderer *r = NULL;
+    pc_render_stats rs = {0};
+    assert_int_equal(pc_renderer_create(&scene, &chosen, 2, &r, &e), 0);
+    assert_int_equal(pc_render_iterations(r, 0, ITERATIONS, &job, &rs, NULL, NULL, NULL, &e), 0);
+    pc_renderer_destroy(r);
+    pc_film_part counted[PC_PILOT_MAX];
+    int nc = 0;
+    double a = 0;
+    for (int i = 0; i < p.n; i++)
+      if (p.c[i].counts) a += (double)p.c[i].iterations;
+    for (int i = 0; i < p.n; i++)
+      if (p.c[i].counts) counted[nc++] = (pc_film_part){&l.films[i], (double)p.c[i].iterations / a};
+    assert_int_equal(nc, 3); /* BDPT, K = 1, K = 2 */
+    assert_int_equal(pc_film_mix(&pilot, counted, nc, &e), 0);
+    pc_film_part parts[] = {{&pilot, a / (a + ITERATIONS)}, {&job, ITERATIONS / (a + ITERATIONS)}};
+    assert_int_equal(pc_film_mix(&shown, parts, 2, &e), 0);
+    size_t nv = (size_t)RES * RES * 3;
+    float *img = malloc(nv * sizeof *img);
+    assert_non_null(img);
+    pc_film_beauty(&shown, img);
+    double m = 0;
+    for (size_t k = 0; k < nv; k++) m += img[k];
+    m /= (double)nv;
+    free(img);
+    pc_film_free(&job);
+    pc_film_free(&pilot);
+    pc_film_free(&shown);
+    local_free(&l);
     printf("furnace seed %d: chose %s, image mean %.5f\n", 1000 + s, p.c[p.best].label, m);
     pc_pilot_free(&p);
     sum += m;
     sum2 += m * m;
-    stat_free(&st);
     pc_scene_free(&scene);
   }
   double mean = sum / SEEDS, var = (sum2 / SEEDS - mean * mean) * SEEDS / (SEEDS - 1), se = sqrt(var / SEEDS);

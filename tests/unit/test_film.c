@@ -1,7 +1,8 @@
 /* test_film.c: per-strategy layers keep their own counts and normalizations (DESIGN.md §4.2):
  * eye layers divide by iterations, light layers by light paths / (W*H); adding films adds sums
  * and counts (beauty_max: their max, in any order); non-finite samples are dropped and counted;
- * the EXR carries layers and counts. */
+ * the EXR carries layers and counts; a mix of films (the pilot's and the job's) has the weighted
+ * images and the weighted variance. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -218,6 +219,85 @@ static void test_max_merge(void **state) {
   pc_film_free(&cba);
 }
 
+
+/* A film of `it` iterations at value j: pt gives a_it*j + 1 at iteration i (a_it = 1, 2, 4, ...),
+ * lt adds `l` per iteration with `lp` light paths per iteration (W*H = 2). */
+static void fill_iterations(pc_film *f, int it, double l, unsigned lp) {
+  int q = pc_film_square_layer(f), m = pc_film_max_layer(f);
+  for (int i = 0; i < it; i++)
+    for (int j = 0; j < 6; j++) {
+      double b = (double)(1 << i) * j + 1, lt = l * lp / 2.0; /* the splats' sum, scaled by W*H/lp */
+      f->layers[PC_LAYER_PT].sum[j] += b;
+      f->layers[PC_LAYER_LT].sum[j] += lt;
+      f->layers[q].sum[j] += (b + l) * (b + l);
+      if (b + l > f->layers[m].sum[j]) f->layers[m].sum[j] = b + l;
+    }
+  for (int k = 0; k < f->nlayers; k++) f->layers[k].count = k == PC_LAYER_LT ? (uint64_t)it * lp : (uint64_t)it;
+}
+
+static void test_mix(void **state) {
+  (void)state;
+  pc_err e = {0};
+  pc_film a, b, out;
+  assert_int_equal(pc_film_init(&a, 2, 1, 0, &e), 0);
+  assert_int_equal(pc_film_init(&b, 2, 1, 0, &e), 0);
+  assert_int_equal(pc_film_init(&out, 2, 1, 0, &e), 0);
+  fill_iterations(&a, 3, 0.5, 2);  /* light paths counted differently in the two: each layer */
+  fill_iterations(&b, 4, 0.25, 6); /* is mixed as an image, not as sums */
+  float ia[6], ib[6], io[6], va[6], vb[6], vo[6];
+  assert_true(pc_film_variance(&a, va));
+  assert_true(pc_film_variance(&b, vb));
+  const double w = 0.3;
+  pc_film_part parts[] = {{&a, w}, {&b, 1 - w}};
+  assert_int_equal(pc_film_mix(&out, parts, 2, &e), 0);
+  assert_int_equal(out.layers[PC_LAYER_PT].count, 7);
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
+    pc_film_layer_image(&a, l, ia);
+    pc_film_layer_image(&b, l, ib);
+    pc_film_layer_image(&out, l, io);
+    for (int j = 0; j < 6; j++) assert_true(fabs(io[j] - (w * ia[j] + (1 - w) * ib[j])) <= 1e-5 * (fabs(io[j]) + 1));
+  }
+  assert_true(pc_film_variance(&out, vo));
+  for (int j = 0; j < 6; j++) {
+    double want = w * w * va[j] + (1 - w) * (1 - w) * vb[j];
+    assert_true(fabs(vo[j] - want) <= 1e-5 * (want + 1));
+  }
+  double est, est_mix;
+  assert_true(pc_film_relmse_estimate(&out, &est));
+  assert_true(pc_film_mix_relmse_estimate(parts, 2, &est_mix));
+  assert_true(fabs(est - est_mix) <= 1e-5 * est);
+  int m = pc_film_max_layer(&out);
+  assert_true(pc_film_max_complete(&out));
+  for (int j = 0; j < 6; j++) assert_true(out.layers[m].sum[j] == fmax(a.layers[m].sum[j], b.layers[m].sum[j]));
+  /* a part of weight 0 is left out, counts included: the mix is the other part */
+  parts[0].weight = 0;
+  parts[1].weight = 1;
+  assert_int_equal(pc_film_mix(&out, parts, 2, &e), 0);
+  assert_int_equal(out.layers[PC_LAYER_PT].count, 4);
+  pc_film_beauty(&b, ib);
+  pc_film_beauty(&out, io);
+  for (int j = 0; j < 6; j++) assert_true(fabs(io[j] - ib[j]) <= 1e-5 * (ib[j] + 1));
+  /* a part that cannot tell its variance (1 iteration) leaves the mix unable to tell */
+  pc_film_clear(&a);
+  fill_iterations(&a, 1, 0.5, 2);
+  parts[0].weight = 0.5;
+  parts[1].weight = 0.5;
+  assert_int_equal(pc_film_mix(&out, parts, 2, &e), 0);
+  assert_false(pc_film_variance(&out, vo));
+  /* refused: a negative weight, another shape */
+  parts[0].weight = -0.1;
+  assert_int_not_equal(pc_film_mix(&out, parts, 2, &e), 0);
+  pc_film c;
+  assert_int_equal(pc_film_init(&c, 1, 2, 0, &e), 0);
+  pc_film_part bad[] = {{&c, 1}};
+  assert_int_not_equal(pc_film_mix(&out, bad, 1, &e), 0);
+  assert_non_null(strstr(e.msg, "film mix"));
+  pc_film_free(&c);
+  pc_film_free(&a);
+  pc_film_free(&b);
+  pc_film_free(&out);
+}
+
 static void test_bad_sizes(void **state) {
   (void)state;
   pc_film f;
@@ -231,6 +311,7 @@ int main(void) {
       cmocka_unit_test(test_layers_and_normalization),
       cmocka_unit_test(test_variance),
       cmocka_unit_test(test_max_merge),
+      cmocka_unit_test(test_mix),
       cmocka_unit_test(test_bad_sizes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
