@@ -161,6 +161,7 @@ void pc_prior_attach(pc_coord *c, pc_job *j) {
 
 double pc_prior_weight(const pc_job *j, double film_seconds, double elapsed, double snapshot_at) {
   if (!j->prior_ready || !(j->prior_amount > 0)) return 0;
+  if ((j->halt_iterations > 0) + (j->halt_worker_seconds > 0) + (j->halt_seconds > 0) != 1) return 0;
   double x, budget;
   if (j->halt_iterations > 0) {
     x = (double)j->film.layers[PC_LAYER_PT].count;

@@ -188,7 +188,9 @@ int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report
   uint64_t min_it;
   pc_pilot pilot;
   pc_pilot_budget(req->seconds, req->spp, &slice, &min_it);
-  fp->keep = req->spp > 0 || req->seconds > 0;
+  /* one budget fixes the pilot's weight before its values are seen; with --spp and --time both,
+     which one stops the job depends on the chosen method's cost (docs/auto.md) */
+  fp->keep = (req->spp > 0) != (req->seconds > 0);
   *prior_amount = 0;
   int rc = pc_pilot_run(&pilot, &req->set, slice, min_it, pc_pilot_farm_render, fp, e);
   if (!rc) {

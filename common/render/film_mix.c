@@ -22,7 +22,6 @@ static bool can_tell(const pc_film *f) {
 }
 
 int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
-  const pc_film *shape = NULL;
   for (int i = 0; i < n; i++) {
     const pc_film *f = parts[i].film;
     if (!(parts[i].weight >= 0.0) || !isfinite(parts[i].weight))
@@ -34,7 +33,6 @@ int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
       if (strcmp(f->layers[l].name, out->layers[l].name) != 0 || !f->layers[l].sum)
         return pc_errf(e, PC_EINVAL, "film mix: part %d's layer %d is '%s', the mix's '%s'", i, l, f->layers[l].name,
                        out->layers[l].name);
-    if (!shape) shape = f;
   }
   pc_film_clear(out);
   size_t nv = (size_t)out->w * out->h * 3;
