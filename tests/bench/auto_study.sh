@@ -29,26 +29,33 @@ for sc in $SCENES; do
     { echo "$sc: study failed: $(tail -3 "$OUT/$sc.log")"; continue; }
 done
 python3 - "$OUT" $SCENES <<'PY'
-import json, os, statistics, sys
+import json, os, re, statistics, sys
 out, scenes = sys.argv[1], sys.argv[2:]
 cfgs = ("bdpt", "pcbpt-k1", "pcbpt-k2", "pcbpt-k4", "pcbpt-k8", "auto")
-print("scene          " + "".join("%-11s" % c.replace("pcbpt-", "") for c in cfgs) + "auto/best auto/bdpt errors     auto chose")
+print("scene          " + "".join("%-11s" % c.replace("pcbpt-", "") for c in cfgs) +
+      "auto/best auto/bdpt per-run auto/bdpt  errors     auto chose (pilot worker-s)")
 for sc in scenes:
     p = os.path.join(out, sc, sc, "study.json")
     if not os.path.exists(p):
         print("%-15s (no study)" % sc); continue
     d = json.load(open(p))
-    med, chose = {}, []
+    med, chose, last = {}, [], {}
+    for r in d["methods"]:
+        if r["snapshots"]:
+            last[(r["run"], r["method"])] = r["snapshots"][-1]["layers"]["beauty"]["relmse"]
+    per_run = ",".join("%.2f" % (last[(k, "auto")] / last[(k, "bdpt")])
+                       for k in sorted({k for k, _ in last}) if last.get((k, "auto")) and last.get((k, "bdpt")))
     for c in cfgs:
         v = [r["snapshots"][-1]["layers"]["beauty"]["relmse"] for r in d["methods"] if r["method"] == c and r["snapshots"]]
         v = [x for x in v if x is not None]
         med[c] = statistics.median(v) if v else float("nan")
     for r in d["methods"]:
         if r["method"] == "auto" and r.get("auto"):
-            chose.append(r["auto"].split(" (pilot")[0].replace("chose ", ""))
+            m = re.match(r"chose (.*) \(pilot ([0-9.]+) s\)", r["auto"])
+            chose.append("%s (%s s)" % m.groups() if m else r["auto"].split(";")[0])
     best = min(med[c] for c in cfgs[:-1])
     kind = "reference" if d.get("reference") else "estimated"
     print("%-15s" % sc + "".join("%-11.4g" % med[c] for c in cfgs) +
-          "%-9.3f %-9.3f %-10s %s" % (med["auto"] / best, med["auto"] / med["bdpt"], kind, "; ".join(chose)))
+          "%-9.3f %-9.3f %-20s %-10s %s" % (med["auto"] / best, med["auto"] / med["bdpt"], per_run, kind, "; ".join(chose)))
 PY
 echo "(studies in $OUT)"
