@@ -212,12 +212,12 @@ int pc_store_load(pc_coord *c, pc_err *e);
 double pc_job_snapshot_time(const pc_job *j, int k);
 /* job_prior.c: a done pilot candidate's film joins its group (taken from the job); a job with
  * a prior_group takes that group's film at activation (or, after a restart, the copy it saved
- * then). The pilot's weight in an image of the job after `elapsed` seconds whose uploads
- * carry film_seconds worker-seconds (snapshot_at > 0: a study snapshot planned at that many),
- * 0 without a prior; the film the job shows (its own, or the mix made in *tmp); the estimate of the mix. */
+ * then). The pilot's weight in an image of the job after `elapsed` seconds and worker_seconds
+ * of uploads (a study snapshot: the worker-seconds it was planned at), 0 without a prior; the
+ * film the job shows (its own, or the mix made in *tmp); the estimate of the mix. */
 void pc_prior_keep(pc_coord *c, pc_job *j);
 void pc_prior_attach(pc_coord *c, pc_job *j);
-double pc_prior_weight(const pc_job *j, double film_seconds, double elapsed, double snapshot_at);
+double pc_prior_weight(const pc_job *j, double worker_seconds, double elapsed);
 int pc_prior_shown(const pc_job *j, double weight, pc_film *tmp, const pc_film **shown, pc_err *e);
 bool pc_prior_relmse_estimate(const pc_job *j, double weight, double *out);
 void pc_prior_free_all(pc_coord *c);

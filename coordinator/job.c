@@ -33,7 +33,7 @@ struct pc_op {
   pc_job *j;
   bool is_merge;
   uint32_t snap_k;           /* a study snapshot: write the film as snap.<snap>.exr */
-  double wall;               /* snapshot: the job's render time when it was queued */
+  double wall;               /* the job's render time when it was queued (j->elapsed is the loop's) */
   /* merge */
   pc_peer *peer;
   uint64_t range_id, first, count, raw;
@@ -99,10 +99,10 @@ static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
   return 0;
 }
 
-/* The estimated relMSE of the image the job shows (-1 when it cannot tell) and the job's
- * iterations. */
-static void film_estimate(const pc_job *j, double *relmse, uint64_t *iterations) {
-  if (!pc_prior_relmse_estimate(j, pc_prior_weight(j, j->film_seconds, j->elapsed, 0), relmse)) *relmse = -1;
+/* The estimated relMSE of the image the job shows after `elapsed` seconds (-1 when it cannot
+ * tell) and the job's iterations. */
+static void film_estimate(const pc_job *j, double elapsed, double *relmse, uint64_t *iterations) {
+  if (!pc_prior_relmse_estimate(j, pc_prior_weight(j, j->film_seconds, elapsed), relmse)) *relmse = -1;
   *iterations = j->film.layers[PC_LAYER_PT].count;
 }
 
@@ -183,7 +183,7 @@ static void merge_work(uv_work_t *w) {
   }
   op->rc = pc_wire_film_add_z(op->buf, op->len, &j->film, judge_counts, op, &op->err);
   if (!op->rc) j->film_seconds += op->stats.t_total;
-  if (!op->rc) film_estimate(j, &op->relmse_est, &op->est_iterations);
+  if (!op->rc) film_estimate(j, op->wall, &op->relmse_est, &op->est_iterations);
 }
 
 /* The checkpoint streams into its file as it is compressed (no serialized copy of the film). */
@@ -226,7 +226,7 @@ static void ckpt_work(uv_work_t *w) {
   char img[600];
   snprintf(img, sizeof img, "%s/image.exr", dir);
   /* the image is written like the checkpoint: a failure is the data dir's (retried) */
-  if (write_image(j, img, &op->stats, j->elapsed, 0, &op->err) != 0) op->rc = PC_EIO;
+  if (write_image(j, img, &op->stats, op->wall, 0, &op->err) != 0) op->rc = PC_EIO;
 }
 
 /* A study snapshot of the merged film (pc_job_snapshot_due). Its worker-seconds are those of
@@ -248,7 +248,7 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
   char idbuf[32], seed[32], version[64], pcbpt_flags[320];
   pc_film mix;
   const pc_film *shown;
-  double pilot_weight = pc_prior_weight(j, st->t_total, wall, snap_at);
+  double pilot_weight = pc_prior_weight(j, snap_at > 0 ? snap_at : st->t_total, wall);
   int rc = pc_prior_shown(j, pilot_weight, &mix, &shown, e);
   if (rc) return rc;
   pc_render_settings_pcbpt_flags(&j->set, pcbpt_flags, sizeof pcbpt_flags);
@@ -548,6 +548,7 @@ void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf,
   op->buf = buf;
   op->len = len;
   op->raw = raw;
+  op->wall = j->elapsed;
   r->merging = true;
   queue_op(j, op);
 }
@@ -572,6 +573,7 @@ static void queue_ckpt(pc_coord *c, pc_job *j, bool exr) {
   }
   op->acks = j->acks;
   op->stats = j->stats_merged;
+  op->wall = j->elapsed;
   j->acks = NULL;
   j->dirty = j->ack_soon = false;
   j->last_ckpt = pc_coord_now();
@@ -668,7 +670,7 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   uint64_t n;
   /* the checkpoint's film holds the committed uploads: their worker-seconds are stored */
   j->film_seconds = j->stats_merged.t_total;
-  film_estimate(j, &j->relmse_est, &n);
+  film_estimate(j, j->elapsed, &j->relmse_est, &n);
   for (int k = 0; k < (int)j->snapshots; k++)
     if (j->stats_merged.t_total >= pc_job_snapshot_time(j, k)) j->snaps_queued = (uint32_t)k + 1;
   j->film_ready = true;

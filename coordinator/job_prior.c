@@ -40,13 +40,18 @@ static void drop_group(pc_coord *c, pc_pilot_films *g) {
   free(g);
 }
 
+static pc_pilot_films *find_group(const pc_coord *c, uint64_t group) {
+  pc_pilot_films *g = c->pilot_films;
+  while (g && g->group != group) g = g->next;
+  return g;
+}
+
 void pc_prior_keep(pc_coord *c, pc_job *j) {
   if (!j->pilot_group || !j->film_ready || j->state != PC_JOB_DONE || iterations(&j->film) == 0) return;
-  pc_pilot_films *g = c->pilot_films;
-  int n = 0;
-  while (g && g->group != j->pilot_group) g = g->next;
-  for (pc_pilot_films *k = c->pilot_films; k; k = k->next) n++;
+  pc_pilot_films *g = find_group(c, j->pilot_group);
   if (!g) {
+    int n = 0;
+    for (pc_pilot_films *k = c->pilot_films; k; k = k->next) n++;
     if (n >= PC_COORD_MAX_PILOT_FILMS) { /* the oldest pilot's job never came */
       pc_pilot_films *old = c->pilot_films;
       for (pc_pilot_films *k = c->pilot_films; k; k = k->next)
@@ -130,8 +135,7 @@ static int load(const pc_coord *c, pc_job *j, bool *found, pc_err *e) {
 void pc_prior_attach(pc_coord *c, pc_job *j) {
   if (!j->prior_group || j->prior_ready) return;
   pc_err e = {0};
-  pc_pilot_films *g = c->pilot_films;
-  while (g && g->group != j->prior_group) g = g->next;
+  pc_pilot_films *g = find_group(c, j->prior_group);
   if (g) {
     if (g->film.w != j->set.width || g->film.h != j->set.height) {
       pc_wire_log("job %llu: pilot group %016llx's films are %dx%d: left out", (unsigned long long)j->id,
@@ -159,7 +163,7 @@ void pc_prior_attach(pc_coord *c, pc_job *j) {
     pc_wire_log("job %llu: the pilot's saved film is left out: %s", (unsigned long long)j->id, e.msg);
 }
 
-double pc_prior_weight(const pc_job *j, double film_seconds, double elapsed, double snapshot_at) {
+double pc_prior_weight(const pc_job *j, double worker_seconds, double elapsed) {
   if (!j->prior_ready || !(j->prior_amount > 0)) return 0;
   if ((j->halt_iterations > 0) + (j->halt_worker_seconds > 0) + (j->halt_seconds > 0) != 1) return 0;
   double x, budget;
@@ -167,7 +171,7 @@ double pc_prior_weight(const pc_job *j, double film_seconds, double elapsed, dou
     x = (double)j->film.layers[PC_LAYER_PT].count;
     budget = (double)j->halt_iterations;
   } else if (j->halt_worker_seconds > 0) {
-    x = snapshot_at > 0 ? snapshot_at : film_seconds;
+    x = worker_seconds;
     budget = j->halt_worker_seconds;
   } else if (j->halt_seconds > 0) {
     x = elapsed;
@@ -190,7 +194,7 @@ int pc_prior_shown(const pc_job *j, double weight, pc_film *tmp, const pc_film *
 }
 
 bool pc_prior_relmse_estimate(const pc_job *j, double weight, double *out) {
-  if (!(weight > 0)) return pc_film_relmse_estimate(&j->film, out);
+  /* a part of weight 0 is never read: without a prior, this is the film's own estimate */
   pc_film_part parts[] = {{&j->prior, weight}, {&j->film, 1.0 - weight}};
   return pc_film_mix_relmse_estimate(parts, 2, out);
 }

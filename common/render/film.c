@@ -1,6 +1,6 @@
 /* film.c: per-strategy layers of unnormalized sums and their sample counts (DESIGN.md §4.2),
  * the beauty's variance estimated from the beauty_sq layer and the per-pixel largest iteration
- * in beauty_max (docs/variance.md). */
+ * in beauty_max (docs/variance.md), and mixes of films with fixed weights (docs/auto.md). */
 #include "film.h"
 
 #include <math.h>
@@ -153,25 +153,52 @@ void pc_film_queue_flush(pc_film_queue *q) {
   q->n = 0;
 }
 
-/* Calls fn(user, j, variance of the mean, mean) for every value j of the beauty, in double
- * precision; false when the film cannot tell (see pc_film_variance). */
-static bool each_variance(const pc_film *f, void (*fn)(void *, size_t, double, double), void *user) {
+/* Whether f's variance is known: beauty_sq has seen its every iteration, and 2 or more. */
+static bool variance_known(const pc_film *f) {
   int q = pc_film_square_layer(f);
   if (q < 0 || !f->layers[q].sum || f->nlayers <= PC_LAYER_STD_COUNT) return false;
-  uint64_t n_it = f->layers[q].count;
-  if (n_it < 2 || n_it != f->layers[PC_LAYER_PT].count) return false;
-  double scale[PC_LAYER_STD_COUNT], inv_n = 1.0 / (double)n_it, inv_n1 = 1.0 / (double)(n_it - 1);
-  for (int i = 0; i < PC_LAYER_STD_COUNT; i++) scale[i] = layer_scale(f, &f->layers[i]);
-  const double *sq = f->layers[q].sum;
-  size_t n = (size_t)f->w * f->h * 3;
-  for (size_t j = 0; j < n; j++) {
-    double m = 0.0;
-    for (int i = 0; i < PC_LAYER_STD_COUNT; i++) m += f->layers[i].sum[j] * scale[i];
-    /* rounding can make the difference of two close sums slightly negative */
-    double v = (sq[j] * inv_n - m * m) * inv_n1;
-    fn(user, j, v > 0.0 ? v : 0.0, m);
+  return f->layers[q].count >= 2 && f->layers[q].count == f->layers[PC_LAYER_PT].count;
+}
+
+/* Calls fn(user, j, variance of the mean, mean) for every value j of the beauty of the mix of
+ * the parts with a weight (independent estimates: mean sum w m, variance sum w^2 v), in double
+ * precision, and returns how many values there are; 0 when there is no such part or one of
+ * them cannot tell (see pc_film_variance). One part of weight 1 is its film: multiplying by 1
+ * and adding to 0 are exact. */
+static size_t each_variance(const pc_film_part *parts, int n, void (*fn)(void *, size_t, double, double), void *user) {
+  if (n < 1 || n > PC_FILM_MIX_MAX_PARTS) return 0;
+  const pc_film *shape = NULL;
+  double scale[PC_FILM_MIX_MAX_PARTS][PC_LAYER_STD_COUNT], inv_n[PC_FILM_MIX_MAX_PARTS], inv_n1[PC_FILM_MIX_MAX_PARTS];
+  const double *sq[PC_FILM_MIX_MAX_PARTS];
+  for (int i = 0; i < n; i++) {
+    const pc_film *f = parts[i].film;
+    if (parts[i].weight == 0.0) continue;
+    if (!shape) shape = f;
+    if (!variance_known(f) || f->w != shape->w || f->h != shape->h) return 0;
+    uint64_t n_it = f->layers[PC_LAYER_PT].count;
+    inv_n[i] = 1.0 / (double)n_it;
+    inv_n1[i] = 1.0 / (double)(n_it - 1);
+    for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[i][l] = layer_scale(f, &f->layers[l]);
+    sq[i] = f->layers[pc_film_square_layer(f)].sum;
   }
-  return true;
+  if (!shape) return 0;
+  size_t nv = (size_t)shape->w * shape->h * 3;
+  for (size_t j = 0; j < nv; j++) {
+    double m = 0.0, v = 0.0;
+    for (int i = 0; i < n; i++) {
+      double w = parts[i].weight;
+      if (w == 0.0) continue;
+      const pc_film *f = parts[i].film;
+      double mi = 0.0;
+      for (int l = 0; l < PC_LAYER_STD_COUNT; l++) mi += f->layers[l].sum[j] * scale[i][l];
+      /* rounding can make the difference of two close sums slightly negative */
+      double vi = (sq[i][j] * inv_n[i] - mi * mi) * inv_n1[i];
+      m += w * mi;
+      v += w * w * (vi > 0.0 ? vi : 0.0);
+    }
+    fn(user, j, v, m);
+  }
+  return nv;
 }
 
 static void put_variance(void *user, size_t j, double v, double m) {
@@ -179,7 +206,10 @@ static void put_variance(void *user, size_t j, double v, double m) {
   ((float *)user)[j] = (float)v;
 }
 
-bool pc_film_variance(const pc_film *f, float *out) { return each_variance(f, put_variance, out); }
+bool pc_film_variance(const pc_film *f, float *out) {
+  pc_film_part whole = {f, 1.0};
+  return each_variance(&whole, 1, put_variance, out) > 0;
+}
 
 /* E[m^2] = exact^2 + v, so the denominator subtracts v (docs/variance.md). */
 static void add_relative(void *user, size_t j, double v, double m) {
@@ -187,12 +217,94 @@ static void add_relative(void *user, size_t j, double v, double m) {
   *(double *)user += v / (fmax(m * m - v, 0.0) + PC_RELMSE_EPS);
 }
 
-bool pc_film_relmse_estimate(const pc_film *f, double *out) {
+bool pc_film_mix_relmse_estimate(const pc_film_part *parts, int n, double *out) {
   double sum = 0.0;
   *out = NAN;
-  if (!each_variance(f, add_relative, &sum)) return false;
-  *out = sum / ((double)f->w * f->h * 3);
+  size_t nv = each_variance(parts, n, add_relative, &sum);
+  if (nv == 0) return false;
+  *out = sum / (double)nv;
   return true;
+}
+
+bool pc_film_relmse_estimate(const pc_film *f, double *out) {
+  pc_film_part whole = {f, 1.0};
+  return pc_film_mix_relmse_estimate(&whole, 1, out);
+}
+
+static void put_double(void *user, size_t j, double v, double m) {
+  (void)m;
+  ((double *)user)[j] = v;
+}
+
+/* The mix is the pilot of --method auto counted in the job's image (docs/auto.md): two
+ * independent unbiased estimates, so any mix with weights fixed independently of their values
+ * is unbiased too. pc_film_add could not do it: it weights each iteration by 1 / (total count),
+ * and the job's count depends on which method the pilot chose. */
+int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
+  if (n < 1 || n > PC_FILM_MIX_MAX_PARTS) return pc_errf(e, PC_EINVAL, "film mix: %d parts (1 to %d)", n, PC_FILM_MIX_MAX_PARTS);
+  for (int i = 0; i < n; i++) {
+    const pc_film *f = parts[i].film;
+    if (!(parts[i].weight >= 0.0) || !isfinite(parts[i].weight))
+      return pc_errf(e, PC_EINVAL, "film mix: weight %g of part %d", parts[i].weight, i);
+    if (f->w != out->w || f->h != out->h || f->nlayers != out->nlayers)
+      return pc_errf(e, PC_EINVAL, "film mix: part %d is %dx%d/%d layers, the mix %dx%d/%d", i, f->w, f->h, f->nlayers,
+                     out->w, out->h, out->nlayers);
+    for (int l = 0; l < f->nlayers; l++)
+      if (strcmp(f->layers[l].name, out->layers[l].name) != 0 || !f->layers[l].sum)
+        return pc_errf(e, PC_EINVAL, "film mix: part %d's layer %d is '%s', the mix's '%s'", i, l, f->layers[l].name,
+                       out->layers[l].name);
+  }
+  pc_film_clear(out);
+  size_t nv = (size_t)out->w * out->h * 3;
+  bool max_complete = true;
+  int q = pc_film_square_layer(out), mx = pc_film_max_layer(out);
+  for (int i = 0; i < n; i++) {
+    const pc_film *f = parts[i].film;
+    if (parts[i].weight == 0.0) continue; /* not in the mix, nor in its counts */
+    max_complete = max_complete && pc_film_max_complete(f);
+    for (int l = 0; l < out->nlayers; l++) out->layers[l].count += f->layers[l].count;
+    out->dropped_nonfinite += f->dropped_nonfinite;
+  }
+  /* every image layer: the weighted sum of the parts' images, as sums of the mix's counts */
+  for (int l = 0; l < out->nlayers; l++) {
+    pc_film_layer *o = &out->layers[l];
+    if (o->norm == PC_NORM_SQUARE || o->norm == PC_NORM_MAX || o->count == 0) continue;
+    double back = 1.0 / layer_scale(out, o);
+    for (int i = 0; i < n; i++) {
+      const pc_film *f = parts[i].film;
+      double s = parts[i].weight * layer_scale(f, &f->layers[l]) * back;
+      if (s == 0.0) continue;
+      const double *src = f->layers[l].sum;
+      for (size_t j = 0; j < nv; j++) o->sum[j] += s * src[j];
+    }
+  }
+  if (mx >= 0) {
+    double *m = out->layers[mx].sum;
+    for (int i = 0; i < n; i++) {
+      if (parts[i].weight == 0.0) continue;
+      const double *src = parts[i].film->layers[mx].sum;
+      for (size_t j = 0; j < nv; j++) m[j] = src[j] > m[j] ? src[j] : m[j];
+    }
+    if (!max_complete) out->layers[mx].count = 0; /* it cannot tell */
+  }
+  if (q < 0) return PC_OK;
+  uint64_t it = out->layers[PC_LAYER_PT].count;
+  double *sq = out->layers[q].sum, nn = (double)it;
+  if (it < 2 || !each_variance(parts, n, put_double, sq)) {
+    out->layers[q].count = 0; /* the mix cannot tell its variance either */
+    return PC_OK;
+  }
+  /* beauty_sq such that pc_film_variance gives the mix's variance: (sq/N - m^2)/(N - 1) = V for
+   * sq = N((N - 1)V + m^2), with m the mix's own beauty */
+  out->layers[q].count = it;
+  double scale[PC_LAYER_STD_COUNT];
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[l] = layer_scale(out, &out->layers[l]);
+  for (size_t j = 0; j < nv; j++) {
+    double m = 0.0;
+    for (int l = 0; l < PC_LAYER_STD_COUNT; l++) m += out->layers[l].sum[j] * scale[l];
+    sq[j] = nn * ((nn - 1.0) * sq[j] + m * m);
+  }
+  return PC_OK;
 }
 
 bool pc_film_is_finite(const pc_film *f) {

@@ -95,6 +95,7 @@ bool pc_film_max_complete(const pc_film *f);
  * (unscaled) only when pc_film_max_complete. */
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e);
 /* One film of a mix and its weight (>= 0; 0: left out, counts included). */
+#define PC_FILM_MIX_MAX_PARTS 4
 typedef struct pc_film_part {
   const pc_film *film;
   double weight;
