@@ -50,8 +50,9 @@ static int farm_size(pc_pilot_farm *fp, int *n, pc_err *e) {
   return rc;
 }
 
-/* Waits for job to end and takes its figures into c. */
-static int wait_candidate(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c, pc_err *e) {
+/* Waits for candidate c's job to end and takes its figures into out. */
+static int wait_candidate(pc_pilot_farm *fp, uint64_t job, const pc_pilot_candidate *c, pc_pilot_candidate *out,
+                          pc_err *e) {
   for (;;) {
     Pcbpt__Envelope *in = NULL;
     int rc = pc_client_status(fp->cl, job, &in, e);
@@ -64,9 +65,9 @@ static int wait_candidate(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c
     bool done = strcmp(j->state, "done") == 0;
     if (done || strcmp(j->state, "failed") == 0 || strcmp(j->state, "cancelled") == 0) {
       if (!done) rc = pc_errf(e, PC_EIO, "auto pilot: job %llu (%s) %s: %s", (unsigned long long)job, c->label, j->state, j->error);
-      c->iterations = j->iterations_done;
-      c->seconds = j->worker_seconds;
-      c->own_relmse = j->relmse_estimate;
+      out->iterations = j->iterations_done;
+      out->seconds = j->worker_seconds;
+      out->own_relmse = j->relmse_estimate;
       fp->worker_seconds += j->worker_seconds;
       if (c->counts && done) {
         fp->counted_worker_seconds += j->worker_seconds;
@@ -107,78 +108,21 @@ static int fetch_image(pc_pilot_farm *fp, uint64_t job, pc_pilot_candidate *c, p
   return rc;
 }
 
-/* A second batch of a candidate's iterations (another seed, so none repeats the first's)
- * folded into the first: the pooled mean of the two images, weighted by iterations, and the
- * variance of that mean. */
-static void fold(pc_pilot_candidate *c, const pc_pilot_candidate *b) {
-  double na = (double)c->iterations, nb = (double)b->iterations, n = na + nb;
-  if (c->npix && c->npix == b->npix) {
-    for (size_t k = 0; k < (size_t)c->npix * 3; k++) {
-      c->mean[k] = (float)((na * c->mean[k] + nb * b->mean[k]) / n);
-      c->var[k] = (float)((na * na * c->var[k] + nb * nb * b->var[k]) / (n * n));
-    }
-  }
-  c->iterations += b->iterations;
-  c->seconds += b->seconds;
-  c->own_relmse = -1; /* the two jobs' own estimates do not combine; the pooled measure does */
-}
-
-/* Submits one batch (iters[i] iterations of candidate i, 0: none) with seed^salt, waits for it
- * and takes each candidate's figures and image into out[i]. */
-static int batch(pc_pilot_farm *fp, const pc_pilot_candidate *c, int n, const uint64_t *iters, uint64_t salt, int workers,
-                 pc_pilot_candidate *out, pc_err *e) {
+int pc_pilot_farm_render(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
+                         pc_pilot_candidate *out, pc_err *e) {
+  pc_pilot_farm *fp = user;
   uint64_t jobs[PC_PILOT_MAX] = {0}, group;
+  if (n > PC_PILOT_MAX) return pc_errf(e, PC_EINVAL, "auto pilot: %d candidates", n);
+  int rc = PC_OK;
+  if (!fp->farm_size) rc = farm_size(fp, &fp->farm_size, e);
+  if (rc) return rc;
+  while (fp->keep && !fp->pilot_group) randombytes_buf(&fp->pilot_group, sizeof fp->pilot_group);
   randombytes_buf(&group, sizeof group);
   group |= 1; /* never 0 (no group) */
-  int rc = PC_OK;
   for (int i = 0; i < n && !rc; i++)
-    if (iters[i]) rc = submit_candidate(fp, &c[i], c[i].set.seed ^ salt, group, workers, iters[i], &jobs[i], e);
-  for (int i = 0; i < n && !rc; i++)
-    if (iters[i]) {
-      if (&out[i] != &c[i]) {
-        memcpy(out[i].label, c[i].label, sizeof out[i].label);
-        out[i].counts = c[i].counts;
-      }
-      rc = wait_candidate(fp, jobs[i], &out[i], e);
-    }
-  for (int i = 0; i < n && !rc; i++)
-    if (iters[i]) rc = fetch_image(fp, jobs[i], &out[i], e);
-  return rc;
-}
-
-/* The second batch's seed: the pilot's seed is the job's xor one constant, this is it xor
- * another, so it equals neither the job's nor the first batch's. */
-#define SECOND_BATCH_SALT UINT64_C(0x6a09e667f3bcc909)
-
-int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e) {
-  pc_pilot_farm *fp = user;
-  uint64_t iters[PC_PILOT_MAX];
-  int workers = 0;
-  if (n > PC_PILOT_MAX) return pc_errf(e, PC_EINVAL, "auto pilot: %d candidates", n);
-  int rc = farm_size(fp, &workers, e);
-  if (rc) return rc;
-  fp->farm_size = workers;
-  while (fp->keep && !fp->pilot_group) randombytes_buf(&fp->pilot_group, sizeof fp->pilot_group);
-  /* first the floor of iterations every candidate needs, which also measures its cost ... */
-  for (int i = 0; i < n; i++) iters[i] = min_iterations;
-  if ((rc = batch(fp, c, n, iters, 0, workers, c, e)) != 0) return rc;
-  if (!(seconds > 0)) return PC_OK;
-  /* ... then what each one's slice of worker-seconds still buys at that cost */
-  bool more = false;
-  for (int i = 0; i < n; i++) {
-    double per_it = c[i].iterations ? c[i].seconds / (double)c[i].iterations : 0, left = seconds * workers - c[i].seconds;
-    iters[i] = per_it > 0 && left > 2 * per_it ? (uint64_t)(left / per_it) : 0;
-    more = more || iters[i] > 0;
-  }
-  if (!more) return PC_OK;
-  pc_pilot_candidate second[PC_PILOT_MAX];
-  memset(second, 0, sizeof second);
-  rc = batch(fp, c, n, iters, SECOND_BATCH_SALT, workers, second, e);
-  for (int i = 0; i < n; i++) {
-    if (!rc && iters[i]) fold(&c[i], &second[i]);
-    free(second[i].mean);
-    free(second[i].var);
-  }
+    rc = submit_candidate(fp, &c[i], c[i].set.seed ^ salt, group, fp->farm_size, iterations, &jobs[i], e);
+  for (int i = 0; i < n && !rc; i++) rc = wait_candidate(fp, jobs[i], &c[i], &out[i], e);
+  for (int i = 0; i < n && !rc; i++) rc = fetch_image(fp, jobs[i], &out[i], e);
   return rc;
 }
 
@@ -192,7 +136,10 @@ int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report
      which one stops the job depends on the chosen method's cost (docs/auto.md) */
   fp->keep = (req->spp > 0) != (req->seconds > 0);
   *prior_amount = 0;
-  int rc = pc_pilot_run(&pilot, &req->set, slice, min_it, pc_pilot_farm_render, fp, e);
+  int rc = farm_size(fp, &fp->farm_size, e);
+  if (rc) return rc;
+  /* the slices in worker-seconds, the unit of a candidate's cost */
+  rc = pc_pilot_run(&pilot, &req->set, slice * fp->farm_size, min_it, pc_pilot_farm_render, fp, e);
   if (!rc) {
     uint64_t seed = req->set.seed;
     req->set = pilot.c[pilot.best].set;

@@ -16,8 +16,8 @@ typedef struct pc_pilot_farm {
   const uint8_t *hash;   /* the scene's bundle, already sent */
   const char *name;      /* the job's name: candidates are "<name> [auto pilot: <label>]" */
   int priority;
-  /* Farm size: each candidate is bound by slice x workers worker-seconds, on at most `workers`
-   * workers at once (a study's farm size); 0: every worker connected. */
+  /* Farm size: the pilot's slices are worth slice x workers worker-seconds, and each candidate
+   * runs on at most `workers` workers at once (a study's farm size); 0: every worker connected. */
   int workers;
   /* Whether the films of the candidates whose iterations count (pc_pilot_candidate.counts)
    * are kept in a pilot group for the chosen job's image (coordinator/job_prior.c): only a job
@@ -30,11 +30,12 @@ typedef struct pc_pilot_farm {
   int farm_size;         /* out: the workers the pilot counted on */
 } pc_pilot_farm;
 
-/* pc_pilot_render_fn: submits the candidates as jobs of one study group (interleaved by least
- * worker time), waits for their end and fetches their images. A candidate's cost is its job's
- * worker-seconds (the render seconds of its merged uploads), which on a shared farm measures
- * the candidate rather than the queue it waited in. */
-int pc_pilot_farm_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations, pc_err *e);
+/* pc_pilot_render_fn: submits the batch's candidates as jobs of one study group (interleaved by
+ * least worker time), each bound by the batch's iterations, waits for their end and fetches
+ * their images. A candidate's cost is its job's worker-seconds (the render seconds of its merged
+ * uploads), which on a shared farm measures the candidate rather than the queue it waited in. */
+int pc_pilot_farm_render(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
+                         pc_pilot_candidate *out, pc_err *e);
 
 /* --method auto for a job request: runs the pilot on the farm (its budget from req's --time or
  * --spp), gives req the winner's settings (its own seed kept) and what is left of --time, and

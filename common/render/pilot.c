@@ -16,18 +16,21 @@ static double clock_s(clockid_t id) {
 
 static double now_s(void) { return clock_s(CLOCK_MONOTONIC); }
 
-/* Stage 1 (BDPT and K = 1) has two slices each and stage 2 (K = 2) one: the budget is split
- * over 5. Stages 3 and 4 (K = 4, 8) add one slice each only where the doubling before paid. */
+/* Stage 1's candidates (BDPT, K = 1 and K = 2) share 5 slices. */
 #define PILOT_SLICES 5
+#define PILOT_STAGE1 3
 /* The estimate needs 2 iterations (1 degree of freedom per pixel, averaged over the image). */
 #define PILOT_MIN_ITERATIONS 2
+/* The second batch's seed: the pilot's seed is the job's xor one constant, this is it xor
+ * another, so it equals neither the job's nor the first batch's. */
+#define SECOND_BATCH_SALT UINT64_C(0x6a09e667f3bcc909)
 
 void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64_t *min_iterations) {
   *min_iterations = PILOT_MIN_ITERATIONS;
   *slice_seconds = 0;
   if (seconds > 0) *slice_seconds = seconds * PC_PILOT_FRACTION / PILOT_SLICES;
   else if (spp > 0) {
-    uint64_t n = (uint64_t)((double)spp * PC_PILOT_FRACTION / PILOT_SLICES);
+    uint64_t n = (uint64_t)((double)spp * PC_PILOT_FRACTION / PILOT_STAGE1);
     if (n > *min_iterations) *min_iterations = n;
   } else {
     *min_iterations = 8; /* --halt-noise alone: no budget to take a share of */
@@ -44,7 +47,7 @@ uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b
 static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k) {
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
-  c->counts = m == PC_METHOD_BDPT || k <= 2; /* stages 1 and 2 run whatever the data says */
+  c->counts = m == PC_METHOD_BDPT || k <= 2; /* stage 1 runs whatever the data says */
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
@@ -167,31 +170,98 @@ void pc_pilot_choose(pc_pilot *p) {
   if (p->best < 0) p->best = bdpt >= 0 ? bdpt : 0; /* nothing could tell: BDPT, the safe default */
 }
 
-static int render_from(pc_pilot *p, int from, double slice, uint64_t min_it, pc_pilot_render_fn render, void *user,
+/* A batch's figures and image taken into c: the first batch's as they are; a later batch (other
+ * seeds, so none repeats the first's) folded in: the pooled mean of the two images, weighted by
+ * iterations, and the variance of that mean. */
+static void take_batch(pc_pilot_candidate *c, pc_pilot_candidate *b) {
+  if (!c->iterations) {
+    free(c->mean);
+    free(c->var);
+    c->iterations = b->iterations;
+    c->seconds = b->seconds;
+    c->own_relmse = b->own_relmse;
+    c->npix = b->npix;
+    c->mean = b->mean;
+    c->var = b->var;
+    b->mean = b->var = NULL;
+    return;
+  }
+  double na = (double)c->iterations, nb = (double)b->iterations, n = na + nb;
+  if (c->npix && c->npix == b->npix) {
+    for (size_t k = 0; k < (size_t)c->npix * 3; k++) {
+      c->mean[k] = (float)((na * c->mean[k] + nb * b->mean[k]) / n);
+      c->var[k] = (float)((na * na * c->var[k] + nb * nb * b->var[k]) / (n * n));
+    }
+  }
+  /* the own estimates (each against its own batch's mean) combine only roughly, as if both had
+   * the same denominator; they are the fallback where no image could be kept */
+  if (c->own_relmse >= 0 && b->own_relmse >= 0) c->own_relmse = (na * na * c->own_relmse + nb * nb * b->own_relmse) / (n * n);
+  else c->own_relmse = -1;
+  c->iterations += b->iterations;
+  c->seconds += b->seconds;
+}
+
+/* Renders candidates from..p->n-1 on the pilot's iterations: the first batch's, then the
+ * second's if there is one; then chooses again. */
+static int render_from(pc_pilot *p, int from, const uint64_t batch[2], pc_pilot_render_fn render, void *user,
                        pc_err *e) {
-  if (from >= p->n) return PC_OK;
-  int rc = render(user, &p->c[from], p->n - from, slice, min_it, e);
+  static const uint64_t salt[2] = {0, SECOND_BATCH_SALT};
+  int n = p->n - from, rc = PC_OK;
+  for (int b = 0; b < 2 && !rc; b++) {
+    if (!batch[b]) continue;
+    pc_pilot_candidate out[PC_PILOT_MAX];
+    memset(out, 0, sizeof out);
+    rc = render(user, &p->c[from], n, batch[b], salt[b], out, e);
+    for (int i = 0; i < n; i++) {
+      if (!rc) take_batch(&p->c[from + i], &out[i]);
+      free(out[i].mean);
+      free(out[i].var);
+    }
+  }
   if (!rc) pc_pilot_choose(p);
   return rc;
+}
+
+/* The second batch: as many iterations as the rest of the 5 slices buys at the first batch's
+ * cost of the three together (0 if fewer than 2: a batch needs 2 for its variance). */
+static uint64_t second_batch(const pc_pilot *p, double slice) {
+  double spent = 0, per_it = 0;
+  for (int i = 0; i < p->n; i++) {
+    if (!p->c[i].iterations) return 0;
+    spent += p->c[i].seconds;
+    per_it += p->c[i].seconds / (double)p->c[i].iterations;
+  }
+  double left = PILOT_SLICES * slice - spent;
+  return per_it > 0 && left >= 2 * per_it ? (uint64_t)(left / per_it) : 0;
 }
 
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint64_t min_it, pc_pilot_render_fn render,
                  void *user, pc_err *e) {
   memset(p, 0, sizeof *p);
   double t0 = now_s();
-  /* stage 1: the comparison that matters most everywhere, with twice the budget each (but the
-   * same floor of iterations: a doubled floor made slow scenes' pilots overrun their share
-   * several times, 12 of 60 worker-seconds on glossy-floor) */
+  /* stage 1: BDPT, K = 1 and K = 2, whatever the data says, so their iterations may count in
+   * the image; all of them on the same iterations, which share their eye and light paths
+   * (PCBPT's connections draw from a stream of their own), so the noise of the strategies they
+   * share cancels in the comparison: with a batch each of its own, slit-room's K = 1 met a
+   * light path through the slit that K = 2's batch did not, and K = 2 looked 170x better */
   add_candidate(p, base, PC_METHOD_BDPT, 0);
   add_candidate(p, base, PC_METHOD_PCBPT, 1);
-  int rc = render_from(p, 0, 2 * slice, min_it, render, user, e);
-  /* stages 2-4: K doubles while the last doubling paid by PC_PILOT_K_MARGIN; efficiency over K
-   * has one peak (more connections cost linearly and gain less each). The uniform mix is not
-   * tried: a less defensive mix has heavier tails, which a few iterations miss (docs/auto.md) */
-  for (int k = 2; !rc && k <= 8; k *= 2) {
-    if (k > 2 && p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
+  add_candidate(p, base, PC_METHOD_PCBPT, 2);
+  uint64_t batch[2] = {min_it, 0};
+  int rc = render_from(p, 0, batch, render, user, e);
+  if (!rc && slice > 0 && (batch[1] = second_batch(p, slice)) != 0) {
+    batch[0] = 0;
+    rc = render_from(p, 0, batch, render, user, e);
+    batch[0] = min_it;
+  }
+  /* stages 2 and 3: K doubles while the last doubling paid by PC_PILOT_K_MARGIN, on the same
+   * iterations; efficiency over K has one peak (more connections cost linearly and gain less
+   * each). The uniform mix is not tried: a less defensive mix has heavier tails, which a few
+   * iterations miss (docs/auto.md) */
+  for (int k = 4; !rc && k <= 8; k *= 2) {
+    if (p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
     add_candidate(p, base, PC_METHOD_PCBPT, k);
-    rc = render_from(p, p->n - 1, slice, min_it, render, user, e);
+    rc = render_from(p, p->n - 1, batch, render, user, e);
   }
   if (rc) return rc;
   p->seconds = now_s() - t0;

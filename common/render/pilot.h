@@ -1,11 +1,12 @@
 /* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
- * (BDPT, PCBPT with K in 1, 2, 4, then 8 if doubling K still paid) for a slice of
- * the budget, measures its efficiency 1 / (estimated relMSE x render time) from the spread of
- * its own iterations (docs/variance.md), and picks the most efficient. The pilot renders with
- * a seed of its own and none of its iterations reach the image: the image is rendered afterwards
- * with the winner's fixed settings, so conditioned on the choice it is the winner's unbiased
- * estimate, hence unbiased. How a candidate is rendered is the caller's: in this process
- * (pc_pilot_local, for `render` and `study`) or as short farm jobs (`submit`). */
+ * (BDPT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid) on the same
+ * iterations (the same seeds, so they share their eye and light paths and the noise those
+ * carry), measures its efficiency 1 / (estimated relMSE x render time) from the spread of its
+ * iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
+ * its own, and the job is rendered afterwards with the winner's fixed settings; the candidates
+ * rendered whatever the data says may be mixed into the image with a weight fixed in advance
+ * (coordinator/job_prior.c). How a batch of candidates is rendered is the caller's (short farm
+ * jobs: coordinator/pilot_farm.h; in process in tests/stat/test_auto.c). */
 #ifndef PC_PILOT_H
 #define PC_PILOT_H
 
@@ -44,7 +45,7 @@
 typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
-  bool counts;          /* rendered whatever the data says (stages 1 and 2): its iterations may
+  bool counts;          /* rendered whatever the data says (stage 1): its iterations may
                            count in the image (docs/auto.md); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
   double seconds;       /* their cost: worker-seconds of the candidate's jobs on a farm */
@@ -68,16 +69,19 @@ void pc_pilot_free(pc_pilot *p);
  * image cannot tell), subsampled on a fixed grid to at most PC_PILOT_MAX_PIXELS pixels. */
 int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, const float *var, pc_err *e);
 
-/* Renders the n candidates side by side (interleaved, so a change of the machine's load
- * falls on all of them alike), each for about `seconds` of its own cost and at least
- * `min_iterations` iterations, and fills iterations, seconds, own_relmse and (if it can) the
- * image of each. */
-typedef int (*pc_pilot_render_fn)(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_iterations,
-                                  pc_err *e);
+/* Renders one batch: `iterations` iterations (0 to iterations - 1) of each of the n candidates
+ * with the seed c[i].set.seed ^ salt, side by side (interleaved, so a change of the machine's
+ * load falls on all of them alike), and fills out[i] (zeroed by the caller) with their
+ * iterations, cost (seconds, in the unit of the pilot's slices), own_relmse and, if it can,
+ * the image (pc_pilot_keep_image). */
+typedef int (*pc_pilot_render_fn)(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
+                                  pc_pilot_candidate *out, pc_err *e);
 
-/* What the pilot spends per candidate for a job bound by seconds (0: none) and iterations
- * (0: none): seconds * PC_PILOT_FRACTION / candidates with --time, else enough for min
- * iterations only (an iteration-bound job pays the pilot on top). */
+/* What the pilot spends for a job bound by seconds (0: none) and iterations (0: none): with
+ * --time a slice of seconds * PC_PILOT_FRACTION / 5 (stage 1's three candidates share 5 slices;
+ * K = 4 and 8, where tried, render the same iterations on top), else min iterations per
+ * candidate only, PC_PILOT_FRACTION of the spp over stage 1 (an iteration-bound job pays the
+ * pilot on top). */
 void pc_pilot_budget(double seconds, uint64_t spp, double *slice_seconds, uint64_t *min_iterations);
 
 /* What is left of a --time budget of `seconds` after a pilot that took `pilot_seconds`: the rest,
@@ -89,12 +93,15 @@ double pc_pilot_remaining(double seconds, double pilot_seconds);
 /* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
 uint64_t pc_pilot_seed(uint64_t job_seed);
 
-/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1 side by side (the other settings of
- * base) with two slices each; stage 2 renders K = 2, and stages 3 and 4 K = 4 and 8 only while
- * the last doubling paid by PC_PILOT_K_MARGIN. Picks that PCBPT K, or BDPT unless the PCBPT
- * candidate beats it by PC_PILOT_BDPT_MARGIN. Free with pc_pilot_free, also after a failure. */
+/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1 and 2 on the same iterations, first
+ * min_iterations of them, then as many more as 5 slices (slice_seconds, in the unit of the
+ * render's cost: worker-seconds on a farm; 0: none) buy at their cost; stages 2 and 3 render
+ * K = 4 and 8 on those same iterations, each only while the last doubling paid by
+ * PC_PILOT_K_MARGIN. Picks that PCBPT K, or BDPT unless the PCBPT candidate beats it by
+ * PC_PILOT_BDPT_MARGIN. Free with pc_pilot_free, also after a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
                  pc_pilot_render_fn render, void *user, pc_err *e);
+
 /* Measures every candidate against the pooled mean of their images (candidates without an
  * image keep their own estimate) and picks p->best by pc_pilot_run's rule: the PCBPT K reached
  * from K = 1 by doublings each better by PC_PILOT_K_MARGIN, against BDPT (used by

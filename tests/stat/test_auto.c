@@ -5,12 +5,13 @@
  *   keeps the smaller K, the job's uniform mix is kept, every
  *   candidate renders with the pilot seed, never the job's (a scripted
  *   renderer of known efficiencies: deterministic).
+ * - matched: every candidate renders the same iterations (the same batches, seeds and counts).
  * - pooled: candidates are measured against the pooled mean of their images, not each against
  *   its own few iterations' mean.
  * - picks the clear winner on a real scene: ajar-door, where PCBPT K=1's relMSE per iteration is
  *   about half BDPT's (48x48, 64 iterations, seeds 5-7, each image's own estimate: 0.427, 0.457,
  *   0.433 against 0.197, 0.220, 0.243) at a lower cost per iteration, so no timing noise of a
- *   shared machine can reverse it; the pilot's 4 iterations (seed 5) measure 2.9x.
+ *   shared machine can reverse it; the pilot's 4 iterations (seed 5) measure 2.6x.
  * - unbiased: on the white furnace (exact 2 everywhere) the mean over seeds of auto's image
  *   (pilot, then the winner with the job's seed, and the counted candidates' films mixed in
  *   with the weight the coordinator gives them under --spp: coordinator/job_prior.c) is 2
@@ -93,30 +94,35 @@ typedef struct script {
   int calls;
   uint64_t job_seed;
   bool seed_leaked;
+  /* the batches each candidate rendered (index 0 BDPT, else K): iterations and salt */
+  int nbatch[9];
+  uint64_t batch_it[9][2], batch_salt[9][2];
 } script;
 
-static int scripted(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_it, pc_err *e) {
-  (void)seconds;
+static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
+                    pc_pilot_candidate *out, pc_err *e) {
   (void)e;
   script *s = user;
   for (int i = 0; i < n; i++) {
     const pc_render_settings *set = &c[i].set;
     s->calls++;
-    if (set->seed == s->job_seed) s->seed_leaked = true;
-    c[i].iterations = min_it;
-    c[i].seconds = 1.0;
-    c[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : s->k[set->pcbpt_k];
+    if ((set->seed ^ salt) == s->job_seed) s->seed_leaked = true;
+    int key = set->method == PC_METHOD_BDPT ? 0 : set->pcbpt_k, b = s->nbatch[key]++;
+    if (b < 2) s->batch_it[key][b] = iterations, s->batch_salt[key][b] = salt;
+    out[i].iterations = iterations;
+    out[i].seconds = 0.5 * (double)iterations;
+    out[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : s->k[set->pcbpt_k];
   }
   return 0;
 }
 
-static void run_script(script *s, pc_pilot *p) {
+static void run_script(script *s, double slice, pc_pilot *p) {
   pc_render_settings base;
   pc_render_settings_default(&base);
   base.method = PC_METHOD_PCBPT;
   base.seed = s->job_seed = 77;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(p, &base, 0.1, 2, scripted, s, &e), 0);
+  assert_int_equal(pc_pilot_run(p, &base, slice, 2, scripted, s, &e), 0);
   assert_false(s->seed_leaked);
   char line[1024];
   pc_pilot_report(p, line, sizeof line);
@@ -126,32 +132,55 @@ static void run_script(script *s, pc_pilot *p) {
 static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
-  /* stage 1 is BDPT and K = 1, stage 2 K = 2. K=2 worse than K=1: no K=4 or 8 (however good
-   * they would have been); the job's uniform mix is kept */
+  /* stage 1 is BDPT, K = 1 and K = 2 (a slice too small for a second batch). K=2 worse than K=1:
+   * no K=4 or 8 (however good they would have been); the job's uniform mix is kept */
   script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
-  run_script(&a, &p);
+  run_script(&a, 0.1, &p);
   assert_int_equal(a.calls, 3);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
   /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4 */
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
-  run_script(&b, &p);
+  run_script(&b, 0.1, &p);
   assert_int_equal(b.calls, 5);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   pc_pilot_free(&p);
   /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried */
   script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01}};
-  run_script(&d, &p);
+  run_script(&d, 0.1, &p);
   assert_int_equal(d.calls, 3);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   pc_pilot_free(&p);
   /* BDPT best */
   script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}};
-  run_script(&c, &p);
+  run_script(&c, 0.1, &p);
   assert_int_equal(c.calls, 3);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
+  pc_pilot_free(&p);
+}
+
+/* Every candidate renders the same iterations: the first batch's floor, then what the rest of
+ * stage 1's 5 slices buys at the three candidates' cost (here (5 x 2 - 3 x 1) / (3 x 0.5) = 4
+ * iterations), and K = 4 and 8, tried later, the same two batches. */
+static void test_matched(void **state) {
+  (void)state;
+  pc_pilot p;
+  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
+  run_script(&b, 2.0, &p);
+  assert_int_equal(b.calls, 10);
+  assert_int_equal(p.n, 5);
+  for (int key = 0; key <= 8; key = key ? 2 * key : 1) {
+    assert_int_equal(b.nbatch[key], 2);
+    assert_int_equal(b.batch_it[key][0], 2);
+    assert_int_equal(b.batch_it[key][1], 4);
+    assert_int_equal(b.batch_salt[key][0], b.batch_salt[0][0]);
+    assert_int_equal(b.batch_salt[key][1], b.batch_salt[0][1]);
+  }
+  assert_true(b.batch_salt[0][0] != b.batch_salt[0][1]);
+  for (int i = 0; i < p.n; i++) assert_int_equal(p.c[i].iterations, 6);
+  assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   pc_pilot_free(&p);
 }
 
@@ -170,28 +199,29 @@ static double cpu_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int local_render(void *user, pc_pilot_candidate *c, int n, double seconds, uint64_t min_it, pc_err *e) {
-  (void)seconds;
+static int local_render(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
+                        pc_pilot_candidate *out, pc_err *e) {
   local *l = user;
   for (int i = 0; i < n; i++) {
     pc_render_settings s = c[i].set;
     s.strategy_layers = 0;
+    s.seed ^= salt;
     pc_film *f = &l->films[l->made++];
     pc_renderer *r = NULL;
     assert_int_equal(pc_film_init(f, s.width, s.height, 0, e), 0);
     assert_int_equal(pc_renderer_create(l->scene, &s, 2, &r, e), 0);
     pc_render_stats st = {0};
     double c0 = cpu_s();
-    assert_int_equal(pc_render_iterations(r, 0, min_it, f, &st, NULL, NULL, NULL, e), 0);
-    c[i].seconds = cpu_s() - c0;
-    c[i].iterations = min_it;
+    assert_int_equal(pc_render_iterations(r, 0, iterations, f, &st, NULL, NULL, NULL, e), 0);
+    out[i].seconds = cpu_s() - c0;
+    out[i].iterations = iterations;
     pc_renderer_destroy(r);
     size_t nv = (size_t)f->w * f->h * 3;
     float *mean = malloc(nv * sizeof *mean), *var = malloc(nv * sizeof *var);
     assert_non_null(mean);
     assert_non_null(var);
     pc_film_beauty(f, mean);
-    assert_int_equal(pc_pilot_keep_image(&c[i], f->w, f->h, mean, pc_film_variance(f, var) ? var : NULL, e), 0);
+    assert_int_equal(pc_pilot_keep_image(&out[i], f->w, f->h, mean, pc_film_variance(f, var) ? var : NULL, e), 0);
     free(mean);
     free(var);
   }
@@ -302,6 +332,7 @@ int main(void) {
       cmocka_unit_test(test_choose),
       cmocka_unit_test(test_pooled),
       cmocka_unit_test(test_grid),
+      cmocka_unit_test(test_matched),
       cmocka_unit_test(test_picks_winner),
       cmocka_unit_test(test_unbiased),
   };
