@@ -420,6 +420,24 @@ static void print_tails(FILE *f, const study_args *a, scene_study *s, int big) {
     }
 }
 
+/* Which strategies carry every run's final image on the largest farm (study.h). */
+static void print_shares(FILE *f, const study_args *a, scene_study *s, int big) {
+  fprintf(f, "strategies carrying the final images: share of the mean luminance (pt: emitter hits, nee: s=1, "
+             "lt: t=1, inner: s,t>=2)\n");
+  fprintf(f, "%-10s %4s %8s %8s %8s %8s\n", "method", "run", "pt", "nee", "lt", "inner");
+  for (int r = 0; r < a->runs; r++)
+    for (int m = 0; m < a->nmethods; m++) {
+      const pc_study_run *run = run_at(a, s, big, r, m);
+      const pc_study_shares *sh = &run->shares;
+      if (!sh->known) {
+        fprintf(f, "%-10s %4d  (cannot tell: the image is black or lacks a strategy layer)\n", run->method.name, r + 1);
+        continue;
+      }
+      fprintf(f, "%-10s %4d %8.3f %8.3f %8.3f %8.3f\n", run->method.name, r + 1, sh->share[PC_LAYER_PT],
+              sh->share[PC_LAYER_NEE], sh->share[PC_LAYER_LT], sh->share[PC_LAYER_INNER]);
+    }
+}
+
 /* The scaling summary: per method, wall time to the same error at each farm size. */
 static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
   int slot = a->layer;
@@ -550,6 +568,7 @@ static int write_scene(const study_args *a, scene_study *s, FILE *f, pc_err *e) 
     print_reruns(f, a, s);
     fprintf(f, "\n");
     print_tails(f, a, s, big);
+    print_shares(f, a, s, big);
   }
   if (!rc && a->nsizes > 1) {
     fprintf(f, "\n");

@@ -77,6 +77,16 @@ typedef struct pc_study_tails {
 /* From an image the farm wrote; t->known false (and PC_OK) when it has no complete beauty_max. */
 int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e);
 
+/* Which strategies carry a method's final image (study_shares.c): the share of the beauty's mean
+ * luminance in each standard strategy layer, indexed by PC_LAYER_* (pt: emitter hits, s = 0;
+ * nee: s = 1; lt: t = 1; inner: s, t >= 2). known: the image has the beauty and all four
+ * layers, and is not black. */
+typedef struct pc_study_shares {
+  bool known;
+  double share[PC_LAYER_STD_COUNT];
+} pc_study_shares;
+void pc_study_shares_exr(const pc_exr_file *x, pc_study_shares *s);
+
 typedef struct pc_study_run {
   pc_study_method method;
   int threads;
@@ -91,6 +101,7 @@ typedef struct pc_study_run {
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
   pc_study_tails tails;  /* of the final image */
+  pc_study_shares shares;/* of the final image */
 } pc_study_run;
 
 void pc_study_run_free(pc_study_run *run);

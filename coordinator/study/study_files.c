@@ -100,6 +100,20 @@ static void json_tails(FILE *f, const pc_study_tails *t) {
   fprintf(f, ", \"max_pixel\": [%d, %d]}", t->max_x, t->max_y);
 }
 
+/* Which strategies carry the final image (study.h), null when it cannot tell. */
+static void json_shares(FILE *f, const pc_study_shares *sh) {
+  if (!sh->known) {
+    fputs("null", f);
+    return;
+  }
+  fputc('{', f);
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
+    fprintf(f, "%s\"%s\": ", l ? ", " : "", pc_study_layer_name(1 + l));
+    json_number(f, sh->share[l]);
+  }
+  fputc('}', f);
+}
+
 static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_study_ref *ref) {
   fputs("  \"methods\": [\n", f);
   for (int r = 0; r < nruns; r++) {
@@ -121,6 +135,8 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
     }
     fputs(",\n     \"tails\": ", f);
     json_tails(f, &run->tails);
+    fputs(",\n     \"shares\": ", f);
+    json_shares(f, &run->shares);
     fputs(",\n     \"snapshots\": [\n", f);
     for (int s = 0; s < run->nsnaps; s++) {
       const pc_study_snap *sn = &run->snaps[s];

@@ -3,7 +3,8 @@
 # exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) on the embedded farm
 # against a reference rendered here: every output file exists in the scene's folder and
 # study.csv has one row per method, snapshot and layer, with the last snapshot at the end of
-# the budget, and every method's heavy tails are in the table, study.json and report.html.
+# the budget, and every method's heavy tails and strategy shares are in the table, study.json and
+# report.html.
 # (The farm studies: tests/farm/study_farm.sh.)
 set -u
 . "$(dirname "$0")/lib.inc"
@@ -80,6 +81,21 @@ for m in d["methods"]:
     x, y = t["max_pixel"]
     assert 0 <= x < 32 and 0 <= y < 32, t
 PY
+  # Which strategies carry each final image: the layers' shares of the mean luminance sum to 1
+  # (the layers sum to the beauty); pt traces no light paths, bdpt's light tracing and inner
+  # connections carry part of the image.
+  python3 - "$tmp/s/cornell-box/study.json" <<'PY' || { echo "FAIL shares json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+for m in d["methods"]:
+    s = m["shares"]
+    assert s is not None and sorted(s) == ["inner", "lt", "nee", "pt"], (m["method"], s)
+    assert all(v >= 0 for v in s.values()) and abs(sum(s.values()) - 1) < 1e-4, (m["method"], s)
+    if m["method"] == "pt": assert s["lt"] == 0 and s["inner"] == 0 and s["nee"] > 0.5, s
+    if m["method"] == "bdpt": assert s["lt"] > 0 and s["inner"] > 0, s
+PY
+  grep -q "^strategies carrying the final images" "$tmp/out" || { echo "FAIL study: no strategy shares"; fail=1; }
+  grep -q "strategies carrying the final images" "$tmp/s/report.html" || { echo "FAIL study: no strategy shares in report.html"; fail=1; }
   grep -q "^heavy tails of the final images" "$tmp/out" || { echo "FAIL study: no heavy-tails table"; fail=1; }
   grep -Eq "^bdpt +1 +[0-9]+ +[0-9]+ " "$tmp/out" || { echo "FAIL study: no heavy-tails line of bdpt"; cat "$tmp/out"; fail=1; }
   grep -q "heavy tails of the final images" "$tmp/s/report.html" || { echo "FAIL study: no heavy tails in report.html"; fail=1; }
