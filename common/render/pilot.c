@@ -201,22 +201,18 @@ static void take_batch(pc_pilot_candidate *c, pc_pilot_candidate *b) {
   c->seconds += b->seconds;
 }
 
-/* Renders candidates from..p->n-1 on the pilot's iterations: the first batch's, then the
- * second's if there is one; then chooses again. */
-static int render_from(pc_pilot *p, int from, const uint64_t batch[2], pc_pilot_render_fn render, void *user,
-                       pc_err *e) {
-  static const uint64_t salt[2] = {0, SECOND_BATCH_SALT};
-  int n = p->n - from, rc = PC_OK;
-  for (int b = 0; b < 2 && !rc; b++) {
-    if (!batch[b]) continue;
-    pc_pilot_candidate out[PC_PILOT_MAX];
-    memset(out, 0, sizeof out);
-    rc = render(user, &p->c[from], n, batch[b], salt[b], out, e);
-    for (int i = 0; i < n; i++) {
-      if (!rc) take_batch(&p->c[from + i], &out[i]);
-      free(out[i].mean);
-      free(out[i].var);
-    }
+/* Renders one batch of candidates from..p->n-1 (iterations with seed ^ salt), takes it into
+ * them and chooses again. */
+static int render_batch(pc_pilot *p, int from, uint64_t iterations, uint64_t salt, pc_pilot_render_fn render,
+                        void *user, pc_err *e) {
+  int n = p->n - from;
+  pc_pilot_candidate out[PC_PILOT_MAX];
+  memset(out, 0, sizeof out);
+  int rc = render(user, &p->c[from], n, iterations, salt, out, e);
+  for (int i = 0; i < n; i++) {
+    if (!rc) take_batch(&p->c[from + i], &out[i]);
+    free(out[i].mean);
+    free(out[i].var);
   }
   if (!rc) pc_pilot_choose(p);
   return rc;
@@ -247,13 +243,10 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   add_candidate(p, base, PC_METHOD_BDPT, 0);
   add_candidate(p, base, PC_METHOD_PCBPT, 1);
   add_candidate(p, base, PC_METHOD_PCBPT, 2);
-  uint64_t batch[2] = {min_it, 0};
-  int rc = render_from(p, 0, batch, render, user, e);
-  if (!rc && slice > 0 && (batch[1] = second_batch(p, slice)) != 0) {
-    batch[0] = 0;
-    rc = render_from(p, 0, batch, render, user, e);
-    batch[0] = min_it;
-  }
+  uint64_t second = 0;
+  int rc = render_batch(p, 0, min_it, 0, render, user, e);
+  if (!rc && slice > 0 && (second = second_batch(p, slice)) != 0)
+    rc = render_batch(p, 0, second, SECOND_BATCH_SALT, render, user, e);
   /* stages 2 and 3: K doubles while the last doubling paid by PC_PILOT_K_MARGIN, on the same
    * iterations; efficiency over K has one peak (more connections cost linearly and gain less
    * each). The uniform mix is not tried: a less defensive mix has heavier tails, which a few
@@ -261,7 +254,8 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   for (int k = 4; !rc && k <= 8; k *= 2) {
     if (p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
     add_candidate(p, base, PC_METHOD_PCBPT, k);
-    rc = render_from(p, p->n - 1, batch, render, user, e);
+    rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
+    if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
   }
   if (rc) return rc;
   p->seconds = now_s() - t0;

@@ -29,10 +29,12 @@
  * so its estimate of a heavy-tailed method is more often low than high. */
 #define PC_PILOT_BDPT_MARGIN 1.05
 /* A doubled K replaces the smaller one only if its efficiency is higher by this factor. At 128x128
- * K = 1 was the best PCBPT K on all 13 shipped scenes (docs/auto.md), by 2-14% over K = 2, while
- * the pilot's K=2/K=1 efficiency ratio ranged over 0.58-2.72 (sd of its log ~0.3, 39 pilots);
- * with a margin of 1.25 the pilot still moved to K = 2 in all 6 runs of ajar-door and slit-room
- * at 60 s. A doubling that truly pays twice still gets through. */
+ * and 60 s the best PCBPT K beat the next by 1-14% (K = 1 on most scenes; K = 2 on ajar-door and
+ * glass-lamp in one of two tables, by 2-9%: docs/auto.md), so a wrong doubling costs little and
+ * a doubling that truly pays twice still gets through. Before the candidates shared their
+ * iterations, the pilot's K=2/K=1 ratio was noise (sd of its log 0.44-1.37 on ajar-door and
+ * slit-room); on shared iterations it is 0.09-0.18, which would allow a smaller margin, but
+ * nothing measured here asks for one. */
 #define PC_PILOT_K_MARGIN 2.0
 
 /* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every

@@ -7,7 +7,12 @@
 
 #include "study.h"
 
-static double luminance(const float *rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+double pc_study_mean_luminance(const pc_image *im) {
+  size_t np = (size_t)im->w * (size_t)im->h;
+  double sum = 0;
+  for (size_t p = 0; p < np; p++) sum += pc_study_luminance(im->rgb + 3 * p);
+  return np ? sum / (double)np : 0;
+}
 
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
@@ -34,19 +39,17 @@ int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e) {
   if (!beauty || !mx || !(n_max >= 1) || n_max != n_pt) return PC_OK;
   t->iterations = (uint64_t)n_max;
   size_t np = (size_t)x->w * x->h;
-  double mean = 0;
-  for (size_t p = 0; p < np; p++) mean += luminance(beauty->rgb + 3 * p);
-  mean /= (double)np;
+  double mean = pc_study_mean_luminance(beauty);
   double *r = malloc((np ? np : 1) * sizeof *r);
   if (!r) return pc_errf(e, PC_ENOMEM, "out of memory for the tails of a %dx%d image", x->w, x->h);
   size_t n = 0;
   for (size_t p = 0; p < np; p++) {
-    double y = luminance(beauty->rgb + 3 * p);
+    double y = pc_study_luminance(beauty->rgb + 3 * p);
     if (!(y > PC_STUDY_TAILS_LIT * mean)) continue;
     /* the luminance of the per-channel maxima: at least the largest iteration's luminance, the
      * same when one iteration holds all three channels' maxima (a firefly does), and still at
      * most N times the mean */
-    double ratio = luminance(mx->rgb + 3 * p) / y;
+    double ratio = pc_study_luminance(mx->rgb + 3 * p) / y;
     r[n++] = ratio;
     if (!(ratio <= t->max)) {
       t->max = ratio;
