@@ -335,6 +335,13 @@ static void normalize_weights(pc_irec_lookup *L) {
 /* Cell coordinates within +-2^20 pack into one 63-bit key. */
 #define CELL_RANGE 1048576.f
 
+/* floorf for |x| < CELL_RANGE, where the int conversion is exact: floorf itself is a libm call
+ * without SSE4.1, ~18 instructions each, three per lookup. */
+static inline float floor_in_range(float x) {
+  float t = (float)(int32_t)x;
+  return t > x ? t - 1.f : t;
+}
+
 /* How many of the n records idx[] have a distribution. */
 static int count_seen(const pc_irec_store *s, const int *idx, int n) {
   int seen = 0;
@@ -359,9 +366,9 @@ static const int *search(const pc_irec_store *s, vec3 q, int knn, int *buf, int 
 static const int *neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *buf, int *count, int *seen) {
   if (!(s->cell > 0.f)) return search(s, p, knn, buf, count, seen);
   vec3 f = v3_scale(v3_sub(p, s->cell_origin), 1.f / s->cell);
-  f = v3(floorf(f.x), floorf(f.y), floorf(f.z));
   if (!(fabsf(f.x) < CELL_RANGE && fabsf(f.y) < CELL_RANGE && fabsf(f.z) < CELL_RANGE))
     return search(s, p, knn, buf, count, seen);
+  f = v3(floor_in_range(f.x), floor_in_range(f.y), floor_in_range(f.z));
   vec3 centre = v3_add(s->cell_origin, v3_scale(v3_add(f, v3s(0.5f)), s->cell));
   if (knn != s->cache_k) return search(s, centre, knn, buf, count, seen);
   uint64_t key = (uint64_t)(int64_t)(f.x + CELL_RANGE) << 42 | (uint64_t)(int64_t)(f.y + CELL_RANGE) << 21 |
@@ -448,20 +455,24 @@ double pc_irec_interp_seen(const pc_irec_lookup *L, int i) {
   return w;
 }
 
-double pc_irec_interp_cmf(const pc_irec_lookup *L, int i) {
-  double c = 0.0;
-  for (int j = 0; j < L->n; j++) c += L->w[j] * (double)L->cmf[j][i];
-  return c;
-}
-
-/* Each record's CMF is non-decreasing and the weights are >= 0, so the weighted sum (in a
- * fixed order; rounding is monotone) is too, and binary search equals a linear scan. */
+/* p_interp is the mixture sum_j w_j pmf_j, so it is sampled by choosing record j with
+ * probability w_j and inverting j's own CMF: one binary search over one row, where inverting
+ * the weighted sum of the rows probed all n rows at every step (n times the reads, scattered
+ * over n rows). xi picks the record and, rescaled to that record's share, the index; the index is
+ * the first whose CMF exceeds it, so its PMF is > 0 (fill_row: zero entries leave the CMF
+ * flat) and its row ends at exactly 1. */
 int pc_irec_interp_sample(const pc_irec_lookup *L, double xi) {
-  double target = xi * pc_irec_interp_cmf(L, L->V - 1);
+  int j = 0;
+  double below = 0.0;
+  while (j < L->n - 1 && !(xi < below + L->w[j])) below += L->w[j++];
+  double x = (xi - below) / L->w[j];
+  if (!(x < 1.0)) x = 0x1.fffffffffffffp-1; /* rounding in the running sum at the top */
+  if (!(x > 0.0)) x = 0.0;
+  const float *cmf = L->cmf[j];
   int lo = 0, hi = L->V - 1;
   while (lo < hi) {
     int mid = lo + (hi - lo) / 2;
-    if (pc_irec_interp_cmf(L, mid) > target) hi = mid;
+    if ((double)cmf[mid] > x) hi = mid;
     else lo = mid + 1;
   }
   return lo;

@@ -10,9 +10,10 @@
  * of the path-vertex type, BSDFs or ray casting.
  *
  * At an eye vertex, a lookup interpolates the knn records nearest to the centre of the eye
- * vertex's cell (weighted by normal and incoming-direction similarity and distance) lazily: sampling is a binary search over the
- * weighted sum of the records' CMFs evaluated only at the probed indices, and p_conn(v) is the
- * same weighted sum of their PMFs. The result is blended with the uniform PMF:
+ * vertex's cell (weighted by normal and incoming-direction similarity and distance) lazily,
+ * without adding up their rows: p_conn(v) is the weighted sum of their PMFs at v, and sampling
+ * picks one record by its weight and inverts that record's CMF. The result is blended with
+ * the uniform PMF:
  *   p_conn(v) = (1 - u) * p_interp(v) + u / V.
  * The exact mode (--pmf exact) computes the PMF at the eye vertex itself instead. */
 #ifndef PC_IREC_H
@@ -142,10 +143,11 @@ typedef float (*pc_irec_target_fn)(void *user, int slot, int v);
 int pc_irec_resample(const pc_irec_lookup *L, int ncand, int nsel, double xi_mix, pc_rng *rng, pc_irec_target_fn target,
                      void *user, int *sel_slot, double *sel_factor);
 
-/* The interpolated component alone (n > 0): its PMF and CMF at index i, and inversion of its
- * CMF by binary search: the smallest i with cmf(i) > xi * cmf(V-1). Exposed for tests. */
+/* The interpolated component alone (n > 0): its PMF at index i, and a draw from it for xi in
+ * [0, 1): the record j whose share of the weights holds xi (the first with xi < w_0 + ... +
+ * w_j, else the last), then the smallest i with cmf_j(i) > (xi - w_0 - ... - w_{j-1}) / w_j.
+ * Exposed for tests. */
 double pc_irec_interp_pmf(const pc_irec_lookup *L, int i);
-double pc_irec_interp_cmf(const pc_irec_lookup *L, int i);
 int pc_irec_interp_sample(const pc_irec_lookup *L, double xi);
 /* The summed weight (in [0, 1]) of the interpolated records whose PMF is > 0 at i: the
  * records' blurred estimate of whether light vertex i is visible from here (0 when n == 0). */
