@@ -302,6 +302,7 @@ typedef struct scene_study {
   pc_study_ref ref;
   /* runs[size][run][method] */
   pc_study_run *runs;
+  bool shares_chart; /* study_shares.svg was written */
 } scene_study;
 
 static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int run, int m) {
@@ -550,6 +551,7 @@ static int write_scene(const study_args *a, scene_study *s, FILE *f, pc_err *e) 
   for (int m = 0; m < a->nmethods; m++) bands[m] = a->runs > 1 ? band[m] : NULL;
   if (!rc) rc = pc_study_write_chart(s->dir, &info, med, a->nmethods, PC_STUDY_BEAUTY, bands, e);
   if (!rc && s->ref.rgb[1 + PC_LAYER_INNER]) rc = pc_study_write_chart(s->dir, &info, med, a->nmethods, 1 + PC_LAYER_INNER, bands, e);
+  if (!rc) rc = pc_study_write_shares_chart(s->dir, &info, run_at(a, s, big, 0, 0), a->nmethods, &s->shares_chart, e);
   if (!rc) {
     fprintf(f, "%s (%s), %d worker%s, %lld run%s, %g s per method:\n", s->name, s->path, a->workers[big],
             a->workers[big] > 1 ? "s" : "", a->runs, a->runs > 1 ? "s" : "", a->seconds);
@@ -636,7 +638,7 @@ static int study_scene(const study_args *a, pc_study_farm *farm, int k, pc_repor
     pc_report_scene sc = {.name = s.name, .path = s.path, .dir = s.dir, .tables = text,
                           .reference = s.ref.estimated ? NULL : s.ref.rgb[PC_STUDY_BEAUTY], .w = s.ref.w, .h = s.ref.h,
                           .methods = a->methods, .nmethods = a->nmethods, .scaling = a->nsizes > 1,
-                          .inner = s.ref.rgb[1 + PC_LAYER_INNER] != NULL};
+                          .inner = s.ref.rgb[1 + PC_LAYER_INNER] != NULL, .shares = s.shares_chart};
     rc = pc_report_add_scene(report, &sc, e);
   }
   free(text);

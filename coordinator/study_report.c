@@ -185,6 +185,12 @@ int pc_report_add_scene(pc_report *r, const pc_report_scene *s, pc_err *e) {
   int rc = figure(f, s->dir, "study_beauty.svg", "image/svg+xml", "beauty", NULL, 640, e);
   if (!rc && s->inner) rc = figure(f, s->dir, "study_inner.svg", "image/svg+xml", "inner strategies", NULL, 640, e);
   if (!rc && s->scaling) rc = figure(f, s->dir, "study_scaling.svg", "image/svg+xml", "scaling with the farm size", NULL, 640, e);
+  if (!rc && s->shares) {
+    fputs("<h3>Strategies carrying the final images</h3>\n", f);
+    rc = figure(f, s->dir, "study_shares.svg", "image/svg+xml",
+                "share of each image's mean luminance per strategy layer: where the light is, not where the error is",
+                NULL, 640, e);
+  }
   if (!rc) fputs("<h3>Images at the end of the budget</h3>\n", f);
   for (int m = 0; m < s->nmethods && !rc; m++) {
     char leaf[64];

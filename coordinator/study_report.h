@@ -25,7 +25,7 @@ typedef struct pc_report_scene {
   int w, h;
   const pc_study_method *methods;
   int nmethods;
-  bool scaling, inner;         /* study_scaling.svg, study_inner.svg were written */
+  bool scaling, inner, shares; /* study_scaling.svg, study_inner.svg, study_shares.svg were written */
 } pc_report_scene;
 
 int pc_report_begin(pc_report *r, const char *path, pc_err *e);

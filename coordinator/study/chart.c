@@ -1,5 +1,6 @@
-/* chart.c: draws a pc_chart (log-log line chart, see chart.h) with cairo onto an image surface
- * (PNG) or an SVG surface; the drawing code is shared so both files show the same chart. */
+/* chart.c: draws a pc_chart (log-log line chart or stacked bars, see chart.h) with cairo onto an
+ * image surface (PNG) or an SVG surface; the drawing code is shared so both files show the same
+ * chart. */
 #include "chart.h"
 
 #include <cairo-svg.h>
@@ -182,8 +183,77 @@ static void draw_legend(cairo_t *cr, const frame *f, const pc_chart *c, double f
   }
 }
 
+/* The bar chart's legend: a row of filled swatches under the title, so it never hides a bar. */
+static void draw_bar_legend(cairo_t *cr, const pc_chart_bars *b, double x, double y, double fs) {
+  set_font(cr, fs);
+  for (int k = 0; k < b->nparts; k++) {
+    const double *rgb = palette[k % NPALETTE];
+    const char *name = b->parts[k] ? b->parts[k] : "";
+    cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+    cairo_rectangle(cr, x, y - 0.45 * fs, fs * 0.9, fs * 0.9);
+    cairo_fill(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    text_at(cr, name, x + fs * 1.3, y, 0, 0.5);
+    cairo_text_extents_t te;
+    cairo_text_extents(cr, name, &te);
+    x += fs * 2.8 + te.x_advance;
+  }
+}
+
+static void draw_bars(cairo_t *cr, const pc_chart *c, double fs) {
+  const pc_chart_bars *b = c->bars;
+  set_font(cr, fs);
+  double label_w = 0;
+  for (int r = 0; r < b->nrows; r++) {
+    cairo_text_extents_t te;
+    cairo_text_extents(cr, b->rows[r] ? b->rows[r] : "", &te);
+    if (te.x_advance > label_w) label_w = te.x_advance;
+  }
+  double x0 = fs + label_w + fs * 0.8, x1 = c->width - fs * 2, y0 = fs * 4.5, y1 = c->height - fs * 4;
+  double row = b->nrows ? (y1 - y0) / b->nrows : 0;
+  cairo_set_line_width(cr, 1);
+  for (int q = 0; q <= 4; q++) { /* grid and labels every 25% */
+    double x = x0 + (x1 - x0) * q / 4.0;
+    char label[8];
+    snprintf(label, sizeof label, "%d%%", 25 * q);
+    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+    cairo_move_to(cr, x, y0);
+    cairo_line_to(cr, x, y1);
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    text_at(cr, label, x, y1 + 6, 0.5, 0);
+  }
+  for (int r = 0; r < b->nrows; r++) {
+    double top = y0 + row * (r + 0.15), h = row * 0.7, at = 0;
+    for (int k = 0; k < b->nparts && at < 1; k++) {
+      double v = fmin(b->value[(size_t)r * b->nparts + k], 1 - at);
+      const double *rgb = palette[k % NPALETTE];
+      cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+      cairo_rectangle(cr, x0 + (x1 - x0) * at, top, (x1 - x0) * v, h);
+      cairo_fill(cr);
+      at += v;
+    }
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    text_at(cr, b->rows[r] ? b->rows[r] : "", x0 - fs * 0.5, top + 0.5 * h, 1, 0.5);
+  }
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, x0, y0, x1 - x0, y1 - y0);
+  cairo_stroke(cr);
+  draw_bar_legend(cr, b, x0, fs * 3, fs);
+  set_font(cr, fs * 1.2);
+  if (c->title) text_at(cr, c->title, 0.5 * c->width, fs * 1.2, 0.5, 0.5);
+  set_font(cr, fs);
+  if (c->x_label) text_at(cr, c->x_label, 0.5 * (x0 + x1), c->height - fs * 1.2, 0.5, 0.5);
+}
+
 static void draw(cairo_t *cr, const pc_chart *c) {
   double fs = fmax(9, fmin(c->width, c->height) / 40.0);
+  if (c->bars) {
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    cairo_paint(cr);
+    draw_bars(cr, c, fmax(9, fmin(c->width, 560) / 40.0));
+    return;
+  }
   double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
   for (int s = 0; s < c->nseries; s++)
     for (int i = 0; i < c->series[s].n; i++) {
@@ -228,6 +298,18 @@ static int check_chart(const pc_chart *c, const char *path, pc_err *e) {
       c->height > PC_CHART_MAX_DIM)
     return pc_errf(e, PC_EINVAL, "%s: chart size %dx%d outside %d..%d", path, c->width, c->height, PC_CHART_MIN_DIM,
                    PC_CHART_MAX_DIM);
+  if (c->bars) {
+    const pc_chart_bars *b = c->bars;
+    if (b->nrows < 0 || b->nrows > PC_CHART_MAX_BARS || b->nparts < 1 || b->nparts > PC_CHART_MAX_PARTS ||
+        (b->nrows > 0 && (!b->rows || !b->value)) || !b->parts)
+      return pc_errf(e, PC_EINVAL, "%s: bad bars (%d rows of %d parts; at most %d of %d)", path, b->nrows, b->nparts,
+                     PC_CHART_MAX_BARS, PC_CHART_MAX_PARTS);
+    for (int i = 0; i < b->nrows * b->nparts; i++)
+      if (!(isfinite(b->value[i]) && b->value[i] >= 0))
+        return pc_errf(e, PC_EINVAL, "%s: bar %d, part %d: value %g is not a fraction", path, i / b->nparts,
+                       i % b->nparts, b->value[i]);
+    return PC_OK;
+  }
   if (c->nseries < 0 || (c->nseries > 0 && !c->series)) return pc_errf(e, PC_EINVAL, "%s: bad series list", path);
   for (int s = 0; s < c->nseries; s++)
     if (c->series[s].n < 0 || (c->series[s].n > 0 && (!c->series[s].x || !c->series[s].y)))

@@ -206,5 +206,13 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
  * of several runs around a median curve. */
 int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nruns, int slot,
                          const pc_study_band *const *bands, pc_err *e);
+/* <dir>/study_shares.png and .svg: which strategies carry each final image, as stacked bars of
+ * the shares (pc_study_shares), from runs[run * nmethods + m] (info->runs runs of nmethods
+ * methods): one bar per method and run, or, past PC_STUDY_SHARE_BARS_RUNS runs, one per method
+ * of its mean over the runs. Runs that cannot tell are left out; *written says whether any
+ * could (else no file is written). */
+#define PC_STUDY_SHARE_BARS_RUNS 8
+int pc_study_write_shares_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nmethods,
+                                bool *written, pc_err *e);
 
 #endif

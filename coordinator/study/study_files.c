@@ -260,3 +260,50 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
   free(xy);
   return rc;
 }
+
+int pc_study_write_shares_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nmethods,
+                                bool *written, pc_err *e) {
+  *written = false;
+  bool per_run = info->runs <= PC_STUDY_SHARE_BARS_RUNS;
+  enum { MAX_BARS = PC_STUDY_MAX_METHODS * PC_STUDY_SHARE_BARS_RUNS };
+  char label[MAX_BARS][96];
+  const char *rows[MAX_BARS];
+  double value[MAX_BARS * PC_LAYER_STD_COUNT];
+  int n = 0;
+  for (int m = 0; m < nmethods; m++) {
+    double mean[PC_LAYER_STD_COUNT] = {0};
+    int known = 0;
+    for (int r = 0; r < info->runs; r++) {
+      const pc_study_run *run = &runs[(size_t)r * (size_t)nmethods + (size_t)m];
+      if (!run->shares.known) continue;
+      known++;
+      for (int l = 0; l < PC_LAYER_STD_COUNT; l++) mean[l] += run->shares.share[l];
+      if (!per_run) continue;
+      snprintf(label[n], sizeof label[n], info->runs > 1 ? "%s, run %d" : "%s", run->method.name, r + 1);
+      for (int l = 0; l < PC_LAYER_STD_COUNT; l++) value[n * PC_LAYER_STD_COUNT + l] = fmax(0, run->shares.share[l]);
+      n++;
+    }
+    if (per_run || !known) continue;
+    snprintf(label[n], sizeof label[n], "%s, mean of %d runs", runs[m].method.name, known);
+    for (int l = 0; l < PC_LAYER_STD_COUNT; l++) value[n * PC_LAYER_STD_COUNT + l] = fmax(0, mean[l] / known);
+    n++;
+  }
+  if (n == 0) return PC_OK;
+  for (int i = 0; i < n; i++) rows[i] = label[i];
+  static const char *const parts[PC_LAYER_STD_COUNT] = {"pt: emitter hits (s=0)", "nee (s=1)", "lt (t=1)",
+                                                        "inner (s,t>=2)"};
+  pc_chart_bars bars = {.rows = rows, .parts = parts, .value = value, .nrows = n, .nparts = PC_LAYER_STD_COUNT};
+  char title[512], path[4096];
+  snprintf(title, sizeof title, "%s: strategies carrying the final images (share of the mean luminance)",
+           info->scene_name);
+  pc_chart c = {.title = title, .x_label = "share of the image's mean luminance", .width = 800,
+                .height = 150 + 30 * n, .bars = &bars};
+  int rc = PC_OK;
+  for (int k = 0; k < 2 && rc == PC_OK; k++) {
+    int len = snprintf(path, sizeof path, "%s/study_shares.%s", dir, k ? "svg" : "png");
+    if (len < 0 || (size_t)len >= sizeof path) rc = pc_errf(e, PC_EINVAL, "%s: path too long", dir);
+    else rc = k ? pc_chart_write_svg(&c, path, e) : pc_chart_write_png(&c, path, e);
+  }
+  *written = rc == PC_OK;
+  return rc;
+}

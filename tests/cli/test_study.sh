@@ -43,7 +43,8 @@ check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scen
 [ -e "$tmp/s" ] && { echo "FAIL: a refused study created its output folder"; fail=1; }
 check study 0 "needs .*x .* time than pt to reach beauty relMSE" -- "$bin" study "$scene" "${ok[@]}"
 grep -q "^inner *bdpt" "$tmp/out" || { echo "FAIL study: table lacks the inner row of bdpt"; cat "$tmp/out"; fail=1; }
-for f in ../report.html pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg; do
+for f in ../report.html pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg \
+         study_shares.png study_shares.svg; do
   [ -s "$tmp/s/cornell-box/$f" ] || { echo "FAIL study: $f missing"; fail=1; }
 done
 csv="$tmp/s/cornell-box/study.csv"
@@ -96,6 +97,7 @@ for m in d["methods"]:
 PY
   grep -q "^strategies carrying the final images" "$tmp/out" || { echo "FAIL study: no strategy shares"; fail=1; }
   grep -q "strategies carrying the final images" "$tmp/s/report.html" || { echo "FAIL study: no strategy shares in report.html"; fail=1; }
+  grep -q "<h3>Strategies carrying the final images</h3>" "$tmp/s/report.html" || { echo "FAIL study: no strategy shares chart in report.html"; fail=1; }
   grep -q "^heavy tails of the final images" "$tmp/out" || { echo "FAIL study: no heavy-tails table"; fail=1; }
   grep -Eq "^bdpt +1 +[0-9]+ +[0-9]+ " "$tmp/out" || { echo "FAIL study: no heavy-tails line of bdpt"; cat "$tmp/out"; fail=1; }
   grep -q "heavy tails of the final images" "$tmp/s/report.html" || { echo "FAIL study: no heavy tails in report.html"; fail=1; }

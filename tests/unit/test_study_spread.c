@@ -3,16 +3,20 @@
  * different times per run: the median curve and its band are the median, min and max of
  * a_r / t at each grid time, times no run reached are left out, and the time to a target is
  * a_r / target per run with its median, range and per-run ratios to another method's runs.
- * A chart with a band draws; half a band is refused. */
+ * A chart with a band draws; half a band is refused. A bar chart draws each part in its colour
+ * and refuses values that are not fractions. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <cairo.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "chart.h"
 #include "study.h"
@@ -122,12 +126,59 @@ static void test_band_chart(void **state) {
   remove(path);
 }
 
+/* Whether a pixel of the PNG's column x has colour rgb (0..255), within 2 per channel. */
+static bool column_has(cairo_surface_t *img, int x, int r, int g, int b) {
+  const unsigned char *d = cairo_image_surface_get_data(img);
+  int stride = cairo_image_surface_get_stride(img), h = cairo_image_surface_get_height(img);
+  for (int y = 0; y < h; y++) {
+    uint32_t px = *(const uint32_t *)(d + (size_t)y * stride + 4 * (size_t)x);
+    int pr = px >> 16 & 255, pg = px >> 8 & 255, pb = px & 255;
+    if (abs(pr - r) <= 2 && abs(pg - g) <= 2 && abs(pb - b) <= 2) return true;
+  }
+  return false;
+}
+
+/* Stacked bars: a bar all of the first part and one all of the fourth show the first and fourth
+ * colours across the plot's middle column, and no other part's; values that are no fraction
+ * and too many parts are refused. */
+static void test_bar_chart(void **state) {
+  (void)state;
+  const char *rows[2] = {"pt", "pcbpt"}, *parts[4] = {"pt", "nee", "lt", "inner"};
+  double v[8] = {1, 0, 0, 0, 0, 0, 0, 1};
+  pc_chart_bars b = {.rows = rows, .parts = parts, .value = v, .nrows = 2, .nparts = 4};
+  pc_chart c = {.title = "shares", .x_label = "share", .width = 400, .height = 220, .bars = &b};
+  char path[] = "/tmp/pcbpt-bars-XXXXXX.png";
+  int fd = mkstemps(path, 4);
+  assert_true(fd >= 0);
+  close(fd);
+  pc_err e = {0};
+  assert_int_equal(pc_chart_write_png(&c, path, &e), PC_OK);
+  cairo_surface_t *img = cairo_image_surface_create_from_png(path);
+  assert_int_equal(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  cairo_surface_flush(img);
+  int x = 300; /* right of the labels, left of the plot's end */
+  assert_true(column_has(img, x, 0, 114, 178));   /* Okabe-Ito blue: part 1 */
+  assert_true(column_has(img, x, 204, 121, 167)); /* reddish purple: part 4 */
+  assert_false(column_has(img, x, 213, 94, 0));   /* vermillion: part 2, empty */
+  assert_false(column_has(img, x, 0, 158, 115));  /* bluish green: part 3, empty */
+  cairo_surface_destroy(img);
+  v[1] = NAN;
+  assert_int_not_equal(pc_chart_write_png(&c, path, &e), PC_OK);
+  assert_non_null(strstr(e.msg, "not a fraction"));
+  v[1] = 0;
+  b.nparts = PC_CHART_MAX_PARTS + 1;
+  assert_int_not_equal(pc_chart_write_png(&c, path, &e), PC_OK);
+  assert_non_null(strstr(e.msg, "bad bars"));
+  remove(path);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_median),
       cmocka_unit_test(test_median_run),
       cmocka_unit_test(test_spread_cell),
       cmocka_unit_test(test_band_chart),
+      cmocka_unit_test(test_bar_chart),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
