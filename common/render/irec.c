@@ -44,7 +44,8 @@ struct pc_irec_store {
   uint32_t epoch;       /* build counter: cached neighbour sets of older builds are stale */
   int cache_k;          /* neighbours memoised per cell (the knn given at creation) */
   size_t cache_stride;  /* bytes per cache entry */
-  unsigned char *cache; /* per thread: PC_IREC_CACHE_CELLS entries, each on its own cache lines */
+  int cache_bits;       /* entries per thread: 2^cache_bits (memo_bits) */
+  unsigned char *cache; /* per thread: 2^cache_bits entries, each on its own cache lines */
 };
 
 /* A memoised neighbour set: the cache_k nearest records of one cell's centre, and how many of
@@ -62,17 +63,49 @@ static size_t per_record_bytes(void) {
   return sizeof(pc_irec_record) + sizeof(double) + sizeof(vec3) + PC_KDTREE_POINT_BYTES;
 }
 
+/* The memo of all threads with 2^bits entries each. */
+static size_t memo_bytes(const pc_irec_store *s, int bits) {
+  return (size_t)s->nthreads * ((size_t)1 << bits) * s->cache_stride;
+}
+
+/* The memo's size for R records: ~16 entries per record, at least PC_IREC_CACHE_CELLS, and all
+ * threads' memos together within MEMO_MAX_BYTES. A record's neighbourhood spans a few query
+ * cells (ajar-door at 128x128: ~900 cells in use for ~200 records), so this keeps the table
+ * about a quarter full. A fixed 2^13 entries did up to ~1800 records: at 512x512 (~3150) a
+ * quarter of the lookups missed on collisions and searched the kd-tree. */
+#define MEMO_MAX_BYTES ((size_t)64 << 20)
+static int memo_bits(const pc_irec_store *s, int R) {
+  int bits = PC_IREC_CACHE_BITS;
+  while (bits < 24 && ((size_t)1 << bits) < 16 * (size_t)R && memo_bytes(s, bits + 1) <= MEMO_MAX_BYTES) bits++;
+  return bits;
+}
+
 static size_t fixed_bytes(const pc_irec_store *s) {
-  return sizeof *s + (size_t)s->nthreads * (sizeof(thread_err) + PC_IREC_CACHE_CELLS * s->cache_stride);
+  return sizeof *s + (size_t)s->nthreads * sizeof(thread_err);
 }
 
 /* Bytes for the given capacities, or SIZE_MAX on overflow. */
-static size_t bytes_for(const pc_irec_store *s, size_t rec, size_t mass, size_t scratch) {
+static size_t bytes_for(const pc_irec_store *s, size_t rec, size_t mass, size_t scratch, int bits) {
   if (rec > SIZE_MAX / per_record_bytes() || mass > SIZE_MAX / 8 || scratch > SIZE_MAX / 8) return SIZE_MAX;
   size_t a = rec * per_record_bytes(), b = mass * sizeof(float), c = scratch * sizeof(float);
-  size_t f = fixed_bytes(s);
+  size_t f = fixed_bytes(s) + memo_bytes(s, bits);
   if (a > SIZE_MAX - b || a + b > SIZE_MAX - c || a + b + c > SIZE_MAX - f) return SIZE_MAX;
   return a + b + c + f;
+}
+
+/* Makes the memo 2^bits entries per thread, all stale. */
+static int resize_memo(pc_irec_store *s, int bits, pc_err *e) {
+  if (bits == s->cache_bits) return PC_OK;
+  free(s->cache);
+  s->cache = aligned_alloc(CACHE_LINE, memo_bytes(s, bits));
+  if (!s->cache) {
+    s->cache_bits = 0;
+    return pc_errf(e, PC_ENOMEM, "importance records: out of memory for the neighbour-set memo (%zu bytes)",
+                   memo_bytes(s, bits));
+  }
+  memset(s->cache, 0, memo_bytes(s, bits));
+  s->cache_bits = bits;
+  return PC_OK;
 }
 
 /* Floats of PMF+CMF and of scratch a build needs, or SIZE_MAX on overflow. */
@@ -85,24 +118,22 @@ int pc_irec_create(int nthreads, int knn, size_t max_bytes, pc_irec_store **out,
   *out = NULL;
   if (nthreads < 1 || nthreads > 4096) return pc_errf(e, PC_EINVAL, "importance records: thread count %d out of range 1..4096", nthreads);
   if (knn < 1 || knn > PC_IREC_MAX_KNN) return pc_errf(e, PC_EINVAL, "importance records: knn %d out of range 1..%d", knn, PC_IREC_MAX_KNN);
-  size_t stride = (sizeof(cell_entry) + (size_t)knn * sizeof(int) + CACHE_LINE - 1) & ~(size_t)(CACHE_LINE - 1);
-  size_t cache_bytes = (size_t)nthreads * PC_IREC_CACHE_CELLS * stride;
   pc_irec_store *s = calloc(1, sizeof *s);
   if (s) s->terr = calloc((size_t)nthreads, sizeof *s->terr);
-  if (s) s->cache = aligned_alloc(CACHE_LINE, cache_bytes);
-  if (s && s->cache) memset(s->cache, 0, cache_bytes);
-  if (!s || !s->terr || !s->cache) {
-    if (s) {
-      free(s->terr);
-      free(s->cache);
-    }
+  if (!s || !s->terr) {
+    if (s) free(s->terr);
     free(s);
     return pc_errf(e, PC_ENOMEM, "importance records: out of memory");
   }
   s->cache_k = knn;
-  s->cache_stride = stride;
+  s->cache_stride = (sizeof(cell_entry) + (size_t)knn * sizeof(int) + CACHE_LINE - 1) & ~(size_t)(CACHE_LINE - 1);
   s->nthreads = nthreads;
   s->max_bytes = max_bytes;
+  int rc = resize_memo(s, PC_IREC_CACHE_BITS, e);
+  if (rc != PC_OK) {
+    pc_irec_destroy(s);
+    return rc;
+  }
   *out = s;
   return PC_OK;
 }
@@ -131,14 +162,14 @@ void pc_irec_destroy(pc_irec_store *s) {
 }
 
 size_t pc_irec_bytes(const pc_irec_store *s) {
-  return bytes_for(s, s->rec_cap, s->mass_cap, s->scratch_cap);
+  return bytes_for(s, s->rec_cap, s->mass_cap, s->scratch_cap, s->cache_bits);
 }
 
 size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight) {
   if (nrecords < 0 || nlight < 0) return SIZE_MAX;
   size_t mass = mass_floats(nrecords, nlight), scratch = mass_floats(s->nthreads, nlight);
   if (mass == SIZE_MAX || scratch == SIZE_MAX) return SIZE_MAX;
-  return bytes_for(s, (size_t)nrecords, mass, scratch);
+  return bytes_for(s, (size_t)nrecords, mass, scratch, memo_bits(s, nrecords));
 }
 
 int pc_irec_count(const pc_irec_store *s) { return s->R; }
@@ -210,7 +241,13 @@ static int reserve(pc_irec_store *s, int R, int V, pc_err *e) {
   size_t keep_rec = want_rec > s->rec_cap ? want_rec : s->rec_cap;
   size_t keep_mass = want_mass > s->mass_cap ? want_mass : s->mass_cap;
   size_t keep_scratch = want_scratch > s->scratch_cap ? want_scratch : s->scratch_cap;
-  if (bytes_for(s, keep_rec, keep_mass, keep_scratch) > s->max_bytes) release_buffers(s);
+  /* The memo grows with the records, and shrinks only by more than a step: R varies from one
+   * iteration to the next, and each resize clears it. */
+  int bits = memo_bits(s, R);
+  if (bits == s->cache_bits - 1) bits = s->cache_bits;
+  if (bytes_for(s, keep_rec, keep_mass, keep_scratch, bits) > s->max_bytes) release_buffers(s);
+  int rc = resize_memo(s, bits, e);
+  if (rc != PC_OK) return rc;
   if (want_rec > s->rec_cap) {
     pc_irec_record *r = realloc(s->rec, want_rec * sizeof *r);
     if (r) s->rec = r;
@@ -375,8 +412,8 @@ static const int *neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int 
                  (uint64_t)(int64_t)(f.z + CELL_RANGE);
   /* Fibonacci hashing: the product's top bits mix every bit of the key. (Its middle bits did
    * not: 1.9% of the lookups missed on collisions with ~900 cells in use, now 0.2%.) */
-  size_t slot = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - PC_IREC_CACHE_BITS));
-  cell_entry *c = (cell_entry *)(s->cache + ((size_t)thread * PC_IREC_CACHE_CELLS + slot) * s->cache_stride);
+  size_t slot = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - s->cache_bits));
+  cell_entry *c = (cell_entry *)(s->cache + (((size_t)thread << s->cache_bits) + slot) * s->cache_stride);
   if (c->epoch != s->epoch || c->key != key) {
     int n, sn;
     search(s, centre, knn, c->idx, &n, &sn);

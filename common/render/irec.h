@@ -29,7 +29,8 @@
 #include "vecmath.h"
 
 #define PC_IREC_MAX_KNN PC_KDTREE_MAX_K
-/* Memoised neighbour sets per thread. */
+/* Memoised neighbour sets per thread: at least this many, more as the records grow (irec.c,
+ * memo_bits). */
 #define PC_IREC_CACHE_BITS 13
 #define PC_IREC_CACHE_CELLS (1 << PC_IREC_CACHE_BITS)
 /* Cell size as a fraction of the median record-neighbourhood radius. */
@@ -67,8 +68,9 @@ void pc_irec_destroy(pc_irec_store *s);
 int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int nlight,
                   pc_irec_importance_fn fn, void *user, pc_pool *pool, pc_err *e);
 
-/* Bytes held: 2*R*V floats of PMF/CMF plus the records, the kd-tree and the exact-mode
- * scratch (capacity: a later smaller build keeps the larger allocation). */
+/* Bytes held: 2*R*V floats of PMF/CMF plus the records, the kd-tree, the exact-mode scratch
+ * and the per-thread neighbour-set memo (capacity: a later smaller build keeps the larger
+ * allocation; the memo grows with R, at most 64 MiB over all threads). */
 size_t pc_irec_bytes(const pc_irec_store *s);
 /* Bytes a build of R records over V light vertices needs (what the limit is checked against);
  * SIZE_MAX when the figure overflows. */

@@ -2,8 +2,9 @@
  * vertices and records, an analytic importance luminance * cos * cos / d^2 with some zero
  * throughputs and a "basement" that sees nothing; no Embree): rows are normalized, the lazily
  * interpolated PMF is normalized and positive with uniform mixing, sampling follows p_conn
- * (chi-square), the lazy binary search equals inversion of the materialised CMF, memory is
- * 2*R*V floats plus little and the limit holds, and bad importances are reported. */
+ * (chi-square), a draw from the interpolated PMF is its record's by weight and then that
+ * record's CMF inverted, memory is 2*R*V floats plus little (the neighbour-set memo growing with
+ * R, capped) and the limit holds, and bad importances are reported. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -313,6 +314,55 @@ static void test_memory_and_limit(void **state) {
   free_scene(&sc);
 }
 
+/* The neighbour-set memo grows with the records (~16 entries per record, at least
+ * PC_IREC_CACHE_CELLS per thread, at most 64 MiB over all threads), counts in the bytes held
+ * and the limit, and shrinks again; lookups through it equal those of a twin store asked from
+ * other threads (ASan runs this too: entries stay in their thread's part of the grown table). */
+static void test_memo_grows(void **state) {
+  (void)state;
+  scene sc = make_scene(20, 2000, 8);
+  pc_irec_store *s = build(&sc, NULL), *direct = NULL; /* the twin */
+  pc_err e = {0};
+  const size_t nthreads = 4, entry = 64;
+  size_t mass = 2 * 2000 * 20 * sizeof(float), memo = nthreads * 32768 * entry; /* 16 * 2000 -> 2^15 */
+  assert_true(pc_irec_bytes(s) >= mass + memo && pc_irec_bytes(s) < mass + memo + (1u << 20));
+  assert_true(pc_irec_bytes_needed(s, 2000, 20) == pc_irec_bytes(s));
+  assert_int_equal(pc_irec_create(4, 6, 64u << 20, &direct, &e), PC_OK);
+  assert_int_equal(pc_irec_build(direct, sc.sites, sc.R, sc.V, importance, &sc, NULL, &e), PC_OK);
+  pc_rng r = pc_rng_make(8, 0, PC_STREAM_MISC, 1);
+  int looked = 0;
+  for (int q = 0; q < 2000; q++) {
+    /* near the records, so that many lookups share a cell and hit the memo */
+    pc_irec_site z = sc.sites[q % 50];
+    z.p = v3_add(z.p, v3_scale(rand_point(&r), 0.01f));
+    pc_irec_lookup a, b;
+    pc_irec_lookup_cached(s, q % 4, &z, 6, 0.1f, &a);
+    pc_irec_lookup_cached(direct, 3 - q % 4, &z, 6, 0.1f, &b);
+    assert_int_equal(a.n, b.n);
+    for (int j = 0; j < a.n; j++) {
+      assert_true(a.w[j] == b.w[j]);
+      assert_memory_equal(a.pmf[j], b.pmf[j], 20 * sizeof(float));
+    }
+    looked += a.n > 0;
+  }
+  assert_true(looked > 1000);
+  /* a build of far fewer records gives the memory back */
+  assert_int_equal(pc_irec_build(s, sc.sites, 30, sc.V, importance, &sc, NULL, &e), PC_OK);
+  assert_true(pc_irec_bytes(s) < mass + nthreads * PC_IREC_CACHE_CELLS * entry + (1u << 20));
+  pc_irec_destroy(direct);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+
+  /* 16 threads and 20000 records would want 2^19 entries each: capped at 64 MiB in all */
+  sc = make_scene(2, 20000, 9);
+  assert_int_equal(pc_irec_create(16, 6, 1u << 30, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, sc.sites, sc.R, sc.V, importance, &sc, NULL, &e), PC_OK);
+  size_t cap = (size_t)64 << 20, rest = pc_irec_bytes(s) - cap;
+  assert_true(pc_irec_bytes(s) > cap && rest < (4u << 20));
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
 static void test_bad_importance(void **state) {
   (void)state;
   scene sc = make_scene(20, 50, 6);
@@ -568,7 +618,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
       cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_mixture_draw_equals_scan),
-      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
+      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_memo_grows),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
       cmocka_unit_test(test_fallbacks),         cmocka_unit_test(test_resample),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
