@@ -34,7 +34,7 @@ typedef struct pc_render_settings {
   int pcbpt_k;             /* connections per eye vertex */
   int pcbpt_candidates;    /* candidates drawn from p_conn and resampled per eye vertex (1: none) */
   pc_candidate_visibility candidate_visibility;
-  float cache_fraction;    /* importance-record eye paths as a fraction of W*H (0.004) */
+  float cache_fraction;    /* importance-record eye paths per pixel (0.004; pc_cache_path_count) */
   int knn;                 /* records interpolated per lookup (6) */
   float uniform_mix;       /* weight of the uniform PMF blended into p_conn */
   pc_mis_mode mis_mode;

@@ -12,7 +12,10 @@
 
 static void test_count(void **state) {
   (void)state;
-  assert_int_equal(pc_cache_path_count(0.004f, 256, 256), 263);
+  assert_int_equal(pc_cache_path_count(0.004f, 128, 128), 66);   /* every pixel counts up to 128x128 */
+  assert_int_equal(pc_cache_path_count(0.004f, 256, 256), 132);  /* then the square root: 0.004 * 128 * 256 */
+  assert_int_equal(pc_cache_path_count(0.004f, 1920, 1080), 738); /* 0.004 * sqrt(16384 * 2073600) = 737.3 */
+  assert_int_equal(pc_cache_path_count(1.f, 200, 200), 25600);    /* sqrt(16384 * 40000) */
   assert_int_equal(pc_cache_path_count(1e-9f, 16, 16), 1);
   assert_int_equal(pc_cache_path_count(1.f, 16, 9), 144);
 }
