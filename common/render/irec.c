@@ -241,10 +241,11 @@ static int reserve(pc_irec_store *s, int R, int V, pc_err *e) {
   size_t keep_rec = want_rec > s->rec_cap ? want_rec : s->rec_cap;
   size_t keep_mass = want_mass > s->mass_cap ? want_mass : s->mass_cap;
   size_t keep_scratch = want_scratch > s->scratch_cap ? want_scratch : s->scratch_cap;
-  /* The memo grows with the records, and shrinks only by more than a step: R varies from one
-   * iteration to the next, and each resize clears it. */
+  /* The memo grows with the records, and shrinks only by more than a step (R varies from one
+   * iteration to the next, and each resize clears it) while the larger one fits the limit. */
   int bits = memo_bits(s, R);
-  if (bits == s->cache_bits - 1) bits = s->cache_bits;
+  if (bits == s->cache_bits - 1 && bytes_for(s, want_rec, want_mass, want_scratch, s->cache_bits) <= s->max_bytes)
+    bits = s->cache_bits;
   if (bytes_for(s, keep_rec, keep_mass, keep_scratch, bits) > s->max_bytes) release_buffers(s);
   int rc = resize_memo(s, bits, e);
   if (rc != PC_OK) return rc;

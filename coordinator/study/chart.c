@@ -247,13 +247,13 @@ static void draw_bars(cairo_t *cr, const pc_chart *c, double fs) {
 }
 
 static void draw(cairo_t *cr, const pc_chart *c) {
-  double fs = fmax(9, fmin(c->width, c->height) / 40.0);
-  if (c->bars) {
-    cairo_set_source_rgb(cr, 1, 1, 1);
-    cairo_paint(cr);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  if (c->bars) { /* its height follows the bar count, so the font follows the width alone */
     draw_bars(cr, c, fmax(9, fmin(c->width, 560) / 40.0));
     return;
   }
+  double fs = fmax(9, fmin(c->width, c->height) / 40.0);
   double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
   for (int s = 0; s < c->nseries; s++)
     for (int i = 0; i < c->series[s].n; i++) {
@@ -267,8 +267,6 @@ static void draw(cairo_t *cr, const pc_chart *c) {
   decades(xlo, xhi, &f.dx_lo, &f.dx_hi);
   decades(ylo, yhi, &f.dy_lo, &f.dy_hi);
 
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
   set_font(cr, fs);
   draw_axes(cr, &f, fs);
   cairo_save(cr);

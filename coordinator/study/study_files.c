@@ -219,6 +219,18 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
   return out_commit(&o, e);
 }
 
+/* <dir>/<leaf>.png and <dir>/<leaf>.svg of the same chart. */
+static int write_png_and_svg(const pc_chart *c, const char *dir, const char *leaf, pc_err *e) {
+  char path[4096];
+  int rc = PC_OK;
+  for (int k = 0; k < 2 && rc == PC_OK; k++) {
+    int n = snprintf(path, sizeof path, "%s/%s.%s", dir, leaf, k ? "svg" : "png");
+    if (n < 0 || (size_t)n >= sizeof path) rc = pc_errf(e, PC_EINVAL, "%s: path too long", dir);
+    else rc = k ? pc_chart_write_svg(c, path, e) : pc_chart_write_png(c, path, e);
+  }
+  return rc;
+}
+
 int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nruns, int slot,
                          const pc_study_band *const *bands, pc_err *e) {
   pc_chart_series series[PC_STUDY_MAX_METHODS];
@@ -240,7 +252,7 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
     }
     ns++;
   }
-  char title[512], path[4096];
+  char title[512];
   char xlabel[128] = "render time (s)";
   if (info->workers > 0)
     snprintf(xlabel, sizeof xlabel, "render time on %d worker%s (worker-seconds / %d)", info->workers,
@@ -251,12 +263,9 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
   pc_chart c = {.title = title, .x_label = xlabel,
                 .y_label = info->reference_path ? "relMSE" : "estimated relMSE", .width = 800, .height = 560,
                 .series = series, .nseries = ns};
-  int rc = PC_OK;
-  for (int k = 0; k < 2 && rc == PC_OK; k++) {
-    int n = snprintf(path, sizeof path, "%s/study_%s.%s", dir, pc_study_layer_name(slot), k ? "svg" : "png");
-    if (n < 0 || (size_t)n >= sizeof path) rc = pc_errf(e, PC_EINVAL, "%s: path too long", dir);
-    else rc = k ? pc_chart_write_svg(&c, path, e) : pc_chart_write_png(&c, path, e);
-  }
+  char leaf[64];
+  snprintf(leaf, sizeof leaf, "study_%s", pc_study_layer_name(slot));
+  int rc = write_png_and_svg(&c, dir, leaf, e);
   free(xy);
   return rc;
 }
@@ -293,17 +302,12 @@ int pc_study_write_shares_chart(const char *dir, const pc_study_info *info, cons
   static const char *const parts[PC_LAYER_STD_COUNT] = {"pt: emitter hits (s=0)", "nee (s=1)", "lt (t=1)",
                                                         "inner (s,t>=2)"};
   pc_chart_bars bars = {.rows = rows, .parts = parts, .value = value, .nrows = n, .nparts = PC_LAYER_STD_COUNT};
-  char title[512], path[4096];
+  char title[512];
   snprintf(title, sizeof title, "%s: strategies carrying the final images (share of the mean luminance)",
            info->scene_name);
   pc_chart c = {.title = title, .x_label = "share of the image's mean luminance", .width = 800,
                 .height = 150 + 30 * n, .bars = &bars};
-  int rc = PC_OK;
-  for (int k = 0; k < 2 && rc == PC_OK; k++) {
-    int len = snprintf(path, sizeof path, "%s/study_shares.%s", dir, k ? "svg" : "png");
-    if (len < 0 || (size_t)len >= sizeof path) rc = pc_errf(e, PC_EINVAL, "%s: path too long", dir);
-    else rc = k ? pc_chart_write_svg(&c, path, e) : pc_chart_write_png(&c, path, e);
-  }
+  int rc = write_png_and_svg(&c, dir, "study_shares", e);
   *written = rc == PC_OK;
   return rc;
 }
