@@ -303,6 +303,7 @@ typedef struct scene_study {
   /* runs[size][run][method] */
   pc_study_run *runs;
   bool shares_chart; /* study_shares.svg was written */
+  bool iterations_chart; /* study_iterations.svg was written */
 } scene_study;
 
 static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int run, int m) {
@@ -418,6 +419,22 @@ static void print_tails(FILE *f, const study_args *a, scene_study *s, int big) {
       }
       fprintf(f, "%-10s %4d %10llu %8zu %10.3g %10.3g %10.3g  (%d, %d)\n", run->method.name, r + 1,
               (unsigned long long)t->iterations, t->pixels, t->p50, t->p99, t->max, t->max_x, t->max_y);
+    }
+  fprintf(f, "error of each iteration: its image's relMSE against the final image over a %dx%d grid of blocks, of the "
+             "first %u iterations; top 1%%: the share of their summed error its worst 1%% carry (1%%: all alike)\n",
+          PC_TRACE_GRID, PC_TRACE_GRID, PC_TRACE_ITERATIONS);
+  fprintf(f, "%-10s %4s %8s %10s %10s %10s %10s %9s %8s %10s\n", "method", "run", "n", "mean", "p50", "p99", "max",
+          "max/mean", "top 1%", "worst");
+  for (int r = 0; r < a->runs; r++)
+    for (int m = 0; m < a->nmethods; m++) {
+      const pc_study_run *run = run_at(a, s, big, r, m);
+      const pc_iteration_errors *ie = &run->tails.iter;
+      if (!run->tails.iter_known) {
+        fprintf(f, "%-10s %4d  (cannot tell: the image traced fewer than 2 iterations)\n", run->method.name, r + 1);
+        continue;
+      }
+      fprintf(f, "%-10s %4d %8u %10.3g %10.3g %10.3g %10.3g %9.3g %7.1f%% %10u\n", run->method.name, r + 1, ie->n,
+              ie->mean, ie->p50, ie->p99, ie->max, ie->mean > 0 ? ie->max / ie->mean : NAN, 100 * ie->top1, ie->worst);
     }
 }
 
@@ -552,6 +569,7 @@ static int write_scene(const study_args *a, scene_study *s, FILE *f, pc_err *e) 
   if (!rc) rc = pc_study_write_chart(s->dir, &info, med, a->nmethods, PC_STUDY_BEAUTY, bands, e);
   if (!rc && s->ref.rgb[1 + PC_LAYER_INNER]) rc = pc_study_write_chart(s->dir, &info, med, a->nmethods, 1 + PC_LAYER_INNER, bands, e);
   if (!rc) rc = pc_study_write_shares_chart(s->dir, &info, run_at(a, s, big, 0, 0), a->nmethods, &s->shares_chart, e);
+  if (!rc) rc = pc_study_write_iterations_chart(s->dir, &info, run_at(a, s, big, 0, 0), a->nmethods, &s->iterations_chart, e);
   if (!rc) {
     fprintf(f, "%s (%s), %d worker%s, %lld run%s, %g s per method:\n", s->name, s->path, a->workers[big],
             a->workers[big] > 1 ? "s" : "", a->runs, a->runs > 1 ? "s" : "", a->seconds);
@@ -638,7 +656,8 @@ static int study_scene(const study_args *a, pc_study_farm *farm, int k, pc_repor
     pc_report_scene sc = {.name = s.name, .path = s.path, .dir = s.dir, .tables = text,
                           .reference = s.ref.estimated ? NULL : s.ref.rgb[PC_STUDY_BEAUTY], .w = s.ref.w, .h = s.ref.h,
                           .methods = a->methods, .nmethods = a->nmethods, .scaling = a->nsizes > 1,
-                          .inner = s.ref.rgb[1 + PC_LAYER_INNER] != NULL, .shares = s.shares_chart};
+                          .inner = s.ref.rgb[1 + PC_LAYER_INNER] != NULL, .shares = s.shares_chart,
+                          .iterations = s.iterations_chart};
     rc = pc_report_add_scene(report, &sc, e);
   }
   free(text);

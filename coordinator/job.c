@@ -77,11 +77,27 @@ static void queue_op(pc_job *j, pc_op *op) {
   if (!j->busy) op_start(j);
 }
 
+/* The iterations of an upload of [first, first + count) its trace holds: those below the bound. */
+static uint32_t upload_traced(uint64_t first, uint64_t count) {
+  if (first >= PC_TRACE_ITERATIONS) return 0;
+  uint64_t below = PC_TRACE_ITERATIONS - first;
+  return (uint32_t)(count < below ? count : below);
+}
+
 /* An upload's per-layer counts must be those of op->count iterations: eye layers count the
- * iterations, light layers the same light paths per iteration as every upload before. */
-static int judge_counts(void *user, const uint64_t *counts, pc_err *e) {
+ * iterations, light layers the same light paths per iteration as every upload before; its trace
+ * must hold exactly its iterations below the trace's bound. */
+static int judge_counts(void *user, const pc_wire_film_counts *c, pc_err *e) {
   pc_op *op = user;
   const pc_film *f = &op->j->film;
+  const uint64_t *counts = c->counts;
+  uint32_t want = upload_traced(op->first, op->count);
+  bool exact = c->ntraced == want;
+  for (uint32_t k = 0; k < c->ntraced && exact; k++) exact = c->traced[k] >= op->first && c->traced[k] - op->first < want;
+  if (!exact) /* no duplicates (the film's check), so n in-range records are the n iterations */
+    return pc_errf(e, PC_EINVAL, "upload of iterations %llu..%llu: its trace holds %u iterations, not exactly its %u below %u",
+                   (unsigned long long)op->first, (unsigned long long)(op->first + op->count - 1), c->ntraced, want,
+                   PC_TRACE_ITERATIONS);
   for (int l = 0; l < f->nlayers; l++) {
     uint64_t cnt = counts[l];
     if (f->layers[l].norm != PC_NORM_LIGHT) {
@@ -175,7 +191,7 @@ void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
 static void merge_work(uv_work_t *w) {
   pc_op *op = w->data;
   pc_job *j = op->j;
-  size_t want = pc_wire_film_size(&j->film);
+  size_t want = pc_wire_film_size_traced(&j->film, upload_traced(op->first, op->count));
   if (op->raw != want) {
     op->rc = pc_errf(&op->err, PC_EINVAL, "upload of %llu bytes, a %dx%d film with %d layers is %zu (wrong resolution?)",
                      (unsigned long long)op->raw, j->film.w, j->film.h, j->film.nlayers, want);

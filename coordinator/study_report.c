@@ -191,6 +191,12 @@ int pc_report_add_scene(pc_report *r, const pc_report_scene *s, pc_err *e) {
                 "share of each image's mean luminance per strategy layer: where the light is, not where the error is",
                 NULL, 640, e);
   }
+  if (!rc && s->iterations) {
+    fputs("<h3>Stability: the error of single iterations</h3>\n", f);
+    rc = figure(f, s->dir, "study_iterations.svg", "image/svg+xml",
+                "how often one iteration's error exceeds a multiple of the mean: a heavy tail (fireflies) reaches far right",
+                NULL, 640, e);
+  }
   if (!rc) fputs("<h3>Images at the end of the budget</h3>\n", f);
   for (int m = 0; m < s->nmethods && !rc; m++) {
     char leaf[64];

@@ -26,6 +26,7 @@ typedef struct pc_report_scene {
   const pc_study_method *methods;
   int nmethods;
   bool scaling, inner, shares; /* study_scaling.svg, study_inner.svg, study_shares.svg were written */
+  bool iterations;             /* study_iterations.svg was written */
 } pc_report_scene;
 
 int pc_report_begin(pc_report *r, const char *path, pc_err *e);

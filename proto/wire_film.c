@@ -6,7 +6,10 @@
  * read, so checkpoints of older coordinators load, and so is a checkpoint without the film's
  * last layers, beauty_sq and beauty_max, or beauty_max alone (written before they existed): it
  * loads with them empty, and the job's error estimate and largest iterations say they cannot
- * tell (film.h). Uploads must be whole. beauty_max merges by max, every other layer by sum. */
+ * tell (film.h). Uploads must be whole. beauty_max merges by max, every other layer by sum.
+ * PCFILM03 adds the film's trace (film_trace.h): its record count and blocks per record in the
+ * header, the records (iteration, then its block means as floats) after the last layer; a
+ * film of an older format loads with no trace. */
 #include "wire_film.h"
 
 #include <math.h>
@@ -16,7 +19,9 @@
 
 #define MAGIC_V1 "PCFILM01"
 #define MAGIC_V2 "PCFILM02"
+#define MAGIC_V3 "PCFILM03"
 #define HEAD (8 + 4 * 3 + 8)
+#define HEAD3 (HEAD + 4 + 4)
 #define LAYER_HEAD (16 + 4 + 8)
 #define PLANE_BLOCK 2048
 /* Fast: films are compressed on the render machines for every upload and on the
@@ -29,12 +34,16 @@ static void put64(uint8_t *p, uint64_t v) { for (int i = 0; i < 8; i++) p[i] = (
 static uint32_t get32(const uint8_t *p) { uint32_t v = 0; for (int i = 3; i >= 0; i--) v = v << 8 | p[i]; return v; }
 static uint64_t get64(const uint8_t *p) { uint64_t v = 0; for (int i = 7; i >= 0; i--) v = v << 8 | p[i]; return v; }
 
-static size_t size_of(const pc_film *f, int nlayers) {
+static size_t record_size(const pc_film *f) { return 4 + 4 * (size_t)pc_trace_blocks(f->w, f->h); }
+
+/* A serialized film of f's shape: nlayers of its layers and, when v3, ntrace trace records. */
+static size_t size_of(const pc_film *f, int nlayers, bool v3, uint32_t ntrace) {
   size_t px = (size_t)f->w * (size_t)f->h * 3;
-  return HEAD + (size_t)nlayers * (LAYER_HEAD + px * 8);
+  return (v3 ? HEAD3 : HEAD) + (size_t)nlayers * (LAYER_HEAD + px * 8) + (v3 ? ntrace * record_size(f) : 0);
 }
 
-size_t pc_wire_film_size(const pc_film *f) { return size_of(f, f->nlayers); }
+size_t pc_wire_film_size(const pc_film *f) { return size_of(f, f->nlayers, true, f->trace.n); }
+size_t pc_wire_film_size_traced(const pc_film *like, uint32_t ntrace) { return size_of(like, like->nlayers, true, ntrace); }
 
 /* Plane by plane, so the loops vectorize. */
 static void put_block(uint8_t *d, const double *v, size_t m) {
@@ -82,12 +91,14 @@ static size_t first_over(const uint8_t *d, bool planes, size_t m, unsigned max_e
   return m;
 }
 
-/* The header: magic, shape, dropped samples, then each layer's name, norm and count. */
+/* The header: magic, shape, dropped samples, trace records and blocks per record, then each
+ * layer's name, norm and count. */
 static size_t put_header(const pc_film *f, uint8_t *p) {
   uint8_t *start = p;
-  memcpy(p, MAGIC_V2, 8); p += 8;
+  memcpy(p, MAGIC_V3, 8); p += 8;
   put32(p, (uint32_t)f->w); put32(p + 4, (uint32_t)f->h); put32(p + 8, (uint32_t)f->nlayers); p += 12;
   put64(p, f->dropped_nonfinite); p += 8;
+  put32(p, f->trace.n); put32(p + 4, (uint32_t)pc_trace_blocks(f->w, f->h)); p += 8;
   for (int l = 0; l < f->nlayers; l++, p += LAYER_HEAD) {
     memset(p, 0, 16);
     memcpy(p, f->layers[l].name, strnlen(f->layers[l].name, 16));
@@ -95,6 +106,17 @@ static size_t put_header(const pc_film *f, uint8_t *p) {
     put64(p + 20, f->layers[l].count);
   }
   return (size_t)(p - start);
+}
+
+/* Trace record k: its iteration, then its block means (float bits, little-endian). */
+static void put_record(const pc_film *f, uint32_t k, uint8_t *p) {
+  int nb = pc_trace_blocks(f->w, f->h);
+  put32(p, f->trace.iteration[k]);
+  for (int b = 0; b < nb; b++) {
+    uint32_t bits;
+    memcpy(&bits, &f->trace.block[(size_t)k * (size_t)nb + (size_t)b], 4);
+    put32(p + 4 + 4 * (size_t)b, bits);
+  }
 }
 
 void pc_wire_film_pack_to(const pc_film *f, uint8_t *out) {
@@ -106,6 +128,7 @@ void pc_wire_film_pack_to(const pc_film *f, uint8_t *out) {
       put_block(p, f->layers[l].sum + k, m);
       p += 8 * m;
     }
+  for (uint32_t k = 0; k < f->trace.n; k++, p += record_size(f)) put_record(f, k, p);
 }
 
 int pc_wire_film_pack(const pc_film *f, uint8_t **out, size_t *n, pc_err *e) {
@@ -212,23 +235,42 @@ static int src_end(film_src *s, pc_err *e) {
   return 0;
 }
 
-/* Reads and checks a serialized film's header against the shape of `like`; *planes tells the
- * format, *nl how many of like's layers it holds (all, or with `whole` false maybe all but
- * the per-iteration layers at the end), counts[] and *dropped its counts. */
-static int read_header(film_src *s, const pc_film *like, bool whole, bool *planes, int *nlp, uint64_t *counts,
-                       uint64_t *dropped, pc_err *e) {
+/* What a serialized film's header says beyond its counts. */
+typedef struct film_head {
+  bool planes;     /* sums as byte planes (v2, v3) */
+  int nl;          /* of like's layers it holds */
+  uint32_t ntrace; /* trace records after the layers (v3) */
+  uint64_t dropped;
+} film_head;
+
+/* Reads and checks a serialized film's header against the shape of `like`: the layers it holds
+ * (all, or with `whole` false maybe all but the per-iteration layers at the end), counts[]. */
+static int read_header(film_src *s, const pc_film *like, bool whole, film_head *hd, uint64_t *counts, pc_err *e) {
   const uint8_t *buf = s->total >= HEAD ? src_read(s, HEAD, e) : NULL;
   if (!buf && s->total >= HEAD) return e->code;
-  bool v1 = buf && memcmp(buf, MAGIC_V1, 8) == 0, v2 = buf && memcmp(buf, MAGIC_V2, 8) == 0;
-  if (!v1 && !v2) return pc_errf(e, PC_EPARSE, "film: not a serialized film (bad magic or %zu bytes)", s->total);
+  bool v1 = buf && memcmp(buf, MAGIC_V1, 8) == 0, v2 = buf && memcmp(buf, MAGIC_V2, 8) == 0,
+       v3 = buf && memcmp(buf, MAGIC_V3, 8) == 0;
+  if (!v1 && !v2 && !v3) return pc_errf(e, PC_EPARSE, "film: not a serialized film (bad magic or %zu bytes)", s->total);
   uint32_t w = get32(buf + 8), h = get32(buf + 12), nl = get32(buf + 16);
-  *dropped = get64(buf + 20);
+  hd->dropped = get64(buf + 20);
+  hd->ntrace = 0;
   if ((int)w != like->w || (int)h != like->h)
     return pc_errf(e, PC_EINVAL, "film: resolution %ux%u, the job has %dx%d", w, h, like->w, like->h);
   if ((int)nl != like->nlayers && (whole || (int)nl < pc_film_per_iteration_first(like) || (int)nl > like->nlayers))
     return pc_errf(e, PC_EINVAL, "film: %u layers, the job has %d", nl, like->nlayers);
-  if (s->total != size_of(like, (int)nl))
-    return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", s->total, size_of(like, (int)nl));
+  if (v3) {
+    const uint8_t *t = s->total >= HEAD3 ? src_read(s, HEAD3 - HEAD, e) : NULL;
+    if (!t) return s->total >= HEAD3 ? e->code : pc_errf(e, PC_EINVAL, "film: %zu bytes, expected more", s->total);
+    hd->ntrace = get32(t);
+    uint32_t nb = get32(t + 4);
+    if (hd->ntrace > PC_TRACE_ITERATIONS)
+      return pc_errf(e, PC_ELIMIT, "film: %u traced iterations, at most %u", hd->ntrace, PC_TRACE_ITERATIONS);
+    if (nb != (uint32_t)pc_trace_blocks(like->w, like->h))
+      return pc_errf(e, PC_EINVAL, "film: %u trace blocks, a %dx%d film has %d", nb, like->w, like->h,
+                     pc_trace_blocks(like->w, like->h));
+  }
+  size_t want = size_of(like, (int)nl, v3, hd->ntrace);
+  if (s->total != want) return pc_errf(e, PC_EINVAL, "film: %zu bytes, expected %zu", s->total, want);
   const uint8_t *p = src_read(s, (size_t)nl * LAYER_HEAD, e);
   if (!p) return e->code;
   for (int l = 0; l < (int)nl; l++, p += LAYER_HEAD) {
@@ -238,8 +280,24 @@ static int read_header(film_src *s, const pc_film *like, bool whole, bool *plane
       return pc_errf(e, PC_EINVAL, "film: layer %d is '%s', the job has '%s'", l, name, like->layers[l].name);
     counts[l] = get64(p + 20);
   }
-  *planes = v2;
-  *nlp = (int)nl;
+  hd->planes = v2 || v3;
+  hd->nl = (int)nl;
+  return 0;
+}
+
+/* The next trace record: its iteration and (into `block`, may be NULL) its block means. */
+static int read_record(film_src *s, const pc_film *like, uint32_t *it, float *block, pc_err *e) {
+  int nb = pc_trace_blocks(like->w, like->h);
+  const uint8_t *p = src_read(s, record_size(like), e);
+  if (!p) return e->code;
+  *it = get32(p);
+  for (int b = 0; b < nb; b++) {
+    uint32_t bits = get32(p + 4 + 4 * (size_t)b);
+    float v;
+    memcpy(&v, &bits, 4);
+    if (!isfinite(v)) return pc_errf(e, PC_ENUMERIC, "film: non-finite trace value of iteration %u", *it);
+    if (block) block[b] = v;
+  }
   return 0;
 }
 
@@ -249,11 +307,13 @@ static int read_header(film_src *s, const pc_film *like, bool whole, bool *plane
  * - 1; a maximum is under the same bound as a sum), before anything is read into a film. A
  * delta holds every layer; a checkpoint may be one written before beauty_sq or beauty_max (*nl
  * tells). */
-static int check(film_src *s, const pc_film *like, bool bounded, bool *planes, int *nl, uint64_t *counts, pc_err *e) {
-  uint64_t dropped;
-  int rc = read_header(s, like, bounded, planes, nl, counts, &dropped, e);
+static int check(film_src *s, const pc_film *like, bool bounded, film_head *hd, uint64_t *counts, uint32_t *traced,
+                 pc_err *e) {
+  int rc = read_header(s, like, bounded, hd, counts, e);
   if (rc) return rc;
   size_t px = (size_t)like->w * (size_t)like->h * 3;
+  bool planes = hd->planes;
+  int *nl = &hd->nl;
   for (int l = 0; l < *nl; l++) {
     unsigned bits = 0, sample_log2 = like->layers[l].norm == PC_NORM_SQUARE ? 2 * PC_WIRE_SAMPLE_LOG2 : PC_WIRE_SAMPLE_LOG2;
     while (bits < 64 && counts[l] >> bits) bits++;
@@ -262,13 +322,26 @@ static int check(film_src *s, const pc_film *like, bool bounded, bool *planes, i
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
       const uint8_t *d = src_read(s, 8 * m, e);
       if (!d) return e->code;
-      size_t i = first_over(d, *planes, m, max_exp);
-      if (i < m && first_over(d, *planes, m, 0x7fe) == i)
+      size_t i = first_over(d, planes, m, max_exp);
+      if (i < m && first_over(d, planes, m, 0x7fe) == i)
         return pc_errf(e, PC_ENUMERIC, "film: non-finite sum in layer %d at pixel %zu", l, (k + i) / 3);
       if (i < m)
         return pc_errf(e, PC_ENUMERIC, "film: a sum in layer %d at pixel %zu is beyond any radiance for %llu samples", l,
                        (k + i) / 3, (unsigned long long)counts[l]);
     }
+  }
+  /* the trace: every iteration once, below the bound, and (merging) not in `like` already */
+  uint64_t seen[PC_TRACE_ITERATIONS / 64] = {0};
+  for (uint32_t k = 0; k < hd->ntrace; k++) {
+    uint32_t it;
+    if ((rc = read_record(s, like, &it, NULL, e)) != 0) return rc;
+    if (it >= PC_TRACE_ITERATIONS)
+      return pc_errf(e, PC_EINVAL, "film: traced iteration %u, only the first %u are", it, PC_TRACE_ITERATIONS);
+    if (seen[it / 64] >> (it % 64) & 1u) return pc_errf(e, PC_EINVAL, "film: iteration %u traced twice", it);
+    if (bounded && pc_trace_has(&like->trace, it))
+      return pc_errf(e, PC_EINVAL, "film: iteration %u is traced already", it);
+    seen[it / 64] |= (uint64_t)1 << (it % 64);
+    traced[k] = it;
   }
   return src_end(s, e);
 }
@@ -277,17 +350,24 @@ static int check(film_src *s, const pc_film *like, bool bounded, bool *planes, i
  * passed check() and judge, so `into` is unchanged on error; the second pass reads the same
  * bytes again. */
 static int apply(film_src *s, pc_film *into, bool add, pc_wire_counts_judge judge, void *user, pc_err *e) {
-  bool planes = false;
-  int nl = 0;
-  uint64_t counts[PC_FILM_MAX_LAYERS], dropped;
-  int rc = check(s, into, add, &planes, &nl, counts, e);
-  if (!rc && judge) rc = judge(user, counts, e);
+  film_head hd = {0};
+  uint64_t counts[PC_FILM_MAX_LAYERS];
+  uint32_t *traced = malloc(PC_TRACE_ITERATIONS * sizeof *traced);
+  if (!traced) return pc_errf(e, PC_ENOMEM, "film: out of memory for a trace");
+  int rc = check(s, into, add, &hd, counts, traced, e);
+  if (!rc && judge) rc = judge(user, &(pc_wire_film_counts){counts, traced, hd.ntrace}, e);
+  free(traced);
+  int nb = pc_trace_blocks(into->w, into->h);
+  /* room for the trace before anything changes */
+  if (!rc) rc = pc_trace_reserve(&into->trace, (add ? into->trace.n : 0) + hd.ntrace, nb, e);
   if (rc) return rc;
   src_rewind(s);
-  if ((rc = read_header(s, into, add, &planes, &nl, counts, &dropped, e)) != 0) return rc;
+  if ((rc = read_header(s, into, add, &hd, counts, e)) != 0) return rc;
+  int nl = hd.nl;
+  bool planes = hd.planes;
   size_t px = (size_t)into->w * (size_t)into->h * 3;
   double v[PLANE_BLOCK];
-  into->dropped_nonfinite = add ? into->dropped_nonfinite + dropped : dropped;
+  into->dropped_nonfinite = add ? into->dropped_nonfinite + hd.dropped : hd.dropped;
   for (int l = 0; l < nl; l++) into->layers[l].count = (add ? into->layers[l].count : 0) + counts[l];
   for (int l = nl; l < into->nlayers; l++) { /* an old checkpoint's missing beauty_sq, beauty_max (set only) */
     into->layers[l].count = 0;
@@ -306,6 +386,13 @@ static int apply(film_src *s, pc_film *into, bool add, pc_wire_counts_judge judg
       else if (add)
         for (size_t i = 0; i < m; i++) sum[i] += v[i];
     }
+  if (!add) pc_trace_clear(&into->trace);
+  float block[PC_TRACE_MAX_BLOCKS];
+  for (uint32_t k = 0; k < hd.ntrace; k++) {
+    uint32_t it;
+    if ((rc = read_record(s, into, &it, block, e)) != 0) return rc;
+    pc_trace_put(&into->trace, nb, it, block);
+  }
   return 0;
 }
 
@@ -349,11 +436,12 @@ int pc_wire_film_compress(const pc_film *f, pc_wire_sink sink, void *user, size_
   if (!rc && (ZSTD_isError(ZSTD_CCtx_setParameter(cc, ZSTD_c_compressionLevel, ZSTD_LEVEL)) ||
               ZSTD_isError(ZSTD_CCtx_setPledgedSrcSize(cc, pc_wire_film_size(f)))))
     rc = pc_errf(e, PC_EIO, "zstd: cannot set up the compression stream");
-  size_t fill = rc ? 0 : put_header(f, stage), total = 0;
+  size_t fill = rc ? 0 : put_header(f, stage), total = 0, rs = record_size(f);
   int l = 0;
   size_t k = 0;
+  uint32_t r = 0;
   while (!rc) {
-    /* stage blocks until the next would not fit, or the film is done */
+    /* stage blocks, then trace records, until the next would not fit, or the film is done */
     while (l < f->nlayers) {
       size_t m = px - k < PLANE_BLOCK ? px - k : PLANE_BLOCK;
       if (fill + 8 * m > cap) break;
@@ -361,7 +449,8 @@ int pc_wire_film_compress(const pc_film *f, pc_wire_sink sink, void *user, size_
       fill += 8 * m;
       if ((k += m) >= px) k = 0, l++;
     }
-    bool last = l == f->nlayers;
+    for (; l == f->nlayers && r < f->trace.n && fill + rs <= cap; r++, fill += rs) put_record(f, r, stage + fill);
+    bool last = l == f->nlayers && r == f->trace.n;
     ZSTD_inBuffer in = {stage, fill, 0};
     size_t left;
     do {

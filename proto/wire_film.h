@@ -15,6 +15,8 @@
 #define PC_WIRE_FILM_MAX ((size_t)1 << 34)
 
 size_t pc_wire_film_size(const pc_film *f);
+/* The size of a serialized film of like's shape and layers with ntrace trace records. */
+size_t pc_wire_film_size_traced(const pc_film *like, uint32_t ntrace);
 /* Serializes f (little-endian, layer by layer, sums as byte planes) into out, which holds
  * pc_wire_film_size(f) bytes; pc_wire_film_pack into a malloc'd buffer. */
 void pc_wire_film_pack_to(const pc_film *f, uint8_t *out);
@@ -28,12 +30,19 @@ int pc_wire_film_unpack(const uint8_t *buf, size_t n, pc_film *into, pc_err *e);
  * radiance comes near): larger finite sums would add to infinity or overflow the image's
  * floats, so pc_wire_film_add refuses them. */
 #define PC_WIRE_SAMPLE_LOG2 64
-/* Judges buf's per-layer counts (counts[into->nlayers]) before anything is added: 0 accepts,
- * an error code (with e set) refuses. */
-typedef int (*pc_wire_counts_judge)(void *user, const uint64_t *counts, pc_err *e);
-/* The same checks (a non-finite or unbounded sum is refused before the counts are judged), then judge
- * (NULL: any counts), then adds buf's sums (beauty_max: their max), counts and dropped samples into `into`
- * (unchanged on error): a merge without an intermediate film. */
+/* What a serialized film holds, for a judge to see before anything is added: its per-layer
+ * counts (counts[into->nlayers]) and the iterations its trace holds. */
+typedef struct pc_wire_film_counts {
+  const uint64_t *counts;
+  const uint32_t *traced;
+  uint32_t ntraced;
+} pc_wire_film_counts;
+/* 0 accepts, an error code (with e set) refuses. */
+typedef int (*pc_wire_counts_judge)(void *user, const pc_wire_film_counts *c, pc_err *e);
+/* The same checks (a non-finite or unbounded sum, or a trace record of an iteration `into` traces
+ * already, is refused before the counts are judged), then judge (NULL: any counts), then adds buf's
+ * sums (beauty_max: their max), counts, dropped samples and trace into `into` (unchanged on error):
+ * a merge without an intermediate film. */
 int pc_wire_film_add(const uint8_t *buf, size_t n, pc_film *into, pc_wire_counts_judge judge, void *user, pc_err *e);
 
 /* pc_wire_film_add of a zstd frame of a serialized film (an upload), decompressed twice through

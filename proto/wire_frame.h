@@ -12,10 +12,11 @@
 #include "pcbpt.pb-c.h"
 #include "wire_seal.h"
 
-#define PC_WIRE_PROTOCOL_VERSION 6u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq;
+#define PC_WIRE_PROTOCOL_VERSION 7u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq;
                                         * 4: sealed frames (wire_seal.h); 5: films end with beauty_max;
                                         * 6: Settings carry pcbpt_candidate_visibility (a worker
-                                        * ignoring it would render another estimator) */
+                                        * ignoring it would render another estimator); 7: films
+                                        * carry their iteration trace (PCFILM03, film_trace.h) */
 #define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's plaintext payload */
 #define PC_WIRE_CHUNK (256u << 10)     /* bulk payload bytes per frame; well under the limit */
 /* A rendering worker uploads what it has at least this often (seconds; a range shorter than

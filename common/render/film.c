@@ -51,6 +51,7 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
 
 void pc_film_free(pc_film *f) {
   for (int i = 0; i < f->nlayers; i++) free(f->layers[i].sum);
+  pc_trace_free(&f->trace);
   memset(f, 0, sizeof *f);
 }
 
@@ -89,6 +90,7 @@ void pc_film_clear(pc_film *f) {
     f->layers[i].count = 0;
   }
   f->dropped_nonfinite = 0;
+  pc_trace_clear(&f->trace);
 }
 
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
@@ -99,6 +101,8 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
     if (strcmp(dst->layers[i].name, src->layers[i].name) != 0)
       return pc_errf(e, PC_EINVAL, "film: layer %d is '%s' here but '%s' in the addend", i, dst->layers[i].name,
                      src->layers[i].name);
+  int rc = pc_trace_append(&dst->trace, &src->trace, pc_trace_blocks(dst->w, dst->h), e);
+  if (rc != PC_OK) return rc;
   size_t n = (size_t)dst->w * dst->h * 3;
   for (int i = 0; i < dst->nlayers; i++) {
     double *d = dst->layers[i].sum;
@@ -254,7 +258,12 @@ int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
         return pc_errf(e, PC_EINVAL, "film mix: part %d's layer %d is '%s', the mix's '%s'", i, l, f->layers[l].name,
                        out->layers[l].name);
   }
+  int heaviest = 0;
+  for (int i = 1; i < n; i++)
+    if (parts[i].weight > parts[heaviest].weight) heaviest = i;
   pc_film_clear(out);
+  int rc = pc_trace_append(&out->trace, &parts[heaviest].film->trace, pc_trace_blocks(out->w, out->h), e);
+  if (rc != PC_OK) return rc;
   size_t nv = (size_t)out->w * out->h * 3;
   bool max_complete = true;
   int q = pc_film_square_layer(out), mx = pc_film_max_layer(out);

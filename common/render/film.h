@@ -9,7 +9,9 @@
  * and channel the largest single iteration's beauty (the same b_i, rounded to single precision):
  * with the mean it tells how much of a pixel one iteration carried (fireflies, docs/variance.md
  * "Heavy tails"). Both count iterations like an eye layer and are shipped and checkpointed like
- * every other layer; beauty_max merges by max, which is exact and order-independent. */
+ * every other layer; beauty_max merges by max, which is exact and order-independent. Beside the
+ * layers, the trace keeps block means of each of the job's first iterations (film_trace.h), shipped
+ * and checkpointed with them, for the distribution of the per-iteration error. */
 #ifndef PC_FILM_H
 #define PC_FILM_H
 
@@ -17,6 +19,7 @@
 #include <stdint.h>
 
 #include "error.h"
+#include "film_trace.h"
 #include "image.h"
 #include "vecmath.h"
 
@@ -46,6 +49,7 @@ typedef struct pc_film {
   pc_film_layer layers[PC_FILM_MAX_LAYERS];
   uint64_t dropped_nonfinite; /* samples that would have added NaN/Inf, counted and dropped */
   int8_t strategy_index[PC_FILM_MAX_ST][PC_FILM_MAX_ST]; /* [s][t] -> layer, -1 if not kept */
+  pc_film_trace trace; /* the iterations below PC_TRACE_ITERATIONS it holds, one record each */
 } pc_film;
 
 /* Creates the four standard layers; with strategy_depth > 0 also one layer per (s,t) with
@@ -69,7 +73,8 @@ int pc_film_per_iteration_first(const pc_film *f);
  * read or merged (the renderer's scratch and per-thread splats), so a job holds the extra
  * layers once per film it keeps, not per thread. */
 void pc_film_drop_per_iteration(pc_film *f);
-/* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max. */
+/* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max; the traces
+ * concatenated (refused, dst unchanged, when an iteration is traced in both). */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
 /* Normalized RGB of layer i into out (w*h*3). */
 void pc_film_layer_image(const pc_film *f, int i, float *out);
@@ -103,11 +108,15 @@ typedef struct pc_film_part {
 /* Makes out (initialized with the parts' shape and layers) the mix of the parts: each image
  * layer the weighted sum of the parts' images, the counts the sums of the counts of the parts
  * with a weight, beauty_sq such that pc_film_variance gives the sum of weight^2 x each part's
- * variance (unknown when one part's is), beauty_max the largest of theirs. The weights are the
- * caller's to make sum to 1. */
+ * variance (unknown when one part's is), beauty_max the largest of theirs, the trace that of the
+ * part with the largest weight (the parts are other estimators, their iterations other
+ * distributions). The weights are the caller's to make sum to 1. */
 int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e);
 /* What pc_film_relmse_estimate would give for the mix, without making it. */
 bool pc_film_mix_relmse_estimate(const pc_film_part *parts, int n, double *out);
+/* The distribution of the per-iteration error of the film's traced iterations against its own
+ * image (film_trace.h); false (out zeroed) with fewer than 2 traced iterations or out of memory. */
+bool pc_film_iteration_errors(const pc_film *f, pc_iteration_errors *out);
 /* True if every sum is finite. */
 bool pc_film_is_finite(const pc_film *f);
 

@@ -1,8 +1,11 @@
 /* film_exr.c: writes a film as a multi-layer EXR: the beauty in R,G,B, every layer
  * normalized by its own count as <layer>.R/G/B (beauty_max as it is, the largest iteration), the per-pixel variance of the beauty's mean as
  * variance.R/G/B, and each layer's count (pcbpt.count.<layer>) and the estimated relMSE
- * (pcbpt.relmse_estimate) in the header, so a reader can recover the sums and knows the error. */
+ * (pcbpt.relmse_estimate) in the header, so a reader can recover the sums and knows the error;
+ * and, when the film traced 2 or more iterations, the distribution of the per-iteration error
+ * (pcbpt.iteration_error.*, film_trace.h). */
 #include <stdio.h>
+#include <string.h>
 #include <stdlib.h>
 
 #include "film.h"
@@ -12,7 +15,8 @@ int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *ext
   int nl = f->nlayers + 1; /* the beauty, every layer but beauty_sq, and the variance */
   float *pix = malloc(sizeof(float) * n * (size_t)nl);
   pc_exr_layer *layers = calloc((size_t)nl, sizeof *layers);
-  pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 2 + nextra), sizeof *attrs);
+  enum { ITER_ATTRS = 9 };
+  pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 2 + ITER_ATTRS + nextra), sizeof *attrs);
   char(*names)[40] = calloc((size_t)f->nlayers, sizeof *names);
   int rc;
   if (!pix || !layers || !attrs || !names) {
@@ -42,6 +46,17 @@ int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *ext
     attrs[na++] = (pc_exr_attr){.name = "pcbpt.relmse_estimate", .type = PC_ATTR_DOUBLE, .d = relmse};
   }
   attrs[na++] = (pc_exr_attr){.name = "pcbpt.dropped_nonfinite", .type = PC_ATTR_DOUBLE, .d = (double)f->dropped_nonfinite};
+  pc_iteration_errors ie;
+  char tail[PC_TRACE_TAIL_MAX * 16 + 1] = "";
+  if (pc_film_iteration_errors(f, &ie)) {
+    static const char *names_ie[] = {"pcbpt.iteration_error.n",   "pcbpt.iteration_error.mean", "pcbpt.iteration_error.p50",
+                                     "pcbpt.iteration_error.p90", "pcbpt.iteration_error.p99",  "pcbpt.iteration_error.max",
+                                     "pcbpt.iteration_error.worst", "pcbpt.iteration_error.top1"};
+    double v[] = {ie.n, ie.mean, ie.p50, ie.p90, ie.p99, ie.max, ie.worst, ie.top1};
+    for (int i = 0; i < 8; i++) attrs[na++] = (pc_exr_attr){.name = names_ie[i], .type = PC_ATTR_DOUBLE, .d = v[i]};
+    for (int i = 0; i < ie.ntail; i++) snprintf(tail + strlen(tail), sizeof tail - strlen(tail), i ? " %.6g" : "%.6g", ie.tail[i]);
+    attrs[na++] = (pc_exr_attr){.name = "pcbpt.iteration_error.tail", .type = PC_ATTR_STRING, .s = tail};
+  }
   for (int i = 0; i < nextra; i++) attrs[na++] = extra[i];
   rc = pc_exr_write(path, f->w, f->h, layers, k, attrs, na, e);
 done:

@@ -257,7 +257,9 @@ static void light_chunk(void *arg, int thread, int item) {
  * layer's scratch sums plus, for light layers, every thread's splats, which are zeroed on the
  * way so the next iteration starts clean; and the square of the iteration's whole beauty into
  * beauty_sq and its maximum into beauty_max (its light splats are complete only here, after
- * every thread's light paths). Done
+ * every thread's light paths), and for one of the job's first iterations its luminance summed
+ * per block of the trace's grid (each band its own sums, added in band order: the same sums
+ * whatever the thread count). Done
  * serially this pass would cap the thread speed-up (it moves every layer of the image once per
  * iteration). */
 #define FOLD_ROWS 8
@@ -269,7 +271,27 @@ typedef struct fold_job {
   int max;                     /* the film's beauty_max layer, -1 if none */
   double beauty_scale[PC_LAYER_STD_COUNT]; /* one iteration's layer sums -> its beauty */
   atomic_uint_fast64_t dropped; /* squares that overflowed */
+  double *band_blocks;         /* traced: [band][block] luminance sums; else NULL */
 } fold_job;
+
+/* Band item's luminance per block of the trace's grid, from the scratch layers the fold has
+ * completed (the light splats are in) and not yet moved into the film. */
+static void trace_rows(const fold_job *j, int item) {
+  const pc_renderer *r = j->r;
+  int w = r->set.width, h = r->set.height, nb = pc_trace_blocks(w, h);
+  double *out = j->band_blocks + (size_t)item * (size_t)nb;
+  const double *s[PC_LAYER_STD_COUNT];
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) s[l] = r->scratch.layers[l].sum;
+  const double *c = j->beauty_scale;
+  int y1 = (item + 1) * FOLD_ROWS < h ? (item + 1) * FOLD_ROWS : h;
+  for (int y = item * FOLD_ROWS; y < y1; y++)
+    for (int x = 0; x < w; x++) {
+      size_t k = 3 * ((size_t)y * (size_t)w + (size_t)x);
+      double b[3];
+      for (int ch = 0; ch < 3; ch++) b[ch] = s[0][k + ch] * c[0] + s[1][k + ch] * c[1] + s[2][k + ch] * c[2] + s[3][k + ch] * c[3];
+      out[pc_trace_block_of(w, h, x, y)] += 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+    }
+}
 
 static void fold_rows(void *arg, int thread, int item) {
   (void)thread;
@@ -293,6 +315,7 @@ static void fold_rows(void *arg, int thread, int item) {
         }
       }
     }
+  if (j->band_blocks) trace_rows(j, item);
   if (j->square >= 0 || j->max >= 0) {
     double *q = j->square >= 0 ? j->film->layers[j->square].sum : NULL;
     double *mx = j->max >= 0 ? j->film->layers[j->max].sum : NULL;
@@ -327,8 +350,9 @@ static void fold_rows(void *arg, int thread, int item) {
   }
 }
 
-static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
-  fold_job j = {.r = r, .film = film, .light = light, .square = pc_film_square_layer(film)};
+/* band_blocks: room for the trace's band sums when this iteration is traced, else NULL. */
+static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t iteration, double *band_blocks) {
+  fold_job j = {.r = r, .film = film, .light = light, .square = pc_film_square_layer(film), .band_blocks = band_blocks};
   _Static_assert(PC_LAYER_PT == 0 && PC_LAYER_NEE == 1 && PC_LAYER_LT == 2 && PC_LAYER_INNER == 3 &&
                      PC_LAYER_STD_COUNT == 4, "fold_rows adds the four standard layers by index");
   /* the beauty is the standard layers each normalized by its count: 1 iteration for the eye
@@ -341,7 +365,19 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
   j.max = pc_film_max_layer(film);
   if (j.max >= 0 && !film->layers[j.max].sum) j.max = -1;
   atomic_init(&j.dropped, 0);
-  pc_pool_run(r->pool, (r->set.height + FOLD_ROWS - 1) / FOLD_ROWS, fold_rows, &j);
+  int nbands = (r->set.height + FOLD_ROWS - 1) / FOLD_ROWS, nb = pc_trace_blocks(r->set.width, r->set.height);
+  if (band_blocks) memset(band_blocks, 0, (size_t)nbands * (size_t)nb * sizeof *band_blocks);
+  pc_pool_run(r->pool, nbands, fold_rows, &j);
+  if (band_blocks) {
+    double sum[PC_TRACE_MAX_BLOCKS] = {0};
+    uint32_t count[PC_TRACE_MAX_BLOCKS];
+    float mean[PC_TRACE_MAX_BLOCKS];
+    pc_trace_block_pixels(r->set.width, r->set.height, count);
+    for (int b = 0; b < nbands; b++)
+      for (int k = 0; k < nb; k++) sum[k] += band_blocks[(size_t)b * (size_t)nb + (size_t)k];
+    for (int k = 0; k < nb; k++) mean[k] = (float)(sum[k] / count[k]);
+    pc_trace_put(&film->trace, nb, (uint32_t)iteration, mean); /* the caller reserved room */
+  }
   for (int i = 0; i < film->nlayers; i++) {
     if (r->scratch.layers[i].norm != PC_NORM_LIGHT) film->layers[i].count += 1;
     else if (light) film->layers[i].count += r->n_light;
@@ -354,76 +390,97 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light) {
   }
 }
 
+/* One iteration, `it`, into film (and stats); band_blocks: room for the trace's band sums (NULL:
+ * the call traces nothing). */
+static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stats *stats, double *band_blocks, pc_err *e) {
+  int nthreads = pc_pool_size(r->pool);
+  uint64_t npix = (uint64_t)r->set.width * (uint64_t)r->set.height;
+  bool traced = band_blocks && it < PC_TRACE_ITERATIONS && !pc_trace_has(&film->trace, (uint32_t)it);
+  if (traced) {
+    int rc = pc_trace_reserve(&film->trace, film->trace.n + 1, pc_trace_blocks(r->set.width, r->set.height), e);
+    if (rc != PC_OK) return rc;
+  }
+  double t0 = now_seconds();
+  if (r->view) {
+    int rc = pc_scene_view_set_time(r->view, pc_scene_time(r->view, r->set.seed, it), e);
+    if (rc != PC_OK) return rc;
+  }
+  for (int i = 0; i < nthreads; i++) {
+    r->tctx[i].iteration = it;
+    r->tctx[i].rays = 0;
+    r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
+  }
+  bool light = r->set.method != PC_METHOD_PT;
+  int n_eye = r->tiles_x * r->tiles_y;
+  int n_chunks = light && r->n_light > r->light_first ? (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK) : 0;
+  atomic_store_explicit(&r->items_done, 0, memory_order_relaxed);
+  atomic_store_explicit(&r->items_total, (uint64_t)(n_eye + n_chunks), memory_order_relaxed);
+  double t_pmf = 0.0;
+  if (r->pcbpt) {
+    int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
+    if (rc != PC_OK) return rc;
+    t_pmf = now_seconds() - t0;
+  }
+  pc_pool_run(r->pool, n_eye, eye_tile, r);
+  if (n_chunks) pc_pool_run(r->pool, n_chunks, light_chunk, r);
+  if (cancelled(r)) {
+    pc_film_clear(&r->scratch);
+    for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
+    return pc_errf(e, PC_ECANCELED, "render cancelled");
+  }
+  double t1 = now_seconds();
+  fold_iteration(r, film, light, it, traced ? band_blocks : NULL);
+  if (stats) {
+    stats->iterations++;
+    stats->eye_paths += npix;
+    if (light) stats->light_paths += r->n_light;
+    /* The phases interleave on every thread: split the iteration's render time by the
+     * threads' summed time per phase. */
+    double tp = 0, tl = 0, tc = 0;
+    for (int i = 0; i < nthreads; i++) {
+      stats->rays += r->tctx[i].rays;
+      tp += r->tctx[i].t_paths;
+      tl += r->tctx[i].t_lt;
+      tc += r->tctx[i].t_connect;
+    }
+    double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
+    stats->t_pmf += t_pmf;
+    uint64_t pmf_bytes = r->pcbpt && r->pcbpt->store ? pc_irec_bytes(r->pcbpt->store) : 0;
+    if (pmf_bytes > stats->pmf_bytes) stats->pmf_bytes = pmf_bytes;
+    if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
+      stats->t_paths += span;
+    } else {
+      stats->t_paths += span * tp / busy;
+      stats->t_lt += span * tl / busy;
+      stats->t_connect += span * tc / busy;
+    }
+    stats->t_total += now_seconds() - t0;
+  }
+  return PC_OK;
+}
+
 int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film *film, pc_render_stats *stats,
                          atomic_bool *cancel, void (*progress)(void *user, uint64_t done), void *user, pc_err *e) {
   if (film->w != r->set.width || film->h != r->set.height || film->nlayers != r->scratch.nlayers)
     return pc_errf(e, PC_EINVAL, "film is %dx%d with %d layers, the render needs %dx%d with %d", film->w, film->h,
                    film->nlayers, r->set.width, r->set.height, r->scratch.nlayers);
   r->cancel = cancel;
-  int nthreads = pc_pool_size(r->pool);
-  uint64_t npix = (uint64_t)r->set.width * (uint64_t)r->set.height;
   for (int i = 0; i < film->nlayers; i++)
     if (strcmp(film->layers[i].name, r->scratch.layers[i].name) != 0)
       return pc_errf(e, PC_EINVAL, "film layer %d is '%s', the render writes '%s'", i, film->layers[i].name,
                      r->scratch.layers[i].name);
-  for (uint64_t k = 0; k < count; k++) {
-    double t0 = now_seconds();
-    if (r->view) {
-      int rc = pc_scene_view_set_time(r->view, pc_scene_time(r->view, r->set.seed, first + k), e);
-      if (rc != PC_OK) return rc;
-    }
-    for (int i = 0; i < nthreads; i++) {
-      r->tctx[i].iteration = first + k;
-      r->tctx[i].rays = 0;
-      r->tctx[i].t_paths = r->tctx[i].t_lt = r->tctx[i].t_connect = 0.0;
-    }
-    bool light = r->set.method != PC_METHOD_PT;
-    int n_eye = r->tiles_x * r->tiles_y;
-    int n_chunks = light && r->n_light > r->light_first ? (int)((r->n_light - r->light_first + LIGHT_CHUNK - 1) / LIGHT_CHUNK) : 0;
-    atomic_store_explicit(&r->items_done, 0, memory_order_relaxed);
-    atomic_store_explicit(&r->items_total, (uint64_t)(n_eye + n_chunks), memory_order_relaxed);
-    double t_pmf = 0.0;
-    if (r->pcbpt) {
-      int rc = pc_pcbpt_prepare(r->pcbpt, r->tctx, r->pool, e);
-      if (rc != PC_OK) return rc;
-      t_pmf = now_seconds() - t0;
-    }
-    pc_pool_run(r->pool, n_eye, eye_tile, r);
-    if (n_chunks) pc_pool_run(r->pool, n_chunks, light_chunk, r);
-    if (cancelled(r)) {
-      pc_film_clear(&r->scratch);
-      for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
-      return pc_errf(e, PC_ECANCELED, "render cancelled");
-    }
-    double t1 = now_seconds();
-    fold_iteration(r, film, light);
-    if (stats) {
-      stats->iterations++;
-      stats->eye_paths += npix;
-      if (light) stats->light_paths += r->n_light;
-      /* The phases interleave on every thread: split the iteration's render time by the
-       * threads' summed time per phase. */
-      double tp = 0, tl = 0, tc = 0;
-      for (int i = 0; i < nthreads; i++) {
-        stats->rays += r->tctx[i].rays;
-        tp += r->tctx[i].t_paths;
-        tl += r->tctx[i].t_lt;
-        tc += r->tctx[i].t_connect;
-      }
-      double busy = tp + tl + tc, span = t1 - t0 - t_pmf;
-      stats->t_pmf += t_pmf;
-      uint64_t pmf_bytes = r->pcbpt && r->pcbpt->store ? pc_irec_bytes(r->pcbpt->store) : 0;
-      if (pmf_bytes > stats->pmf_bytes) stats->pmf_bytes = pmf_bytes;
-      if (r->set.method == PC_METHOD_PT || !(busy > 0)) {
-        stats->t_paths += span;
-      } else {
-        stats->t_paths += span * tp / busy;
-        stats->t_lt += span * tl / busy;
-        stats->t_connect += span * tc / busy;
-      }
-      stats->t_total += now_seconds() - t0;
-    }
-    if (progress) progress(user, k + 1);
+  /* the trace's band sums, when this call renders one of the job's first iterations */
+  double *band_blocks = NULL;
+  if (first < PC_TRACE_ITERATIONS && count > 0) {
+    size_t nbands = (size_t)(r->set.height + FOLD_ROWS - 1) / FOLD_ROWS;
+    band_blocks = malloc(nbands * (size_t)pc_trace_blocks(r->set.width, r->set.height) * sizeof *band_blocks);
+    if (!band_blocks) return pc_errf(e, PC_ENOMEM, "render: out of memory for the iteration trace");
   }
-  return PC_OK;
+  int rc = PC_OK;
+  for (uint64_t k = 0; k < count && rc == PC_OK; k++) {
+    rc = render_one(r, first + k, film, stats, band_blocks, e);
+    if (progress && rc == PC_OK) progress(user, k + 1);
+  }
+  free(band_blocks);
+  return rc;
 }

@@ -78,6 +78,10 @@ typedef struct pc_study_tails {
   size_t pixels;        /* lit pixels the ratios are over */
   double p50, p99, max; /* NAN when no pixel is lit */
   int max_x, max_y;     /* where the largest ratio is */
+  /* The distribution of the per-iteration error (film_trace.h) from the image's header;
+   * iter_known false when it has none (fewer than 2 traced iterations, an older image). */
+  bool iter_known;
+  pc_iteration_errors iter;
 } pc_study_tails;
 /* From an image the farm wrote; t->known false (and PC_OK) when it has no complete beauty_max. */
 int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e);
@@ -214,5 +218,12 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
 #define PC_STUDY_SHARE_BARS_RUNS 8
 int pc_study_write_shares_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nmethods,
                                 bool *written, pc_err *e);
+/* <dir>/study_iterations.png and .svg: the tail of each method's per-iteration error
+ * (pc_iteration_errors), the fraction of iterations whose error exceeds x times their mean
+ * against x on log-log axes (per method, the median over its runs of each tail point), from
+ * runs[run * nmethods + m]; a light tail falls steeply past x = 1, a heavy one reaches far
+ * right. *written says whether any run could tell (else no file is written). */
+int pc_study_write_iterations_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nmethods,
+                                    bool *written, pc_err *e);
 
 #endif

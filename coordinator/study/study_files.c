@@ -100,6 +100,28 @@ static void json_tails(FILE *f, const pc_study_tails *t) {
   fprintf(f, ", \"max_pixel\": [%d, %d]}", t->max_x, t->max_y);
 }
 
+/* The per-iteration error's distribution (film_trace.h), null when the image has none. */
+static void json_iteration_errors(FILE *f, const pc_study_tails *t) {
+  if (!t->iter_known) {
+    fputs("null", f);
+    return;
+  }
+  const pc_iteration_errors *ie = &t->iter;
+  fprintf(f, "{\"iterations\": %u, \"grid\": %d, \"worst_iteration\": %u", ie->n, PC_TRACE_GRID, ie->worst);
+  const char *names[] = {"mean", "p50", "p90", "p99", "max", "top1_percent_share"};
+  double v[] = {ie->mean, ie->p50, ie->p90, ie->p99, ie->max, ie->top1};
+  for (int i = 0; i < 6; i++) {
+    fprintf(f, ", \"%s\": ", names[i]);
+    json_number(f, v[i]);
+  }
+  fputs(", \"tail\": [", f);
+  for (int k = 0; k < ie->ntail; k++) {
+    if (k) fputs(", ", f);
+    json_number(f, ie->tail[k]);
+  }
+  fputs("]}", f);
+}
+
 /* Which strategies carry the final image (study.h), null when it cannot tell. */
 static void json_shares(FILE *f, const pc_study_shares *sh) {
   if (!sh->known) {
@@ -135,6 +157,8 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
     }
     fputs(",\n     \"tails\": ", f);
     json_tails(f, &run->tails);
+    fputs(",\n     \"iteration_errors\": ", f);
+    json_iteration_errors(f, &run->tails);
     fputs(",\n     \"shares\": ", f);
     json_shares(f, &run->shares);
     fputs(",\n     \"snapshots\": [\n", f);
@@ -308,6 +332,40 @@ int pc_study_write_shares_chart(const char *dir, const pc_study_info *info, cons
   pc_chart c = {.title = title, .x_label = "share of the image's mean luminance", .width = 800,
                 .height = 150 + 30 * n, .bars = &bars};
   int rc = write_png_and_svg(&c, dir, "study_shares", e);
+  *written = rc == PC_OK;
+  return rc;
+}
+
+int pc_study_write_iterations_chart(const char *dir, const pc_study_info *info, const pc_study_run *runs, int nmethods,
+                                    bool *written, pc_err *e) {
+  *written = false;
+  pc_chart_series series[PC_STUDY_MAX_METHODS];
+  double x[PC_STUDY_MAX_METHODS][PC_TRACE_TAIL_MAX], y[PC_STUDY_MAX_METHODS][PC_TRACE_TAIL_MAX];
+  double v[PC_STUDY_MAX_RUNS];
+  int ns = 0;
+  for (int m = 0; m < nmethods && m < PC_STUDY_MAX_METHODS; m++) {
+    int np = 0;
+    for (int k = 0; k < PC_TRACE_TAIL_MAX; k++) {
+      int nv = 0;
+      for (int r = 0; r < info->runs && r < PC_STUDY_MAX_RUNS; r++) {
+        const pc_study_tails *t = &runs[(size_t)r * (size_t)nmethods + (size_t)m].tails;
+        if (t->iter_known && k < t->iter.ntail && t->iter.mean > 0) v[nv++] = t->iter.tail[k] / t->iter.mean;
+      }
+      if (nv == 0) break;
+      x[ns][np] = pc_study_median(v, nv, NULL, NULL);
+      y[ns][np++] = ldexp(1.0, -(k + 1));
+    }
+    if (np == 0) continue;
+    series[ns] = (pc_chart_series){.name = runs[m].method.name, .x = x[ns], .y = y[ns], .n = np};
+    ns++;
+  }
+  if (ns == 0) return PC_OK;
+  char title[512];
+  snprintf(title, sizeof title, "%s: tail of the per-iteration error (%dx%d blocks%s)", info->scene_name, PC_TRACE_GRID,
+           PC_TRACE_GRID, info->runs > 1 ? ", median of the runs" : "");
+  pc_chart c = {.title = title, .x_label = "error of one iteration / mean error of an iteration",
+                .y_label = "fraction of iterations above", .width = 800, .height = 560, .series = series, .nseries = ns};
+  int rc = write_png_and_svg(&c, dir, "study_iterations", e);
   *written = rc == PC_OK;
   return rc;
 }

@@ -1,6 +1,7 @@
 /* study_tails.c: how heavy-tailed a method's image is, from its final EXR alone: per pixel,
  * how much of the pixel its largest single iteration carried (the film's beauty_max over its
- * mean, docs/variance.md "Heavy tails"), summarised over the image's lit pixels. */
+ * mean, docs/variance.md "Heavy tails"), summarised over the image's lit pixels; and the
+ * distribution of the per-iteration error the film wrote in the header (film_trace.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,10 +26,40 @@ static double quantile(const double *v, size_t n, double q) {
   return v[k > 0 ? k - 1 : 0];
 }
 
+/* pcbpt.iteration_error.* of the header: known only whole and consistent. */
+static void iteration_errors(const pc_exr_file *x, pc_study_tails *t) {
+  pc_iteration_errors *ie = &t->iter;
+  double n = pc_study_exr_number(x, "pcbpt.iteration_error.n"), worst = pc_study_exr_number(x, "pcbpt.iteration_error.worst");
+  ie->mean = pc_study_exr_number(x, "pcbpt.iteration_error.mean");
+  ie->p50 = pc_study_exr_number(x, "pcbpt.iteration_error.p50");
+  ie->p90 = pc_study_exr_number(x, "pcbpt.iteration_error.p90");
+  ie->p99 = pc_study_exr_number(x, "pcbpt.iteration_error.p99");
+  ie->max = pc_study_exr_number(x, "pcbpt.iteration_error.max");
+  ie->top1 = pc_study_exr_number(x, "pcbpt.iteration_error.top1");
+  if (!(n >= 2 && n <= PC_TRACE_ITERATIONS) || !(worst >= 0 && worst < PC_TRACE_ITERATIONS)) return;
+  double v[] = {ie->mean, ie->p50, ie->p90, ie->p99, ie->max, ie->top1};
+  for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
+    if (!(v[i] >= 0) || !isfinite(v[i])) return;
+  ie->n = (uint32_t)n;
+  ie->worst = (uint32_t)worst;
+  const char *s = NULL;
+  for (int i = 0; i < x->nattrs; i++)
+    if (strcmp(x->attr_names[i], "pcbpt.iteration_error.tail") == 0) s = x->attr_values[i];
+  while (s && *s && ie->ntail < PC_TRACE_TAIL_MAX) {
+    char *end;
+    double d = strtod(s, &end);
+    if (end == s || !(d >= 0) || !isfinite(d)) return;
+    ie->tail[ie->ntail++] = d;
+    s = end;
+  }
+  t->iter_known = true;
+}
+
 int pc_study_tails_exr(const pc_exr_file *x, pc_study_tails *t, pc_err *e) {
   memset(t, 0, sizeof *t);
   t->p50 = t->p99 = t->max = NAN;
   t->max_x = t->max_y = -1;
+  iteration_errors(x, t);
   const pc_image *beauty = NULL, *mx = NULL;
   for (int i = 0; i < x->nlayers; i++) {
     if (x->names[i][0] == '\0') beauty = &x->layers[i];

@@ -3,8 +3,8 @@
 # exit), and a tiny equal-time study (32x32, 2 s per method, pt and bdpt) on the embedded farm
 # against a reference rendered here: every output file exists in the scene's folder and
 # study.csv has one row per method, snapshot and layer, with the last snapshot at the end of
-# the budget, and every method's heavy tails and strategy shares are in the table, study.json and
-# report.html.
+# the budget, and every method's heavy tails, per-iteration errors and strategy shares are in the
+# table, study.json and report.html.
 # (The farm studies: tests/farm/study_farm.sh.)
 set -u
 . "$(dirname "$0")/lib.inc"
@@ -44,7 +44,7 @@ check size-mismatch 1 "32x32 but the study renders 16x32" -- "$bin" study "$scen
 check study 0 "needs .*x .* time than pt to reach beauty relMSE" -- "$bin" study "$scene" "${ok[@]}"
 grep -q "^inner *bdpt" "$tmp/out" || { echo "FAIL study: table lacks the inner row of bdpt"; cat "$tmp/out"; fail=1; }
 for f in ../report.html pt.exr pt.png bdpt.exr bdpt.png study.csv study.json study_beauty.png study_beauty.svg study_inner.png study_inner.svg \
-         study_shares.png study_shares.svg; do
+         study_shares.png study_shares.svg study_iterations.png study_iterations.svg; do
   [ -s "$tmp/s/cornell-box/$f" ] || { echo "FAIL study: $f missing"; fail=1; }
 done
 csv="$tmp/s/cornell-box/study.csv"
@@ -82,6 +82,24 @@ for m in d["methods"]:
     x, y = t["max_pixel"]
     assert 0 <= x < 32 and 0 <= y < 32, t
 PY
+  # The error of each iteration: over its first iterations (all of them here), ordered
+  # p50 <= p99 <= max, the worst 1% carrying between 1% and all of the summed error, the tail
+  # points falling with the fraction.
+  python3 - "$tmp/s/cornell-box/study.json" <<'PY' || { echo "FAIL iteration errors json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+for m in d["methods"]:
+    t = m["iteration_errors"]
+    assert t is not None and t["grid"] == 8, (m["method"], t)
+    n = t["iterations"]
+    assert n == min(m["iterations"], 4096) and 0 <= t["worst_iteration"] < m["iterations"], (m["method"], n, t)
+    assert 0 < t["p50"] <= t["p90"] <= t["p99"] <= t["max"] and t["mean"] <= t["max"], t
+    assert 0.01 * (1 - 1e-9) <= t["top1_percent_share"] <= 1, t
+    tail = t["tail"]
+    assert len(tail) == min(13, n.bit_length() - 1) and tail == sorted(tail), t
+PY
+  grep -q "^error of each iteration" "$tmp/out" || { echo "FAIL study: no per-iteration error table"; fail=1; }
+  grep -q "<h3>Stability: the error of single iterations</h3>" "$tmp/s/report.html" || { echo "FAIL study: no per-iteration error chart in report.html"; fail=1; }
   # Which strategies carry each final image: the layers' shares of the mean luminance sum to 1
   # (the layers sum to the beauty); pt traces no light paths, bdpt's light tracing and inner
   # connections carry part of the image.

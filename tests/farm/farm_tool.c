@@ -3,14 +3,15 @@
  *       equal a single-process render of iterations [0, --spp) up to summation order:
  *       identical counts, relative 1e-9 on per-layer totals and on every pixel value
  *       (beauty_sq included, so the estimated relMSE agrees too: printed, relative 1e-6);
- *       beauty_max, merged by max, bit for bit
+ *       beauty_max, merged by max, and the trace of each iteration below the trace's bound,
+ *       bit for bit
  *   farm_tool mean CKPT EXPECT TOL              |mean(beauty) - EXPECT| <= TOL * EXPECT
  *   farm_tool relmse CKPT W H EXACT             prints the film's estimated relMSE and the one
  *       measured against the constant image EXACT (compare's definition)
- *   farm_tool upload HOST:PORT TOKEN nan|size|huge|wrap   speaks as a worker: takes a range
- *       and uploads a delta with a NaN sum, of the wrong size, with a finite sum no radiance
- *       reaches (1.7e308), or of 2^64-1 iterations (first + count wraps); exits 0 if the
- *       coordinator refuses it
+ *   farm_tool upload HOST:PORT TOKEN nan|size|huge|wrap|trace   speaks as a worker: takes a
+ *       range and uploads a delta with a NaN sum, of the wrong size, with a finite sum no
+ *       radiance reaches (1.7e308), of 2^64-1 iterations (first + count wraps), or whose trace
+ *       holds an iteration of another range; exits 0 if the coordinator refuses it
  *   farm_tool bundle HOST:PORT TOKEN            sends a scene bundle whose content does not
  *       match its hash; exits 0 if the coordinator refuses it and will not run a job on it
  *   farm_tool fail HOST:PORT TOKEN              speaks as a worker: takes a range and reports
@@ -109,6 +110,17 @@ static int cmd_exact(int argc, char **argv) {
   }
   printf("worst per-pixel relative difference %.2e\n", worst);
   if (worst > 1e-9) bad = 1;
+  /* the trace: the same iterations, each bit for bit (its order is the uploads') */
+  int nb = pc_trace_blocks(mine.w, mine.h);
+  uint32_t trace_differ = mine.trace.n != farm.trace.n;
+  for (uint32_t k = 0; k < farm.trace.n && !trace_differ; k++) {
+    uint32_t it = farm.trace.iteration[k], i = 0;
+    while (i < mine.trace.n && mine.trace.iteration[i] != it) i++;
+    trace_differ += i == mine.trace.n ||
+                    memcmp(mine.trace.block + (size_t)i * nb, farm.trace.block + (size_t)k * nb, (size_t)nb * sizeof(float)) != 0;
+  }
+  printf("trace %u/%u iterations, %s\n", farm.trace.n, mine.trace.n, trace_differ ? "differ" : "identical");
+  if (trace_differ) bad = 1;
   double em, ef;
   bool hm = pc_film_relmse_estimate(&mine, &em), hf = pc_film_relmse_estimate(&farm, &ef);
   printf("estimated relMSE %.9g/%.9g\n", ef, em);
@@ -227,13 +239,20 @@ static int cmd_fail(int argc, char **argv) {
 }
 
 /* Uploads a delta of iterations [first, first+count) of an assigned range, shaped like a
- * real one (eye layers count the iterations, light layers w*h light paths per iteration)
- * with zero sums but for the pt layer's first value; dw widens the film (a wrong size). */
+ * real one (eye layers count the iterations, light layers w*h light paths per iteration, the
+ * trace its iterations below the bound) with zero sums but for the pt layer's first value; dw
+ * widens the film (a wrong size); trace_shift moves its traced iterations (another range's). */
 static int send_delta(pc_client *cl, const Pcbpt__Assign *a, uint64_t first, uint64_t count, bool final, int dw,
-                      double value, pc_err *e) {
+                      double value, uint32_t trace_shift, pc_err *e) {
   pc_render_settings s;
   pc_film f;
   if (pc_wire_settings_from_proto(a->settings, &s, e) || pc_film_init(&f, s.width + dw, s.height, s.strategy_layers, e)) return 1;
+  float zero[PC_TRACE_MAX_BLOCKS] = {0};
+  int nb = pc_trace_blocks(f.w, f.h);
+  for (uint64_t it = first; it < PC_TRACE_ITERATIONS && it - first < count; it++) {
+    if (pc_trace_reserve(&f.trace, f.trace.n + 1, nb, e)) { pc_film_free(&f); return 1; }
+    pc_trace_put(&f.trace, nb, (uint32_t)((it + trace_shift) % PC_TRACE_ITERATIONS), zero);
+  }
   /* beauty_sq and beauty_max count iterations like an eye layer */
   for (int l = 0; l < f.nlayers; l++) f.layers[l].count = f.layers[l].norm != PC_NORM_LIGHT ? count : count * (uint64_t)s.width * s.height;
   f.layers[PC_LAYER_PT].sum[7] = value;
@@ -313,8 +332,9 @@ static int request_range(pc_client *cl, double rate, Pcbpt__Envelope **in, pc_er
 }
 
 static int cmd_upload(int argc, char **argv) {
-  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size") && strcmp(argv[3], "huge") && strcmp(argv[3], "wrap"))) {
-    fprintf(stderr, "upload HOST:PORT TOKEN nan|size|huge|wrap\n");
+  if (argc != 4 || (strcmp(argv[3], "nan") && strcmp(argv[3], "size") && strcmp(argv[3], "huge") && strcmp(argv[3], "wrap") &&
+                    strcmp(argv[3], "trace"))) {
+    fprintf(stderr, "upload HOST:PORT TOKEN nan|size|huge|wrap|trace\n");
     return 2;
   }
   pc_client cl;
@@ -326,7 +346,8 @@ static int cmd_upload(int argc, char **argv) {
   double value = strcmp(argv[3], "nan") == 0 ? NAN : strcmp(argv[3], "huge") == 0 ? 1.7e308 : 0;
   /* wrap: 2^64-1 iterations from first + 1, so first + count wraps round to first */
   bool wrap = strcmp(argv[3], "wrap") == 0;
-  int rc = send_delta(&cl, a, wrap ? a->first + 1 : a->first, wrap ? UINT64_MAX : 1, true, size ? 1 : 0, value, &e);
+  int rc = send_delta(&cl, a, wrap ? a->first + 1 : a->first, wrap ? UINT64_MAX : 1, true, size ? 1 : 0, value,
+                      strcmp(argv[3], "trace") == 0 ? PC_TRACE_ITERATIONS / 2 : 0, &e);
   if (!rc) printf("uploaded a %s delta for job %llu range %llu\n", argv[3], (unsigned long long)a->job_id, (unsigned long long)a->range_id);
   if (!rc) rc = wait_ack(&cl, a->range_id, 30, &refused, &e);
   if (rc) fprintf(stderr, "upload: %s\n", e.msg);
@@ -347,12 +368,12 @@ static int cmd_cancelack(int argc, char **argv) {
   Pcbpt__Assign *a = in->assign;
   /* the probe range, committed at once (its last upload); then a range of 100 iterations */
   int rc = send_heartbeat(&cl, a->job_id, a->range_id, 100, 0, &e);
-  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, &e);
+  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, 0, &e);
   if (!rc) rc = wait_ack(&cl, a->range_id, 10, &refused, &e);
   if (!rc) rc = request_range(&cl, 100, &in2, &e);
   if (!rc && in2->assign->count < 2) rc = pc_errf(&e, PC_EINVAL, "a range of %llu iterations", (unsigned long long)in2->assign->count);
   /* one iteration of it: merged, its acknowledgement waits for the next checkpoint */
-  if (!rc) rc = send_delta(&cl, in2->assign, in2->assign->first, 1, false, 0, 0, &e);
+  if (!rc) rc = send_delta(&cl, in2->assign, in2->assign->first, 1, false, 0, 0, 0, &e);
   struct timespec ts = {0, 200000000};
   nanosleep(&ts, NULL);
   if (!rc && !(rc = pc_client_connect(argv[1], argv[2], &cc, &e))) {
@@ -402,7 +423,7 @@ static int cmd_hoard(int argc, char **argv) {
     }
   }
   printf("%s after %.1f s; uploading the range anyway\n", revoked ? "taken back" : "not taken back", atof(argv[4]) - (end - now_s()));
-  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, &e);
+  if (!rc) rc = send_delta(&cl, a, a->first, a->count, true, 0, 0, 0, &e);
   if (!rc) rc = wait_ack(&cl, a->range_id, 10, &refused, &e);
   if (rc) fprintf(stderr, "hoard: %s\n", e.msg);
   pcbpt__envelope__free_unpacked(in, NULL);

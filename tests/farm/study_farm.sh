@@ -95,8 +95,9 @@ class P(html.parser.HTMLParser):
     def handle_starttag(self, tag, attrs):
         if tag == "img": self.imgs.append(dict(attrs)["src"])
 p = P(); p.feed(open(sys.argv[1]).read())
-# charts beauty, inner, scaling, strategy shares; pt, bdpt, reference; crops of pt, bdpt, reference
-assert len(p.imgs) == 10, len(p.imgs)
+# charts beauty, inner, scaling, strategy shares, per-iteration errors; pt, bdpt, reference;
+# crops of pt, bdpt, reference
+assert len(p.imgs) == 11, len(p.imgs)
 for src in p.imgs:
     head, data = src.split(",", 1)
     raw = base64.b64decode(data)
@@ -108,7 +109,7 @@ if command -v chromium-headless-shell >/dev/null; then
   cp "$T/s/report.html" "$T/probe.html"
   echo "<script>addEventListener('load',()=>{let ok=0,bad=0;for(const i of document.images)(i.complete&&i.naturalWidth>0)?ok++:bad++;document.body.dataset.images=ok+'/'+bad})</script>" >>"$T/probe.html"
   timeout 60 chromium-headless-shell --no-sandbox --disable-gpu --virtual-time-budget=5000 --dump-dom "file://$T/probe.html" \
-    2>/dev/null | grep -q 'data-images="10/0"' || fail "report: the browser did not show its 10 images"
+    2>/dev/null | grep -q 'data-images="11/0"' || fail "report: the browser did not show its 11 images"
 else
   echo "no chromium-headless-shell: the report was checked with an HTML parser only"
 fi

@@ -2,7 +2,8 @@
  * eye layers divide by iterations, light layers by light paths / (W*H); adding films adds sums
  * and counts (beauty_max: their max, in any order); non-finite samples are dropped and counted;
  * the EXR carries layers and counts; a mix of films (the pilot's and the job's) has the weighted
- * images and the weighted variance. */
+ * images and the weighted variance; the trace of single iterations concatenates, refuses an
+ * iteration twice, and gives the per-iteration errors of a hand-made case exactly. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -298,6 +299,70 @@ static void test_mix(void **state) {
   pc_film_free(&out);
 }
 
+/* 16x2 pixels: 16 blocks of 2x1. 100 iterations of a constant image, 1 but 101 in iteration 7
+ * (a firefly): the image is 2, e_i = (v_i - 2)^2 (100/99) / (4 + eps), so the firefly carries 99%
+ * of the summed error. */
+static void put_iteration(pc_film *f, uint32_t it, double v) {
+  float blk[PC_TRACE_MAX_BLOCKS];
+  int nb = pc_trace_blocks(f->w, f->h);
+  for (int k = 0; k < nb; k++) blk[k] = (float)v;
+  pc_err e = {0};
+  assert_int_equal(pc_trace_reserve(&f->trace, f->trace.n + 1, nb, &e), 0);
+  pc_trace_put(&f->trace, nb, it, blk);
+  for (size_t j = 0; j < (size_t)f->w * f->h * 3; j++) f->layers[PC_LAYER_PT].sum[j] += v;
+  for (int l = 0; l < f->nlayers; l++) f->layers[l].count++;
+}
+
+static void test_trace(void **state) {
+  (void)state;
+  pc_err e = {0};
+  pc_film a, b, out;
+  assert_int_equal(pc_film_init(&a, 16, 2, 0, &e), 0);
+  assert_int_equal(pc_film_init(&b, 16, 2, 0, &e), 0);
+  assert_int_equal(pc_film_init(&out, 16, 2, 0, &e), 0);
+  assert_int_equal(pc_trace_blocks(16, 2), 16);
+  uint32_t count[PC_TRACE_MAX_BLOCKS];
+  pc_trace_block_pixels(16, 2, count);
+  for (int k = 0; k < 16; k++) assert_int_equal(count[k], 2);
+  pc_trace_block_pixels(20, 3, count); /* uneven: 8 x 3 blocks of 2 or 3 columns, all 60 pixels */
+  uint32_t total = 0;
+  for (int k = 0; k < pc_trace_blocks(20, 3); k++) total += count[k];
+  assert_int_equal(total, 60);
+  for (uint32_t it = 0; it < 60; it++) put_iteration(&a, it, it == 7 ? 101 : 1);
+  for (uint32_t it = 60; it < 100; it++) put_iteration(&b, it, 1);
+  assert_int_equal(pc_film_add(&a, &b, &e), 0);
+  assert_int_equal(a.trace.n, 100);
+  assert_true(pc_trace_has(&a.trace, 99) && !pc_trace_has(&a.trace, 100));
+  pc_iteration_errors ie;
+  assert_true(pc_film_iteration_errors(&a, &ie));
+  double eps = PC_RELMSE_EPS, small = (100.0 / 99) / (4 + eps), big = 99.0 * 99 * (100.0 / 99) / (4 + eps);
+  assert_int_equal(ie.n, 100);
+  assert_int_equal(ie.worst, 7);
+  assert_true(fabs(ie.max - big) <= 1e-9 * big);
+  assert_true(fabs(ie.p50 - small) <= 1e-9 && fabs(ie.p99 - small) <= 1e-9);
+  assert_true(fabs(ie.mean - (99 * small + big) / 100) <= 1e-9 * big);
+  assert_true(fabs(ie.top1 - big / (99 * small + big)) <= 1e-9);
+  assert_int_equal(ie.ntail, 6); /* 2^-1 .. 2^-6 of 100 iterations */
+  /* the same iterations again are refused, and a is unchanged */
+  assert_int_equal(pc_film_add(&a, &b, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "iteration 60"));
+  assert_int_equal(a.trace.n, 100);
+  assert_int_equal(a.layers[PC_LAYER_PT].count, 100);
+  /* a mix keeps the heaviest part's trace */
+  pc_film_part parts[] = {{&a, 0.3}, {&b, 0.7}};
+  assert_int_equal(pc_film_mix(&out, parts, 2, &e), 0);
+  assert_int_equal(out.trace.n, 40);
+  assert_int_equal(out.trace.iteration[0], 60);
+  /* one iteration cannot tell; clearing empties the trace */
+  pc_film_clear(&a);
+  put_iteration(&a, 3, 1);
+  assert_false(pc_film_iteration_errors(&a, &ie));
+  assert_true(pc_trace_has(&a.trace, 3) && !pc_trace_has(&a.trace, 7));
+  pc_film_free(&a);
+  pc_film_free(&b);
+  pc_film_free(&out);
+}
+
 static void test_bad_sizes(void **state) {
   (void)state;
   pc_film f;
@@ -312,6 +377,7 @@ int main(void) {
       cmocka_unit_test(test_variance),
       cmocka_unit_test(test_max_merge),
       cmocka_unit_test(test_mix),
+      cmocka_unit_test(test_trace),
       cmocka_unit_test(test_bad_sizes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -125,7 +125,10 @@ static void make_film(pc_film *f, int w, int h) {
   f->layers[1].norm = PC_NORM_LIGHT;
   for (int l = 0; l < 2; l++) f->layers[l].sum = calloc((size_t)w * h * 3, sizeof(double));
 }
-static void free_film(pc_film *f) { for (int l = 0; l < f->nlayers; l++) free(f->layers[l].sum); }
+static void free_film(pc_film *f) {
+  for (int l = 0; l < f->nlayers; l++) free(f->layers[l].sum);
+  pc_trace_free(&f->trace);
+}
 
 static void film_roundtrip(void **st) {
   (void)st;
@@ -232,9 +235,9 @@ typedef struct seen_counts {
   int answer;
 } seen_counts;
 
-static int record_counts(void *user, const uint64_t *counts, pc_err *e) {
+static int record_counts(void *user, const pc_wire_film_counts *c, pc_err *e) {
   seen_counts *s = user;
-  memcpy(s->counts, counts, sizeof s->counts);
+  memcpy(s->counts, c->counts, sizeof s->counts);
   return s->answer ? pc_errf(e, s->answer, "counts refused") : 0;
 }
 
@@ -275,7 +278,7 @@ static void film_v1_and_add(void **st) {
   uint8_t *v2;
   size_t n2;
   assert_int_equal(pc_wire_film_pack(&a, &v2, &n2, &e), 0);
-  assert_int_equal(n2, n);
+  assert_int_equal(n2, n + 8); /* PCFILM03's header holds the trace's count and blocks; no record */
   assert_memory_not_equal(v1, v2, n);
   assert_int_equal(pc_wire_film_add(v2, n2, &a, NULL, NULL, &e), 0);
   assert_true(a.layers[0].sum[35] == 17.5 && a.layers[1].sum[0] == -2.0);
@@ -293,6 +296,85 @@ static void film_v1_and_add(void **st) {
   assert_int_equal(a.layers[0].count, 4);
   free(v1); free(v2);
   free_film(&a); free_film(&b);
+}
+
+typedef struct seen_trace {
+  uint32_t n, first, last;
+} seen_trace;
+static int record_trace(void *user, const pc_wire_film_counts *c, pc_err *e) {
+  seen_trace *s = user;
+  s->n = c->ntraced;
+  s->first = c->ntraced ? c->traced[0] : 0;
+  s->last = c->ntraced ? c->traced[c->ntraced - 1] : 0;
+  return pc_errf(e, PC_EINVAL, "trace refused");
+}
+
+static bool traces_equal(const pc_film *a, const pc_film *b) {
+  int nb = pc_trace_blocks(a->w, a->h);
+  return a->trace.n == b->trace.n && memcmp(a->trace.iteration, b->trace.iteration, a->trace.n * sizeof(uint32_t)) == 0 &&
+         memcmp(a->trace.block, b->trace.block, (size_t)a->trace.n * nb * sizeof(float)) == 0;
+}
+
+/* The trace travels with the film: after the layers, across the compressor's staging buffer
+ * (a 300x200 film's layers fill it past 1 MiB, its 4096 records another ~1 MiB), in its order;
+ * a record that is not finite, an iteration traced twice or past the bound, or one the target
+ * traces already, refuses the whole film; the judge sees the traced iterations. */
+static void film_trace_travels(void **st) {
+  (void)st;
+  pc_film a, b, c;
+  int w = 300, h = 200, nb = pc_trace_blocks(w, h);
+  make_film(&a, w, h);
+  make_film(&b, w, h);
+  make_film(&c, w, h);
+  assert_int_equal(nb, 64);
+  a.layers[0].count = PC_TRACE_ITERATIONS;
+  a.layers[1].count = PC_TRACE_ITERATIONS;
+  pc_err e;
+  assert_int_equal(pc_trace_reserve(&a.trace, PC_TRACE_ITERATIONS, nb, &e), 0);
+  float blk[PC_TRACE_MAX_BLOCKS];
+  for (uint32_t k = 0; k < PC_TRACE_ITERATIONS; k++) {
+    for (int i = 0; i < nb; i++) blk[i] = (float)k * 0.5f + (float)i;
+    pc_trace_put(&a.trace, nb, PC_TRACE_ITERATIONS - 1 - k, blk);
+  }
+  uint8_t *z, *raw, *back;
+  size_t zn, rn;
+  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_pack(&a, &raw, &rn, &e), 0);
+  assert_int_equal(rn, pc_wire_film_size_traced(&a, PC_TRACE_ITERATIONS));
+  assert_int_equal(pc_wire_decompress(z, zn, rn, rn, &back, &e), 0);
+  assert_memory_equal(raw, back, rn);
+  assert_int_equal(pc_wire_film_load(z, zn, &b, &e), 0);
+  assert_true(traces_equal(&a, &b));
+  /* merging the same iterations again is refused, b unchanged */
+  assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "traced already"));
+  assert_true(traces_equal(&a, &b) && b.layers[0].count == PC_TRACE_ITERATIONS);
+  /* the judge sees them, in order; its refusal leaves c without a trace */
+  seen_trace seen = {0};
+  assert_int_equal(pc_wire_film_add_z(z, zn, &c, record_trace, &seen, &e), PC_EINVAL);
+  assert_true(seen.n == PC_TRACE_ITERATIONS && seen.first == PC_TRACE_ITERATIONS - 1 && seen.last == 0);
+  assert_true(c.trace.n == 0 && c.layers[0].count == 0);
+  assert_int_equal(pc_wire_film_add_z(z, zn, &c, NULL, NULL, &e), 0);
+  assert_true(traces_equal(&a, &c));
+  /* broken records, in the raw bytes: each refuses the whole add */
+  size_t rs = 4 + 4 * (size_t)nb, last = rn - rs;
+  uint8_t keep[4];
+  memcpy(keep, raw + last, 4);
+  uint32_t bad_it = PC_TRACE_ITERATIONS; /* past the bound */
+  memcpy(raw + last, &bad_it, 4);
+  pc_film_clear(&c);
+  assert_int_equal(pc_wire_film_add(raw, rn, &c, NULL, NULL, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "only the first"));
+  memcpy(raw + last, raw + last - rs, 4); /* the iteration before it, twice */
+  assert_int_equal(pc_wire_film_add(raw, rn, &c, NULL, NULL, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "traced twice"));
+  memcpy(raw + last, keep, 4);
+  float nan = 0.0f / 0.0f;
+  memcpy(raw + last + 4 + 4 * 7, &nan, 4);
+  assert_int_equal(pc_wire_film_add(raw, rn, &c, NULL, NULL, &e), PC_ENUMERIC);
+  assert_true(c.trace.n == 0 && c.layers[0].count == 0);
+  free(z); free(raw); free(back);
+  free_film(&a); free_film(&b); free_film(&c);
 }
 
 /* Several byte-plane blocks and a short last one: every value comes back bit for bit. */
@@ -489,7 +571,7 @@ static void film_bounds(void **st) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
-    cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_blocks),
+    cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_trace_travels), cmocka_unit_test(film_blocks),
     cmocka_unit_test(film_without_per_iteration), cmocka_unit_test(film_max_roundtrip), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
