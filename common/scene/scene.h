@@ -78,6 +78,11 @@ typedef struct pc_scene {
   int env_light;              /* index of the environment emitter, -1 if none */
   float env_radius;           /* light paths from the environment start on a disk of this radius
                                  perpendicular to their direction, outside the bounding sphere */
+  /* Every ray traced through this scene is handed to ray_hook first (NULL but in the Embree
+   * ceiling benchmark, tests/bench/bench_rays.c, which records a render's rays to replay them
+   * through Embree alone): shadow rays test t in [0, tfar) of o + t d. */
+  void (*ray_hook)(void *user, bool shadow, vec3 o, vec3 d, float tfar);
+  void *ray_hook_user;
 } pc_scene;
 
 /* Command-line $name parameters (Mitsuba's -D name=value), kept in one flat buffer so render

@@ -307,6 +307,7 @@ bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *h
   rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  if (s->ray_hook) s->ray_hook(s->ray_hook_user, false, o, d, tmax);
   rtcIntersect1((RTCScene)s->rtc_scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   fill_hit(s, &rh, o, d, hit);
@@ -332,6 +333,7 @@ static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
   r.mask = 0xffffffffu;
   r.id = 0;
   r.flags = 0;
+  if (s->ray_hook) s->ray_hook(s->ray_hook_user, true, o, d, tfar);
   rtcOccluded1((RTCScene)s->rtc_scene, &ctx, &r);
   return r.tfar >= 0.f;
 }
