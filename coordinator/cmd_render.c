@@ -334,6 +334,14 @@ int pc_cmd_render(int argc, char **argv) {
     printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
            1e3 * attr_number(&img, "pcbpt.time_pmf") / it, 1e3 * attr_number(&img, "pcbpt.time_connect") / it);
+  if (has_attr(&img, "pcbpt.iteration_error.n"))
+    printf("error of single iterations (%.0f of them, %dx%d blocks): median %.3g, mean %.3g, worst %.3g (iteration %.0f); "
+           "the worst 1%% carry %.1f%% of it\n",
+           attr_number(&img, "pcbpt.iteration_error.n"), img.w < PC_TRACE_GRID ? img.w : PC_TRACE_GRID,
+           img.h < PC_TRACE_GRID ? img.h : PC_TRACE_GRID,
+           attr_number(&img, "pcbpt.iteration_error.p50"), attr_number(&img, "pcbpt.iteration_error.mean"),
+           attr_number(&img, "pcbpt.iteration_error.max"), attr_number(&img, "pcbpt.iteration_error.worst"),
+           100 * attr_number(&img, "pcbpt.iteration_error.top1"));
   double pmf_bytes = attr_number(&img, "pcbpt.pmf_bytes");
   if (pmf_bytes > 0) printf("importance records: %.2f MiB\n", pmf_bytes / (1024.0 * 1024.0));
   if (dropped > 0) fprintf(stderr, "pcbpt-coord render: warning: %.0f non-finite samples were dropped\n", dropped);

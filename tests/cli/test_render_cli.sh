@@ -25,6 +25,9 @@ check render-pcbpt 0 "pcbpt: 1 iterations" -- "$bin" render "$scene" --method pc
 grep -aq -- "--pcbpt-candidates 3 --pcbpt-candidate-visibility uncertain" "$tmp/pc.exr" ||
   { echo "FAIL render-pcbpt: no PCBPT flags in the header"; fail=1; }
 check render 0 "est. relMSE" -- "$bin" render "$scene" --method pt --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
+# with 2 iterations it can tell how their errors spread (docs/variance.md)
+grep -q "^error of single iterations (2 of them, 8x8 blocks): median" "$tmp/out" ||
+  { echo "FAIL render: no per-iteration error line"; cat "$tmp/out"; fail=1; }
 [ -s "$tmp/cb.exr" ] && [ -s "$tmp/cb.png" ] || { echo "FAIL render: outputs missing"; fail=1; }
 check compare-self 0 "beauty" -- "$bin" compare "$tmp/cb.exr" "$tmp/cb.exr"
 grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-self: non-zero error"; cat "$tmp/out"; fail=1; }
