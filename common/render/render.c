@@ -283,14 +283,22 @@ static void trace_rows(const fold_job *j, int item) {
   const double *s[PC_LAYER_STD_COUNT];
   for (int l = 0; l < PC_LAYER_STD_COUNT; l++) s[l] = r->scratch.layers[l].sum;
   const double *c = j->beauty_scale;
-  int y1 = (item + 1) * FOLD_ROWS < h ? (item + 1) * FOLD_ROWS : h;
-  for (int y = item * FOLD_ROWS; y < y1; y++)
-    for (int x = 0; x < w; x++) {
-      size_t k = 3 * ((size_t)y * (size_t)w + (size_t)x);
-      double b[3];
-      for (int ch = 0; ch < 3; ch++) b[ch] = s[0][k + ch] * c[0] + s[1][k + ch] * c[1] + s[2][k + ch] * c[2] + s[3][k + ch] * c[3];
-      out[pc_trace_block_of(w, h, x, y)] += 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+  int y1 = (item + 1) * FOLD_ROWS < h ? (item + 1) * FOLD_ROWS : h, gx = w < PC_TRACE_GRID ? w : PC_TRACE_GRID;
+  for (int y = item * FOLD_ROWS; y < y1; y++) {
+    int row = pc_trace_block_of(w, h, 0, y);
+    for (int bx = 0, x = 0; bx < gx; bx++) {
+      int x1 = (int)(((int64_t)(bx + 1) * w + gx - 1) / gx); /* the first x of the next block */
+      double sum = 0.0;
+      for (; x < x1; x++) {
+        size_t k = 3 * ((size_t)y * (size_t)w + (size_t)x);
+        double b[3];
+        for (int ch = 0; ch < 3; ch++)
+          b[ch] = s[0][k + ch] * c[0] + s[1][k + ch] * c[1] + s[2][k + ch] * c[2] + s[3][k + ch] * c[3];
+        sum += 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+      }
+      out[row + bx] += sum;
     }
+  }
 }
 
 static void fold_rows(void *arg, int thread, int item) {
