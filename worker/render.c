@@ -2,7 +2,11 @@
  * for the next job of the same scene bundle, -D values and film size: a study's interleaved
  * jobs differ in method and seed only, and switch often), then renders the assigned range in
  * batches of about half a second into a scratch film, adds each finished batch to the pending
- * film, and compresses that into an upload when the loop asks.
+ * film, and compresses that into an upload when the loop asks. Over one scene it keeps the
+ * renderers and films of the last few jobs (a study's methods and auto's pilot candidates
+ * alternate range by range): a fresh renderer's first iteration pays for allocating and first
+ * touching its buffers, and PCBPT's stores grow back over a few iterations, which would be
+ * charged to every range of every method and weigh most in the pilot's short ranges.
  * Cancel is polled by the renderer between work items, so it takes effect well within a
  * second. */
 #include <stdio.h>
@@ -22,32 +26,54 @@ static double now_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-typedef struct job_ctx {
-  bool loaded;
-  pc_scene scene;
+/* One job's renderer and films over the loaded scene. */
+typedef struct job_rend {
+  uint64_t job;
   pc_renderer *rend;
   pc_film work;     /* one batch */
   pc_film pending;  /* batches not yet taken for upload */
   bool pending_dirty;
+  size_t bytes;     /* about what it holds: its films and the renderer's per-thread ones */
+  uint64_t used;    /* when it last rendered (a counter) */
+} job_rend;
+
+/* Renderers kept besides the current one: at most this many, holding at most this much. */
+#define KEEP_RENDERERS 4
+#define KEEP_BYTES ((size_t)256 << 20)
+
+typedef struct job_ctx {
+  bool loaded;
+  pc_scene scene;
+  job_rend kept[KEEP_RENDERERS + 1];
+  int nkept;
+  job_rend *cur;    /* the job being rendered, one of kept */
+  uint64_t clock;
   /* what the built scene depends on */
   char path[1200], root[1200];
   int width, height;
   pc_scene_defines defines;
 } job_ctx;
 
-/* The job's renderer (withdrawn from the loop's progress reads first) and films. */
-static void ctx_drop_films(job_ctx *c, pc_wrender *w) {
-  uv_mutex_lock(&w->mu);
-  w->rend = NULL;
-  uv_mutex_unlock(&w->mu);
-  pc_renderer_destroy(c->rend);
-  pc_film_free(&c->work);
-  pc_film_free(&c->pending);
+/* Kept renderer k (withdrawn from the loop's progress reads first when it is the current). */
+static void drop_rend(job_ctx *c, pc_wrender *w, int k) {
+  job_rend *r = &c->kept[k];
+  if (c->cur == r) {
+    uv_mutex_lock(&w->mu);
+    w->rend = NULL;
+    uv_mutex_unlock(&w->mu);
+    c->cur = NULL;
+  }
+  pc_renderer_destroy(r->rend);
+  pc_film_free(&r->work);
+  pc_film_free(&r->pending);
+  job_rend *cur = c->cur;
+  c->kept[k] = c->kept[--c->nkept];
+  if (cur == &c->kept[c->nkept]) c->cur = &c->kept[k]; /* it moved */
 }
 
 static void ctx_free(job_ctx *c, pc_wrender *w) {
   if (!c->loaded) return;
-  ctx_drop_films(c, w);
+  while (c->nkept > 0) drop_rend(c, w, c->nkept - 1);
   pc_scene_free(&c->scene);
   c->loaded = false;
 }
@@ -58,35 +84,57 @@ static bool same_scene(const job_ctx *c, const pc_render_settings *set, const ch
          memcmp(c->defines.buf, set->defines.buf, (size_t)set->defines.used) == 0;
 }
 
-/* The renderer and films for the job's settings (method, seed, depth, layers ...); the scene
- * must be built. On failure the whole context is freed. */
-static int ctx_films(job_ctx *c, pc_wrender *w, const pc_render_settings *set, pc_err *e) {
-  int rc = pc_renderer_create(&c->scene, set, w->threads, &c->rend, e);
-  if (!rc && (rc = pc_film_init(&c->work, set->width, set->height, set->strategy_layers, e)) != 0)
-    pc_renderer_destroy(c->rend);
-  if (!rc && (rc = pc_film_init(&c->pending, set->width, set->height, set->strategy_layers, e)) != 0) {
-    pc_film_free(&c->work);
-    pc_renderer_destroy(c->rend);
+/* Makes job's renderer and films (for its settings: method, seed, depth, layers ...) the
+ * current ones: a kept one, or new ones, after dropping the least recently used past the
+ * bounds. The scene must be built. On failure the whole context is freed. */
+static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_settings *set, pc_err *e) {
+  job_rend *r = NULL;
+  for (int k = 0; k < c->nkept && !r; k++)
+    if (c->kept[k].job == job) r = &c->kept[k];
+  if (!r) {
+    size_t film = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
+    int d = set->strategy_layers, layers = PC_LAYER_STD_COUNT + 2 + d * (d + 3) / 2;
+    /* the job's two films, the renderer's scratch and one splat film per render thread */
+    size_t bytes = film * (size_t)layers * (size_t)(w->threads > 0 ? w->threads + 3 : 4);
+    for (;;) { /* room for one more: drop the least recently used while over a bound */
+      size_t held = bytes;
+      int lru = -1;
+      for (int k = 0; k < c->nkept; k++) {
+        held += c->kept[k].bytes;
+        if (lru < 0 || c->kept[k].used < c->kept[lru].used) lru = k;
+      }
+      if (lru < 0 || (c->nkept <= KEEP_RENDERERS && held - bytes <= KEEP_BYTES)) break;
+      drop_rend(c, w, lru);
+    }
+    r = &c->kept[c->nkept];
+    memset(r, 0, sizeof *r);
+    int rc = pc_renderer_create(&c->scene, set, w->threads, &r->rend, e);
+    if (!rc && (rc = pc_film_init(&r->work, set->width, set->height, set->strategy_layers, e)) != 0)
+      pc_renderer_destroy(r->rend);
+    if (!rc && (rc = pc_film_init(&r->pending, set->width, set->height, set->strategy_layers, e)) != 0) {
+      pc_film_free(&r->work);
+      pc_renderer_destroy(r->rend);
+    }
+    if (rc) {
+      ctx_free(c, w);
+      return rc;
+    }
+    r->job = job;
+    r->bytes = bytes;
+    c->nkept++;
   }
-  if (rc) {
-    pc_scene_free(&c->scene);
-    c->loaded = false;
-    return rc;
-  }
+  r->used = ++c->clock;
+  c->cur = r;
   c->loaded = true;
-  c->pending_dirty = false;
   uv_mutex_lock(&w->mu);
-  w->rend = c->rend;
+  w->rend = r->rend;
   uv_mutex_unlock(&w->mu);
   return 0;
 }
 
-static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, const char *path, const char *root,
-                    pc_err *e) {
-  if (same_scene(c, set, path, root)) {
-    ctx_drop_films(c, w); /* a new renderer and films over the built scene */
-    return ctx_films(c, w, set, e);
-  }
+static int ctx_load(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_settings *set, const char *path,
+                    const char *root, pc_err *e) {
+  if (same_scene(c, set, path, root)) return ctx_films(c, w, job, set, e);
   ctx_free(c, w);
   memset(&c->scene, 0, sizeof c->scene);
   snprintf(c->path, sizeof c->path, "%s", path);
@@ -111,7 +159,8 @@ static int ctx_load(job_ctx *c, pc_wrender *w, const pc_render_settings *set, co
     pc_scene_free(&c->scene);
     return rc;
   }
-  return ctx_films(c, w, set, e);
+  c->loaded = true;
+  return ctx_films(c, w, job, set, e);
 }
 
 /* The loop asked for an upload: compresses what is pending (outside the lock: a 4K film takes
@@ -125,7 +174,8 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   size_t zn = 0;
   pc_err e = {0};
   double t0 = now_s();
-  int rc = count && c->loaded ? pc_wire_film_zip(&c->pending, &z, &zn, &e) : 0;
+  job_rend *r = c->loaded ? c->cur : NULL;
+  int rc = count && r ? pc_wire_film_zip(&r->pending, &z, &zn, &e) : 0;
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);
@@ -134,7 +184,7 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   if (z && w->range_id == range && w->pend_count == count) {
     w->zip = z;
     w->zip_len = zn;
-    w->zip_raw = pc_wire_film_size(&c->pending);
+    w->zip_raw = pc_wire_film_size(&r->pending);
     w->zip_range = range;
     w->zip_first = first;
     w->zip_count = count;
@@ -147,9 +197,9 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   }
   uv_mutex_unlock(&w->mu);
   free(z);
-  if (!rc && count && c->loaded) {
-    pc_film_clear(&c->pending);
-    c->pending_dirty = false;
+  if (!rc && count && r) {
+    pc_film_clear(&r->pending);
+    r->pending_dirty = false;
   }
   uv_async_send(w->notify);
 }
@@ -177,12 +227,13 @@ static void thread_main(void *arg) {
     pc_err e = {0};
     int rc = 0;
     if (!ctx.loaded || loaded_job != job) {
-      rc = ctx_load(&ctx, w, &set, path, root, &e);
+      rc = ctx_load(&ctx, w, job, &set, path, root, &e);
       loaded_job = rc ? 0 : job;
     }
-    if (!rc && ctx.pending_dirty) { /* a dropped range's batches */
-      pc_film_clear(&ctx.pending);
-      ctx.pending_dirty = false;
+    job_rend *r = rc ? NULL : ctx.cur;
+    if (r && r->pending_dirty) { /* a dropped range's batches */
+      pc_film_clear(&r->pending);
+      r->pending_dirty = false;
     }
     uint64_t done = 0;
     while (!rc && done < count && !atomic_load(&w->cancel)) {
@@ -193,15 +244,15 @@ static void thread_main(void *arg) {
       if (batch < 1) batch = 1;
       if (batch > count - done) batch = count - done;
       pc_render_stats st = {0};
-      pc_film_clear(&ctx.work);
+      pc_film_clear(&r->work);
       double t0 = now_s();
-      rc = pc_render_iterations(ctx.rend, first + done, batch, &ctx.work, &st, &w->cancel, NULL, NULL, &e);
+      rc = pc_render_iterations(r->rend, first + done, batch, &r->work, &st, &w->cancel, NULL, NULL, &e);
       double dt = now_s() - t0;
-      uint64_t got = ctx.work.layers[PC_LAYER_PT].count;
+      uint64_t got = r->work.layers[PC_LAYER_PT].count;
       if (rc == PC_ECANCELED) rc = 0;
       if (rc || got > batch) break;
-      if (got && (rc = pc_film_add(&ctx.pending, &ctx.work, &e)) != 0) break;
-      ctx.pending_dirty |= got > 0;
+      if (got && (rc = pc_film_add(&r->pending, &r->work, &e)) != 0) break;
+      r->pending_dirty |= got > 0;
       uv_mutex_lock(&w->mu);
       if (got) {
         if (w->pend_count == 0) w->pend_first = first + done;

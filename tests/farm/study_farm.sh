@@ -83,6 +83,21 @@ for gi, g in enumerate(groups):
             served = {names[j] for j, ww in seq if j in g and ww == w}
             assert served == {"pt", "bdpt"}, (g, w, served)
 EOF
+# the worker alternated the group's jobs range by range over kept renderers (worker/render.c):
+# the bdpt job of the first run on 1 worker is still exactly a single process's render of its
+# iterations
+read -r BJ BSEED BN < <(python3 - "$d/study.json" "$T/coord.log" <<'EOF'
+import json, re, sys
+d = json.load(open(sys.argv[1]))
+r = [r for r in d["methods"] if r["method"] == "bdpt" and r["workers"] == 1 and r["run"] == 1][0]
+jobs = [int(m.group(1)) for m in re.finditer(r"job (\d+): submitted by \S+: '[^']*' bdpt", open(sys.argv[2]).read())]
+print(jobs[1], r["seed"], r["iterations"])  # job 1 is the reference
+EOF
+)
+CK=$(ls "$T/data/jobs/$BJ"/ckpt.* | sort -t. -k2 -n | tail -1)
+"$B/tests/farm_tool" exact "$CK" "$scene" --method bdpt --seed "$BSEED" --spp "$BN" --width 64 --height 64 >"$T/exact.out" ||
+  { cat "$T/exact.out"; fail "study job $BJ (bdpt, seed $BSEED, $BN iterations) is not a single process's render"; }
+grep -q "^trace $BN/$BN iterations, identical" "$T/exact.out" || { cat "$T/exact.out"; fail "study job $BJ: trace"; }
 # a study job's snapshots are fetchable by any client (job 2: the first run's pt)
 [ "$(job_field 2 snapshots)" -ge 1 ] || fail "job 2 kept no snapshot"
 "$B/pcbpt-coord" fetch 2 --snapshot 1 --out "$T/snap1.exr" $H >/dev/null && [ -s "$T/snap1.exr" ] || fail "fetch --snapshot 1"
