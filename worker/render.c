@@ -17,6 +17,7 @@
 #include "render_flags.h"
 #include "wire_film.h"
 #include "scene.h"
+#include "thread_pool.h"
 #include "wire_log.h"
 #include "worker.h"
 
@@ -93,9 +94,9 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     if (c->kept[k].job == job) r = &c->kept[k];
   if (!r) {
     size_t film = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
-    int d = set->strategy_layers, layers = PC_LAYER_STD_COUNT + 2 + d * (d + 3) / 2;
     /* the job's two films, the renderer's scratch and one splat film per render thread */
-    size_t bytes = film * (size_t)layers * (size_t)(w->threads > 0 ? w->threads + 3 : 4);
+    int threads = w->threads > 0 ? w->threads : pc_cpu_count();
+    size_t bytes = film * (size_t)pc_film_layer_count(set->strategy_layers) * (size_t)(threads + 3);
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
       int lru = -1;

@@ -38,6 +38,9 @@ static inline vec3 v3_max(vec3 a, vec3 b) { return v3(fmaxf(a.x, b.x), fmaxf(a.y
 static inline float v3_minc(vec3 a) { return fminf(a.x, fminf(a.y, a.z)); }
 static inline float v3_maxabs(vec3 a) { return fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z))); }
 static inline float v3_luminance(vec3 c) { return 0.212671f * c.x + 0.715160f * c.y + 0.072169f * c.z; }
+/* Rec. 709 luminance in double precision, rounded coefficients: what images are measured in
+ * (the film's trace of single iterations, a study's tails and strategy shares). */
+static inline double pc_luminance709(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 static inline bool v3_is_zero(vec3 a) { return a.x == 0.f && a.y == 0.f && a.z == 0.f; }
 static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 static inline float v3_get(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }

@@ -117,8 +117,7 @@ int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e) {
   return PC_OK;
 }
 
-/* What a layer's sums are multiplied by to make its image. */
-static double layer_scale(const pc_film *f, const pc_film_layer *l) {
+double pc_film_layer_scale(const pc_film *f, const pc_film_layer *l) {
   if (l->count == 0) return 0.0;
   if (l->norm == PC_NORM_MAX) return 1.0; /* a maximum, not a sum */
   return l->norm == PC_NORM_LIGHT ? (double)f->w * f->h / (double)l->count : 1.0 / (double)l->count;
@@ -127,7 +126,7 @@ static double layer_scale(const pc_film *f, const pc_film_layer *l) {
 void pc_film_layer_image(const pc_film *f, int i, float *out) {
   const pc_film_layer *l = &f->layers[i];
   size_t n = (size_t)f->w * f->h * 3;
-  double scale = layer_scale(f, l);
+  double scale = pc_film_layer_scale(f, l);
   for (size_t j = 0; j < n; j++) out[j] = l->sum ? (float)(l->sum[j] * scale) : 0.f;
 }
 
@@ -137,7 +136,7 @@ void pc_film_beauty(const pc_film *f, float *out) {
   for (int i = 0; i < PC_LAYER_STD_COUNT && i < f->nlayers; i++) {
     const pc_film_layer *l = &f->layers[i];
     if (l->count == 0) continue;
-    double scale = layer_scale(f, l);
+    double scale = pc_film_layer_scale(f, l);
     for (size_t j = 0; j < n; j++) out[j] += (float)(l->sum[j] * scale);
   }
 }
@@ -182,7 +181,7 @@ static size_t each_variance(const pc_film_part *parts, int n, void (*fn)(void *,
     uint64_t n_it = f->layers[PC_LAYER_PT].count;
     inv_n[i] = 1.0 / (double)n_it;
     inv_n1[i] = 1.0 / (double)(n_it - 1);
-    for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[i][l] = layer_scale(f, &f->layers[l]);
+    for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[i][l] = pc_film_layer_scale(f, &f->layers[l]);
     sq[i] = f->layers[pc_film_square_layer(f)].sum;
   }
   if (!shape) return 0;
@@ -278,10 +277,10 @@ int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
   for (int l = 0; l < out->nlayers; l++) {
     pc_film_layer *o = &out->layers[l];
     if (o->norm == PC_NORM_SQUARE || o->norm == PC_NORM_MAX || o->count == 0) continue;
-    double back = 1.0 / layer_scale(out, o);
+    double back = 1.0 / pc_film_layer_scale(out, o);
     for (int i = 0; i < n; i++) {
       const pc_film *f = parts[i].film;
-      double s = parts[i].weight * layer_scale(f, &f->layers[l]) * back;
+      double s = parts[i].weight * pc_film_layer_scale(f, &f->layers[l]) * back;
       if (s == 0.0) continue;
       const double *src = f->layers[l].sum;
       for (size_t j = 0; j < nv; j++) o->sum[j] += s * src[j];
@@ -307,7 +306,7 @@ int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
    * sq = N((N - 1)V + m^2), with m the mix's own beauty */
   out->layers[q].count = it;
   double scale[PC_LAYER_STD_COUNT];
-  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[l] = layer_scale(out, &out->layers[l]);
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[l] = pc_film_layer_scale(out, &out->layers[l]);
   for (size_t j = 0; j < nv; j++) {
     double m = 0.0;
     for (int l = 0; l < PC_LAYER_STD_COUNT; l++) m += out->layers[l].sum[j] * scale[l];

@@ -56,6 +56,11 @@ typedef struct pc_film {
  * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d"; then beauty_sq and
  * beauty_max. */
 int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
+/* The layers pc_film_init makes for a strategy_depth: the four standard, k + 1 per path length
+ * k <= strategy_depth, beauty_sq and beauty_max. */
+static inline int pc_film_layer_count(int strategy_depth) {
+  return PC_LAYER_STD_COUNT + strategy_depth * (strategy_depth + 3) / 2 + 2;
+}
 void pc_film_free(pc_film *f);
 void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
 /* Index of the per-strategy layer (s,t), or -1 if not kept. */
@@ -76,6 +81,9 @@ void pc_film_drop_per_iteration(pc_film *f);
 /* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max; the traces
  * concatenated (refused, dst unchanged, when an iteration is traced in both). */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);
+/* What layer l's sums are multiplied by to make its image: 1/iterations (eye layers),
+ * W*H/light paths (light layers), 1 (beauty_max), 0 when it counted nothing. */
+double pc_film_layer_scale(const pc_film *f, const pc_film_layer *l);
 /* Normalized RGB of layer i into out (w*h*3). */
 void pc_film_layer_image(const pc_film *f, int i, float *out);
 /* Beauty = sum of the normalized standard layers. */

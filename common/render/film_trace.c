@@ -17,11 +17,8 @@ void pc_trace_block_pixels(int w, int h, uint32_t *count) {
   int gx = w < PC_TRACE_GRID ? w : PC_TRACE_GRID;
   for (int y = 0; y < h; y++) {
     int row = pc_trace_block_of(w, h, 0, y);
-    for (int bx = 0; bx < gx; bx++) {
-      /* the pixels x with x * gx / w == bx */
-      int x0 = (int)(((int64_t)bx * w + gx - 1) / gx), x1 = (int)(((int64_t)(bx + 1) * w + gx - 1) / gx);
-      count[row + bx] += (uint32_t)(x1 - x0);
-    }
+    for (int bx = 0; bx < gx; bx++)
+      count[row + bx] += (uint32_t)(pc_trace_column_start(w, gx, bx + 1) - pc_trace_column_start(w, gx, bx));
   }
 }
 
@@ -83,19 +80,15 @@ bool pc_film_iteration_errors(const pc_film *f, pc_iteration_errors *out) {
   double m[PC_TRACE_MAX_BLOCKS] = {0}, scale[PC_LAYER_STD_COUNT];
   uint32_t count[PC_TRACE_MAX_BLOCKS];
   pc_trace_block_pixels(w, h, count);
-  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
-    const pc_film_layer *L = &f->layers[l];
-    scale[l] = L->count == 0 ? 0.0 : L->norm == PC_NORM_LIGHT ? (double)w * h / (double)L->count : 1.0 / (double)L->count;
-  }
-  static const double lum[3] = {0.2126, 0.7152, 0.0722};
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) scale[l] = pc_film_layer_scale(f, &f->layers[l]);
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++) {
       size_t j = 3 * ((size_t)y * (size_t)w + (size_t)x);
-      double v = 0.0;
+      double b[3] = {0, 0, 0};
       for (int l = 0; l < PC_LAYER_STD_COUNT; l++)
         if (scale[l] != 0.0)
-          for (int c = 0; c < 3; c++) v += lum[c] * f->layers[l].sum[j + c] * scale[l];
-      m[pc_trace_block_of(w, h, x, y)] += v;
+          for (int c = 0; c < 3; c++) b[c] += f->layers[l].sum[j + c] * scale[l];
+      m[pc_trace_block_of(w, h, x, y)] += pc_luminance709(b[0], b[1], b[2]);
     }
   for (int k = 0; k < nb; k++) m[k] /= count[k];
   double *e = malloc(t->n * sizeof *e);

@@ -32,6 +32,9 @@ static inline int pc_trace_block_of(int w, int h, int x, int y) {
   int gx = w < PC_TRACE_GRID ? w : PC_TRACE_GRID, gy = h < PC_TRACE_GRID ? h : PC_TRACE_GRID;
   return (int)((int64_t)y * gy / h) * gx + (int)((int64_t)x * gx / w);
 }
+/* The first column of block column bx (of gx) of a w-pixel row: the x with x * gx / w == bx
+ * are [pc_trace_column_start(w, gx, bx), pc_trace_column_start(w, gx, bx + 1)). */
+static inline int pc_trace_column_start(int w, int gx, int bx) { return (int)(((int64_t)bx * w + gx - 1) / gx); }
 /* Pixels in each block (count[pc_trace_blocks(w, h)]). */
 void pc_trace_block_pixels(int w, int h, uint32_t *count);
 

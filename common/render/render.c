@@ -18,6 +18,7 @@
 #include "thread_pool.h"
 
 #define TILE 16
+#define FOLD_ROWS 8 /* rows per work item of the fold (fold_iteration) */
 #define LIGHT_CHUNK 1024 /* light paths per work item of the light pass */
 
 struct pc_renderer {
@@ -35,6 +36,7 @@ struct pc_renderer {
   uint64_t light_first;   /* first light path of the light pass (the others are paired) */
   pc_path_vertex *verts;  /* per-thread sub-path buffers */
   pc_pcbpt *pcbpt;        /* CBDPT/PCBPT per-iteration state */
+  double *band_blocks;    /* a traced iteration's luminance per band of rows and trace block */
   /* the iteration's work items (eye tiles, light chunks): all, and finished so far */
   atomic_uint_fast64_t items_total, items_done;
 };
@@ -155,7 +157,10 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     r->tctx = calloc((size_t)threads, sizeof(pc_tctx));
     r->splatq = calloc((size_t)threads, sizeof(pc_film_queue));
     r->verts = calloc((size_t)threads * 2 * (PC_MAX_SEGMENTS + 2), sizeof(pc_path_vertex));
-    if (!r->splat || !r->tctx || !r->splatq || !r->verts) rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+    r->band_blocks = malloc((size_t)(settings->height + FOLD_ROWS - 1) / FOLD_ROWS *
+                            (size_t)pc_trace_blocks(settings->width, settings->height) * sizeof(double));
+    if (!r->splat || !r->tctx || !r->splatq || !r->verts || !r->band_blocks)
+      rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
   for (int i = 0; rc == PC_OK && i < threads; i++) {
     rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
@@ -210,6 +215,7 @@ void pc_renderer_destroy(pc_renderer *r) {
   free(r->tctx);
   free(r->splatq);
   free(r->verts);
+  free(r->band_blocks);
   pc_pcbpt_destroy(r->pcbpt);
   pc_film_free(&r->scratch);
   pc_scene_view_destroy(r->view);
@@ -262,7 +268,6 @@ static void light_chunk(void *arg, int thread, int item) {
  * whatever the thread count). Done
  * serially this pass would cap the thread speed-up (it moves every layer of the image once per
  * iteration). */
-#define FOLD_ROWS 8
 typedef struct fold_job {
   pc_renderer *r;
   pc_film *film;
@@ -287,14 +292,14 @@ static void trace_rows(const fold_job *j, int item) {
   for (int y = item * FOLD_ROWS; y < y1; y++) {
     int row = pc_trace_block_of(w, h, 0, y);
     for (int bx = 0, x = 0; bx < gx; bx++) {
-      int x1 = (int)(((int64_t)(bx + 1) * w + gx - 1) / gx); /* the first x of the next block */
+      int x1 = pc_trace_column_start(w, gx, bx + 1);
       double sum = 0.0;
       for (; x < x1; x++) {
         size_t k = 3 * ((size_t)y * (size_t)w + (size_t)x);
         double b[3];
         for (int ch = 0; ch < 3; ch++)
           b[ch] = s[0][k + ch] * c[0] + s[1][k + ch] * c[1] + s[2][k + ch] * c[2] + s[3][k + ch] * c[3];
-        sum += 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+        sum += pc_luminance709(b[0], b[1], b[2]);
       }
       out[row + bx] += sum;
     }
@@ -358,8 +363,9 @@ static void fold_rows(void *arg, int thread, int item) {
   }
 }
 
-/* band_blocks: room for the trace's band sums when this iteration is traced, else NULL. */
-static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t iteration, double *band_blocks) {
+/* traced: iteration goes into the film's trace too (the caller reserved room). */
+static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t iteration, bool traced) {
+  double *band_blocks = traced ? r->band_blocks : NULL;
   fold_job j = {.r = r, .film = film, .light = light, .square = pc_film_square_layer(film), .band_blocks = band_blocks};
   _Static_assert(PC_LAYER_PT == 0 && PC_LAYER_NEE == 1 && PC_LAYER_LT == 2 && PC_LAYER_INNER == 3 &&
                      PC_LAYER_STD_COUNT == 4, "fold_rows adds the four standard layers by index");
@@ -384,7 +390,7 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t i
     for (int b = 0; b < nbands; b++)
       for (int k = 0; k < nb; k++) sum[k] += band_blocks[(size_t)b * (size_t)nb + (size_t)k];
     for (int k = 0; k < nb; k++) mean[k] = (float)(sum[k] / count[k]);
-    pc_trace_put(&film->trace, nb, (uint32_t)iteration, mean); /* the caller reserved room */
+    pc_trace_put(&film->trace, nb, (uint32_t)iteration, mean);
   }
   for (int i = 0; i < film->nlayers; i++) {
     if (r->scratch.layers[i].norm != PC_NORM_LIGHT) film->layers[i].count += 1;
@@ -398,12 +404,11 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t i
   }
 }
 
-/* One iteration, `it`, into film (and stats); band_blocks: room for the trace's band sums (NULL:
- * the call traces nothing). */
-static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stats *stats, double *band_blocks, pc_err *e) {
+/* One iteration, `it`, into film (and stats). */
+static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stats *stats, pc_err *e) {
   int nthreads = pc_pool_size(r->pool);
   uint64_t npix = (uint64_t)r->set.width * (uint64_t)r->set.height;
-  bool traced = band_blocks && it < PC_TRACE_ITERATIONS && !pc_trace_has(&film->trace, (uint32_t)it);
+  bool traced = it < PC_TRACE_ITERATIONS && !pc_trace_has(&film->trace, (uint32_t)it);
   if (traced) {
     int rc = pc_trace_reserve(&film->trace, film->trace.n + 1, pc_trace_blocks(r->set.width, r->set.height), e);
     if (rc != PC_OK) return rc;
@@ -437,7 +442,7 @@ static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stat
     return pc_errf(e, PC_ECANCELED, "render cancelled");
   }
   double t1 = now_seconds();
-  fold_iteration(r, film, light, it, traced ? band_blocks : NULL);
+  fold_iteration(r, film, light, it, traced);
   if (stats) {
     stats->iterations++;
     stats->eye_paths += npix;
@@ -477,18 +482,10 @@ int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film
     if (strcmp(film->layers[i].name, r->scratch.layers[i].name) != 0)
       return pc_errf(e, PC_EINVAL, "film layer %d is '%s', the render writes '%s'", i, film->layers[i].name,
                      r->scratch.layers[i].name);
-  /* the trace's band sums, when this call renders one of the job's first iterations */
-  double *band_blocks = NULL;
-  if (first < PC_TRACE_ITERATIONS && count > 0) {
-    size_t nbands = (size_t)(r->set.height + FOLD_ROWS - 1) / FOLD_ROWS;
-    band_blocks = malloc(nbands * (size_t)pc_trace_blocks(r->set.width, r->set.height) * sizeof *band_blocks);
-    if (!band_blocks) return pc_errf(e, PC_ENOMEM, "render: out of memory for the iteration trace");
-  }
   int rc = PC_OK;
   for (uint64_t k = 0; k < count && rc == PC_OK; k++) {
-    rc = render_one(r, first + k, film, stats, band_blocks, e);
+    rc = render_one(r, first + k, film, stats, e);
     if (progress && rc == PC_OK) progress(user, k + 1);
   }
-  free(band_blocks);
   return rc;
 }

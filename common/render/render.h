@@ -83,7 +83,9 @@ double pc_renderer_progress(const pc_renderer *r);
 /* Renders iterations [first, first+count) adding into film (sums and counts) and stats.
  * `cancel`, if non-NULL, is polled between work items; when it becomes true the call returns
  * PC_ECANCELED and the film holds only whole iterations (none of the partial one).
- * `progress(user, done)` is called after each finished iteration (may be NULL). */
+ * `progress(user, done)` is called after each finished iteration (may be NULL). Iterations
+ * below PC_TRACE_ITERATIONS are also traced into film->trace, each once: one the film's trace
+ * holds already (the same iteration rendered into it again) is not traced twice. */
 int pc_render_iterations(pc_renderer *r, uint64_t first, uint64_t count, pc_film *film,
                          pc_render_stats *stats, atomic_bool *cancel,
                          void (*progress)(void *user, uint64_t done), void *user, pc_err *e);

@@ -64,7 +64,7 @@ typedef struct pc_study_snap {
 
 /* Rec. 709 luminance of one rgb value, and the mean over an image (study_tails.c): the
  * brightness the tails and the strategy shares are measured in. */
-static inline double pc_study_luminance(const float *rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+static inline double pc_study_luminance(const float *rgb) { return pc_luminance709(rgb[0], rgb[1], rgb[2]); }
 double pc_study_mean_luminance(const pc_image *im);
 
 /* Heavy tails of a method's final image (study_tails.c): over the pixels whose luminance is above

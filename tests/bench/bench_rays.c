@@ -71,8 +71,8 @@ static const char *mode_name[NMODES] = {"single (rtcIntersect1/rtcOccluded1)", "
 /* One pass over the log in mode m; returns how many rays hit (intersections) or are blocked. */
 static size_t replay(RTCScene scn, const ray_log *l, int m) {
   enum { RUN = 256 };
-  static struct RTCRayHit hits[RUN];
-  static struct RTCRay rays[RUN];
+  struct RTCRayHit hits[RUN];
+  struct RTCRay rays[RUN];
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   size_t found = 0;

@@ -113,7 +113,7 @@ static void block_means(const pc_film *f, double *m) {
   for (int y = 0; y < f->h; y++)
     for (int x = 0; x < f->w; x++) {
       const float *p = img + 3 * ((size_t)y * f->w + x);
-      m[pc_trace_block_of(f->w, f->h, x, y)] += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+      m[pc_trace_block_of(f->w, f->h, x, y)] += pc_luminance709(p[0], p[1], p[2]);
     }
   for (int k = 0; k < nb; k++) m[k] /= count[k];
   free(img);

@@ -316,10 +316,9 @@ static void put_iteration(pc_film *f, uint32_t it, double v) {
 static void test_trace(void **state) {
   (void)state;
   pc_err e = {0};
-  pc_film a, b, out;
-  assert_int_equal(pc_film_init(&a, 16, 2, 0, &e), 0);
-  assert_int_equal(pc_film_init(&b, 16, 2, 0, &e), 0);
-  assert_int_equal(pc_film_init(&out, 16, 2, 0, &e), 0);
+  pc_film f[3];
+  for (int i = 0; i < 3; i++) assert_int_equal(pc_film_init(&f[i], 16, 2, 0, &e), 0);
+  pc_film *a = &f[0], *b = &f[1], *out = &f[2];
   assert_int_equal(pc_trace_blocks(16, 2), 16);
   uint32_t count[PC_TRACE_MAX_BLOCKS];
   pc_trace_block_pixels(16, 2, count);
@@ -328,13 +327,13 @@ static void test_trace(void **state) {
   uint32_t total = 0;
   for (int k = 0; k < pc_trace_blocks(20, 3); k++) total += count[k];
   assert_int_equal(total, 60);
-  for (uint32_t it = 0; it < 60; it++) put_iteration(&a, it, it == 7 ? 101 : 1);
-  for (uint32_t it = 60; it < 100; it++) put_iteration(&b, it, 1);
-  assert_int_equal(pc_film_add(&a, &b, &e), 0);
-  assert_int_equal(a.trace.n, 100);
-  assert_true(pc_trace_has(&a.trace, 99) && !pc_trace_has(&a.trace, 100));
+  for (uint32_t it = 0; it < 60; it++) put_iteration(a, it, it == 7 ? 101 : 1);
+  for (uint32_t it = 60; it < 100; it++) put_iteration(b, it, 1);
+  assert_int_equal(pc_film_add(a, b, &e), 0);
+  assert_int_equal(a->trace.n, 100);
+  assert_true(pc_trace_has(&a->trace, 99) && !pc_trace_has(&a->trace, 100));
   pc_iteration_errors ie;
-  assert_true(pc_film_iteration_errors(&a, &ie));
+  assert_true(pc_film_iteration_errors(a, &ie));
   double eps = PC_RELMSE_EPS, small = (100.0 / 99) / (4 + eps), big = 99.0 * 99 * (100.0 / 99) / (4 + eps);
   assert_int_equal(ie.n, 100);
   assert_int_equal(ie.worst, 7);
@@ -344,29 +343,32 @@ static void test_trace(void **state) {
   assert_true(fabs(ie.top1 - big / (99 * small + big)) <= 1e-9);
   assert_int_equal(ie.ntail, 6); /* 2^-1 .. 2^-6 of 100 iterations */
   /* the same iterations again are refused, and a is unchanged */
-  assert_int_equal(pc_film_add(&a, &b, &e), PC_EINVAL);
+  assert_int_equal(pc_film_add(a, b, &e), PC_EINVAL);
   assert_non_null(strstr(e.msg, "iteration 60"));
-  assert_int_equal(a.trace.n, 100);
-  assert_int_equal(a.layers[PC_LAYER_PT].count, 100);
+  assert_int_equal(a->trace.n, 100);
+  assert_int_equal(a->layers[PC_LAYER_PT].count, 100);
   /* a mix keeps the heaviest part's trace */
-  pc_film_part parts[] = {{&a, 0.3}, {&b, 0.7}};
-  assert_int_equal(pc_film_mix(&out, parts, 2, &e), 0);
-  assert_int_equal(out.trace.n, 40);
-  assert_int_equal(out.trace.iteration[0], 60);
+  pc_film_part parts[] = {{a, 0.3}, {b, 0.7}};
+  assert_int_equal(pc_film_mix(out, parts, 2, &e), 0);
+  assert_int_equal(out->trace.n, 40);
+  assert_int_equal(out->trace.iteration[0], 60);
   /* one iteration cannot tell; clearing empties the trace */
-  pc_film_clear(&a);
-  put_iteration(&a, 3, 1);
-  assert_false(pc_film_iteration_errors(&a, &ie));
-  assert_true(pc_trace_has(&a.trace, 3) && !pc_trace_has(&a.trace, 7));
-  pc_film_free(&a);
-  pc_film_free(&b);
-  pc_film_free(&out);
+  pc_film_clear(a);
+  put_iteration(a, 3, 1);
+  assert_false(pc_film_iteration_errors(a, &ie));
+  assert_true(pc_trace_has(&a->trace, 3) && !pc_trace_has(&a->trace, 7));
+  for (int i = 0; i < 3; i++) pc_film_free(&f[i]);
 }
 
 static void test_bad_sizes(void **state) {
   (void)state;
   pc_film f;
   pc_err e = {0};
+  for (int d = 0; d <= 8; d++) { /* what a worker sizes its kept renderers by */
+    assert_int_equal(pc_film_init(&f, 2, 2, d, &e), 0);
+    assert_int_equal(f.nlayers, pc_film_layer_count(d));
+    pc_film_free(&f);
+  }
   assert_int_not_equal(pc_film_init(&f, 0, 4, 0, &e), 0);
   assert_int_not_equal(pc_film_init(&f, 4, 4, 9, &e), 0);
 }
