@@ -103,7 +103,7 @@ int pc_cmd_submit(int argc, char **argv) {
   double prior_amount = 0;
   if (!rc && req.method_auto) {
     /* the pilot's candidates are short jobs of their own on the farm, so every worker renders
-     * them; the client waits for them and takes each one's cost from its worker-seconds */
+     * them; the client waits for them and takes each one's cost from their render threads' CPU seconds */
     double pilot_s;
     rc = pc_pilot_farm_choose(&fp, &req, report, sizeof report, &pilot_s, &prior_amount, &e);
     if (!rc) fprintf(stderr, "pcbpt-coord submit: auto: %s\n", report);
@@ -145,8 +145,8 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
-           j->halt_noise, j->worker_seconds, j->snapshots, j->ranges_rerun);
+    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"cpu_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
+           j->halt_noise, j->worker_seconds, j->cpu_seconds, j->snapshots, j->ranges_rerun);
     if (*j->auto_report) json_str(j->auto_report);
     else printf("null");
     printf("}");

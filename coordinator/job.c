@@ -279,6 +279,7 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.max_depth", .type = PC_ATTR_DOUBLE, .d = j->set.max_depth},
     {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = wall},
     {.name = "pcbpt.worker_seconds", .type = PC_ATTR_DOUBLE, .d = st->t_total},
+    {.name = "pcbpt.cpu_seconds", .type = PC_ATTR_DOUBLE, .d = st->t_cpu},
     {.name = "pcbpt.rays", .type = PC_ATTR_DOUBLE, .d = (double)st->rays},
     {.name = "pcbpt.time_paths", .type = PC_ATTR_DOUBLE, .d = st->t_paths},
     {.name = "pcbpt.time_lt", .type = PC_ATTR_DOUBLE, .d = st->t_lt},

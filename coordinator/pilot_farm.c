@@ -67,6 +67,7 @@ static int wait_candidate(pc_pilot_farm *fp, uint64_t job, const pc_pilot_candid
       if (!done) rc = pc_errf(e, PC_EIO, "auto pilot: job %llu (%s) %s: %s", (unsigned long long)job, c->label, j->state, j->error);
       out->iterations = j->iterations_done;
       out->seconds = j->worker_seconds;
+      out->cpu_seconds = j->cpu_seconds;
       out->own_relmse = j->relmse_estimate;
       fp->worker_seconds += j->worker_seconds;
       if (c->counts && done) {

@@ -335,7 +335,8 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
       const Pcbpt__RenderStats *s = u->stats;
       /* informational only, but never let a peer put NaN or nonsense into a header */
       bool ok = s->t_paths >= 0 && s->t_paths < 1e9 && s->t_lt >= 0 && s->t_lt < 1e9 && s->t_pmf >= 0 && s->t_pmf < 1e9 &&
-                s->t_connect >= 0 && s->t_connect < 1e9 && s->t_total >= 0 && s->t_total < 1e9;
+                s->t_connect >= 0 && s->t_connect < 1e9 && s->t_total >= 0 && s->t_total < 1e9 &&
+                (s->t_cpu == -1.0 || (s->t_cpu >= 0 && s->t_cpu < 1e9));
       if (ok) {
         p->up_stats.rays = s->rays;
         p->up_stats.t_paths = s->t_paths;
@@ -344,6 +345,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
         p->up_stats.t_connect = s->t_connect;
         p->up_stats.pmf_bytes = s->pmf_bytes;
         p->up_stats.t_total = s->t_total;
+        p->up_stats.t_cpu = s->t_cpu;
       }
     }
   } else if (u->job_id != p->up_job || u->range_id != p->up_range || u->first != p->up_first ||
@@ -598,6 +600,7 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->relmse_estimate = j->relmse_est;
     s->auto_report = j->auto_report;
     s->worker_seconds = j->stats_merged.t_total;
+    s->cpu_seconds = j->stats_merged.t_cpu;
     s->snapshots = j->snaps_taken;
     s->ranges_rerun = j->ranges_rerun;
     s->elapsed = j->elapsed;

@@ -34,6 +34,8 @@ static const char *const migrations[] = {
     "ALTER TABLE jobs ADD COLUMN t_total REAL NOT NULL DEFAULT 0;"
     "ALTER TABLE jobs ADD COLUMN snapshots INTEGER NOT NULL DEFAULT 0;"
     "ALTER TABLE jobs ADD COLUMN ranges_rerun INTEGER NOT NULL DEFAULT 0;",
+    /* CPU seconds of the render threads (the auto pilot's cost); unknown for older jobs */
+    "ALTER TABLE jobs ADD COLUMN t_cpu REAL NOT NULL DEFAULT -1;",
 };
 
 static int db_err(pc_coord *c, pc_err *e, const char *what) {
@@ -123,8 +125,8 @@ static int step_done(pc_coord *c, sqlite3_stmt *st, int bound, pc_err *e, const 
 int pc_store_insert_job(pc_coord *c, pc_job *j, pc_err *e) {
   sqlite3_stmt *st;
   int b = SQLITE_OK;
-  if (sqlite3_prepare_v2(c->db, "INSERT INTO jobs(name,bundle,settings,halt_iterations,halt_seconds,priority,state)"
-                                " VALUES(?,?,?,?,?,?,?)", -1, &st, NULL) != SQLITE_OK)
+  if (sqlite3_prepare_v2(c->db, "INSERT INTO jobs(name,bundle,settings,halt_iterations,halt_seconds,priority,state,t_cpu)"
+                                " VALUES(?,?,?,?,?,?,?,0)", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare insert job");
   b |= sqlite3_bind_text(st, 1, j->name, -1, SQLITE_TRANSIENT);
   b |= sqlite3_bind_blob(st, 2, j->bundle, PC_BUNDLE_HASH, SQLITE_TRANSIENT);
@@ -143,7 +145,7 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   int b = SQLITE_OK;
   if (sqlite3_prepare_v2(c->db, "UPDATE jobs SET state=?,next_iter=?,done=?,elapsed=?,ckpt_gen=?,light_per_iter=?,error=?,"
                                 "rays=?,t_paths=?,t_lt=?,t_pmf=?,t_connect=?,pmf_bytes=?,failures=?,t_total=?,snapshots=?,"
-                                "ranges_rerun=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
+                                "ranges_rerun=?,t_cpu=? WHERE id=?", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare update job");
   b |= sqlite3_bind_text(st, 1, pc_job_state_name(j->state), -1, SQLITE_STATIC);
   b |= sqlite3_bind_int64(st, 2, (sqlite3_int64)j->next_iter);
@@ -162,7 +164,8 @@ int pc_store_update_job(pc_coord *c, const pc_job *j, pc_err *e) {
   b |= sqlite3_bind_double(st, 15, j->stats.t_total);
   b |= sqlite3_bind_int64(st, 16, (sqlite3_int64)j->snaps_taken);
   b |= sqlite3_bind_int64(st, 17, (sqlite3_int64)j->ranges_rerun);
-  b |= sqlite3_bind_int64(st, 18, (sqlite3_int64)j->id);
+  b |= sqlite3_bind_double(st, 18, j->stats.t_cpu);
+  b |= sqlite3_bind_int64(st, 19, (sqlite3_int64)j->id);
   return step_done(c, st, b, e, "update job");
 }
 
@@ -224,7 +227,7 @@ static int load_ranges(pc_coord *c, pc_job *j, pc_err *e) {
 int pc_store_load(pc_coord *c, pc_err *e) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(c->db, "SELECT id,name,bundle,settings,halt_iterations,halt_seconds,priority,state,next_iter,"
-                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes,failures,t_total,snapshots,ranges_rerun FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
+                                "done,elapsed,ckpt_gen,light_per_iter,error,rays,t_paths,t_lt,t_pmf,t_connect,pmf_bytes,failures,t_total,snapshots,ranges_rerun,t_cpu FROM jobs ORDER BY id", -1, &st, NULL) != SQLITE_OK)
     return db_err(c, e, "prepare load jobs");
   pc_job **tail = &c->jobs;
   int r, rc = 0;
@@ -258,6 +261,7 @@ int pc_store_load(pc_coord *c, pc_err *e) {
     j->stats.t_total = sqlite3_column_double(st, 21);
     j->snaps_taken = j->snaps_queued_n = (uint32_t)sqlite3_column_int64(st, 22);
     j->ranges_rerun = (uint32_t)sqlite3_column_int64(st, 23);
+    j->stats.t_cpu = sqlite3_column_double(st, 24);
     j->stats_merged = j->stats;
     j->relmse_est = -1; /* until its film is loaded */
     *tail = j;

@@ -103,6 +103,7 @@ static void send_inflight(worker *w) {
   st.t_connect = w->in_stats.t_connect;
   st.pmf_bytes = w->in_stats.pmf_bytes;
   st.t_total = w->in_stats.t_total;
+  st.t_cpu = w->in_stats.t_cpu;
   for (size_t i = 0; i < nchunks; i++) {
     Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
     Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 struct pc_pool {
@@ -117,6 +118,22 @@ void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg) {
   pthread_mutex_lock(&p->mu);
   while (p->running > 0) pthread_cond_wait(&p->cv_done, &p->mu);
   pthread_mutex_unlock(&p->mu);
+}
+
+static double clock_seconds(clockid_t id) {
+  struct timespec ts;
+  if (clock_gettime(id, &ts) != 0) return -1.0;
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double pc_pool_cpu_seconds(const pc_pool *p) {
+  double sum = clock_seconds(CLOCK_THREAD_CPUTIME_ID);
+  for (int i = 1; i < p->n && sum >= 0; i++) {
+    clockid_t id;
+    double s = pthread_getcpuclockid(p->threads[i], &id) == 0 ? clock_seconds(id) : -1.0;
+    sum = s < 0 ? -1.0 : sum + s;
+  }
+  return sum;
 }
 
 int pc_cpu_count(void) {

@@ -15,6 +15,10 @@ void pc_pool_destroy(pc_pool *p);
 int pc_pool_size(const pc_pool *p);
 /* Runs fn(arg, thread, item) for item in [0, nitems) and returns when all are done. */
 void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg);
+/* CPU seconds the pool's threads (the caller as thread 0 when it is the calling thread) have
+ * run so far, from the kernel's per-thread clocks: unlike wall time, it does not grow while
+ * another process or thread holds the cores. < 0 when a clock cannot be read. */
+double pc_pool_cpu_seconds(const pc_pool *p);
 /* Number of online CPUs (at least 1). */
 int pc_cpu_count(void);
 

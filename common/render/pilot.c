@@ -142,11 +142,28 @@ static int find(const pc_pilot *p, pc_method m, int k) {
   return -1;
 }
 
+/* The cost the candidates are compared by: CPU seconds of the render threads when every
+ * candidate has them, else wall seconds. The pilot's short ranges run beside the farm's other
+ * work (on an embedded farm, the coordinator merging and writing the candidates' images on the
+ * same cores): a render thread that loses its core stalls the others at the next barrier, and
+ * PCBPT, with more phases per iteration, stalls more. On cornell-box 128x128 that put K = 1 at
+ * 1.3-1.6x BDPT's wall time per iteration in the pilot against 1.15-1.2x in a render of its own;
+ * in CPU seconds the pilot saw 1.07-1.38 (docs/auto.md). */
+static bool cpu_known(const pc_pilot *p) {
+  for (int i = 0; i < p->n; i++)
+    if (p->c[i].iterations && !(p->c[i].cpu_seconds > 0)) return false;
+  return true;
+}
+
+static double pilot_cost(const pc_pilot_candidate *c, bool cpu) { return cpu ? c->cpu_seconds : c->seconds; }
+
 void pc_pilot_choose(pc_pilot *p) {
   pooled_relmse(p);
+  bool cpu = cpu_known(p);
   for (int i = 0; i < p->n; i++) {
     pc_pilot_candidate *c = &p->c[i];
-    c->efficiency = c->relmse > 0 && c->seconds > 0 ? 1.0 / (c->relmse * c->seconds) : 0;
+    double cost = pilot_cost(c, cpu);
+    c->efficiency = c->relmse > 0 && cost > 0 ? 1.0 / (c->relmse * cost) : 0;
     /* an image without noise (all black, or exact) is infinitely efficient */
     if (c->relmse == 0 && c->iterations >= 2) c->efficiency = INFINITY;
   }
@@ -179,6 +196,7 @@ static void take_batch(pc_pilot_candidate *c, pc_pilot_candidate *b) {
     free(c->var);
     c->iterations = b->iterations;
     c->seconds = b->seconds;
+    c->cpu_seconds = b->cpu_seconds;
     c->own_relmse = b->own_relmse;
     c->npix = b->npix;
     c->mean = b->mean;
@@ -199,6 +217,7 @@ static void take_batch(pc_pilot_candidate *c, pc_pilot_candidate *b) {
   else c->own_relmse = -1;
   c->iterations += b->iterations;
   c->seconds += b->seconds;
+  c->cpu_seconds = c->cpu_seconds > 0 && b->cpu_seconds > 0 ? c->cpu_seconds + b->cpu_seconds : -1.0;
 }
 
 /* Renders one batch of candidates from..p->n-1 (iterations with seed ^ salt), takes it into
@@ -263,11 +282,14 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
 }
 
 void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
-  size_t n = (size_t)snprintf(buf, size, "chose %s (pilot %.2f s)", p->c[p->best].label, p->seconds);
+  bool cpu = cpu_known(p);
+  size_t n = (size_t)snprintf(buf, size, "chose %s (pilot %.2f s), cost in %s", p->c[p->best].label, p->seconds,
+                              cpu ? "CPU ms/it" : "wall ms/it");
   for (int i = 0; i < p->n && n < size; i++) {
     const pc_pilot_candidate *c = &p->c[i];
-    double ms = c->iterations ? 1e3 * c->seconds / (double)c->iterations : 0;
-    n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g cost ms/it %.1f it %llu", c->label, c->efficiency,
-                          c->relmse, ms, (unsigned long long)c->iterations);
+    double ms = c->iterations ? 1e3 * pilot_cost(c, cpu) / (double)c->iterations : 0;
+    double wall = c->iterations ? 1e3 * c->seconds / (double)c->iterations : 0;
+    n += (size_t)snprintf(buf + n, size - n, "; %s eff %.4g relMSE %.4g cost %.1f wall %.1f it %llu", c->label,
+                          c->efficiency, c->relmse, ms, wall, (unsigned long long)c->iterations);
   }
 }

@@ -50,7 +50,9 @@ typedef struct pc_pilot_candidate {
   bool counts;          /* rendered whatever the data says (stage 1): its iterations may
                            count in the image (docs/auto.md); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
-  double seconds;       /* their cost: worker-seconds of the candidate's jobs on a farm */
+  double seconds;       /* worker-seconds (wall) of the candidate's jobs: what the pilot spent */
+  double cpu_seconds;   /* CPU seconds of the render threads over them (<= 0: unknown): the cost
+                           compared, unless a candidate lacks it (pilot_cost in pilot.c) */
   double own_relmse;    /* the image's own relMSE estimate (< 0: could not tell) */
   double relmse;        /* relMSE against the candidates' pooled mean (pc_pilot_choose; the
                            own estimate when no image was kept); < 0: could not tell */
@@ -74,8 +76,8 @@ int pc_pilot_keep_image(pc_pilot_candidate *c, int w, int h, const float *mean, 
 /* Renders one batch: `iterations` iterations (0 to iterations - 1) of each of the n candidates
  * with the seed c[i].set.seed ^ salt, side by side (interleaved, so a change of the machine's
  * load falls on all of them alike), and fills out[i] (zeroed by the caller) with their
- * iterations, cost (seconds, in the unit of the pilot's slices), own_relmse and, if it can,
- * the image (pc_pilot_keep_image). */
+ * iterations, cost (seconds, in the unit of the pilot's slices, and cpu_seconds), own_relmse
+ * and, if it can, the image (pc_pilot_keep_image). */
 typedef int (*pc_pilot_render_fn)(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
                                   pc_pilot_candidate *out, pc_err *e);
 

@@ -116,6 +116,7 @@ void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src) {
   dst->light_paths += src->light_paths;
   dst->rays += src->rays;
   dst->t_total += src->t_total;
+  dst->t_cpu = dst->t_cpu < 0 || src->t_cpu < 0 ? -1.0 : dst->t_cpu + src->t_cpu;
   dst->t_paths += src->t_paths;
   dst->t_lt += src->t_lt;
   dst->t_pmf += src->t_pmf;
@@ -413,7 +414,7 @@ static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stat
     int rc = pc_trace_reserve(&film->trace, film->trace.n + 1, pc_trace_blocks(r->set.width, r->set.height), e);
     if (rc != PC_OK) return rc;
   }
-  double t0 = now_seconds();
+  double t0 = now_seconds(), cpu0 = pc_pool_cpu_seconds(r->pool);
   if (r->view) {
     int rc = pc_scene_view_set_time(r->view, pc_scene_time(r->view, r->set.seed, it), e);
     if (rc != PC_OK) return rc;
@@ -468,6 +469,8 @@ static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stat
       stats->t_connect += span * tc / busy;
     }
     stats->t_total += now_seconds() - t0;
+    double cpu1 = pc_pool_cpu_seconds(r->pool);
+    stats->t_cpu = stats->t_cpu < 0 || cpu0 < 0 || cpu1 < cpu0 ? -1.0 : stats->t_cpu + (cpu1 - cpu0);
   }
   return PC_OK;
 }

@@ -56,6 +56,8 @@ typedef struct pc_render_stats {
   uint64_t eye_paths, light_paths;
   uint64_t rays;           /* closest-hit and shadow rays */
   double t_total;          /* wall seconds inside pc_render_iterations */
+  double t_cpu;            /* CPU seconds of the render threads meanwhile (< 0: unknown): what a
+                              method costs, without the time other load took from it */
   double t_paths;          /* eye/light sub-path generation */
   double t_lt;             /* light tracing splats */
   double t_pmf;            /* PCBPT importance records */
