@@ -330,10 +330,18 @@ int pc_cmd_render(int argc, char **argv) {
   printf("%s: %.0f iterations, %.2f s%s, %.0f samples/s, %.2f Mrays/s, %d threads%s%s -> %s, %s\n",
          pc_method_name(req.set.method), it, secs, pilot_note, samples / secs, rays / secs * 1e-6,
          threads ? (int)threads : pc_cpu_count(), est, dropped > 0 ? " (non-finite samples dropped)" : "", out, png);
-  if (it > 0)
-    printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f\n",
+  if (it > 0) {
+    printf("per iteration (ms): path generation %.1f, light tracing %.1f, PMF build %.1f, sample+connect %.1f",
            1e3 * attr_number(&img, "pcbpt.time_paths") / it, 1e3 * attr_number(&img, "pcbpt.time_lt") / it,
            1e3 * attr_number(&img, "pcbpt.time_pmf") / it, 1e3 * attr_number(&img, "pcbpt.time_connect") / it);
+    /* the render threads' CPU time against their wall time: below ~95% they waited for one
+       another (a serial phase, or a thread that lost its core to other work) */
+    double cpu = attr_number(&img, "pcbpt.cpu_seconds"), wall = attr_number(&img, "pcbpt.worker_seconds");
+    int nthreads = threads ? (int)threads : pc_cpu_count();
+    if (cpu > 0 && wall > 0)
+      printf("; CPU %.1f, render threads busy %.0f%%", 1e3 * cpu / it, 100 * cpu / (wall * nthreads));
+    putchar('\n');
+  }
   if (has_attr(&img, "pcbpt.iteration_error.n"))
     printf("error of single iterations (%.0f of them, %dx%d blocks): median %.3g, mean %.3g, worst %.3g (iteration %.0f); "
            "the worst 1%% carry %.1f%% of it\n",
