@@ -314,9 +314,14 @@ bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *h
   return true;
 }
 
-float pc_offset_eps(const pc_scene *s, vec3 p) {
-  return 1e-4f * fmaxf(1.f, fmaxf(v3_maxabs(p), s->scene_radius * 1e-2f));
-}
+/* Floating point is relative, so is the offset: a hit point rebuilt from barycentrics is off
+ * its triangle's plane by a few ulps of its coordinates (or, through the barycentrics' own
+ * error, of the triangle's extent, which the scene's radius bounds), and 2^-20 is 8 ulps of the
+ * larger. The offset was 1e-4 x max(1, |p|, radius / 100), whose share of the geometry grew as
+ * the scene shrank or moved off the origin: the Cornell box at 1/1000 scale came out 0.4-0.9%
+ * off, and moved 10^4 units away (an offset of 1, half the box) 13-28% (tests/cli/test_scale.sh). */
+#define OFFSET_RELATIVE 0x1p-20f
+float pc_offset_eps(const pc_scene *s, vec3 p) { return OFFSET_RELATIVE * fmaxf(v3_maxabs(p), s->scene_radius); }
 
 vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) { return pc_offset_by(p, ng, d, pc_offset_eps(s, p)); }
 

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Scale and placement do not change the image: the Cornell box scaled by 1/1000 and by 1000
+# renders the same as the original with the same seed (every method draws the same numbers; only
+# rounding differs), and moved 10^4 units off the origin (where a float's step is 10^-3 of the
+# 2-unit box) it keeps its brightness. Ray offsets off surfaces must be relative to the
+# coordinates: with an absolute part (1e-4 x max(1, |p|, ...)) the small box came out 0.4-0.9%
+# off and the moved one 13-28% (an offset of 1 unit, half the box).
+set -u
+. "$(dirname "$0")/lib.inc"
+cp -r "$src/scenes/cornell-box/meshes" "$tmp/meshes"
+python3 - "$src/scenes/cornell-box/scene.xml" "$tmp" <<'PY' || fail=1
+import re, sys
+src, out = open(sys.argv[1]).read(), sys.argv[2]
+assert '<lookat origin="0, 1, 6.8" target="0, 1, 0" up="0, 1, 0"/>' in src, "the Cornell box's camera changed: update this test"
+for name, scale, ox in (("unit", 1, 0), ("small", 1e-3, 0), ("big", 1e3, 0), ("far", 1, 1e4)):
+    pt = lambda x, y, z: "%.9g, %.9g, %.9g" % (x * scale + ox, y * scale, z * scale)
+    s = src.replace('<lookat origin="0, 1, 6.8" target="0, 1, 0" up="0, 1, 0"/>',
+                    '<lookat origin="%s" target="%s" up="0, 1, 0"/>' % (pt(0, 1, 6.8), pt(0, 1, 0)))
+    s, n = re.subn(r'(<string name="filename" value="meshes/[^"]+"/>)',
+                   r'\1<transform name="toWorld"><scale value="%.9g"/><translate x="%.9g" y="0" z="0"/></transform>' % (scale, ox), s)
+    assert n == 8, "the Cornell box's meshes changed: update this test"
+    open("%s/%s.xml" % (out, name), "w").write(s)
+PY
+# compare's beauty row: RMSE relMSE L1 mean mean(ref)
+beauty() { awk '$1 == "beauty" { print $3, $5, $6 }' "$tmp/out"; }
+for m in pt lt bdpt pcbpt; do
+  for v in unit small big far; do
+    check "$m-$v" 0 "$m: 8 iterations" -- "$bin" render "$tmp/$v.xml" --method "$m" --spp 8 --width 32 --height 32 \
+      --threads 2 --quiet --out "$tmp/$v-$m.exr"
+  done
+  for v in small big far; do
+    check "$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/$v-$m.exr" "$tmp/unit-$m.exr"
+    read -r rel mean ref <<<"$(beauty)"
+    # the same samples up to rounding: the scaled boxes agree far below the noise (relMSE ~1e-5,
+    # 4e-3 with the absolute offset); the moved one's geometry is rounded to 10^-3, which moves
+    # some samples, but not the brightness
+    python3 -c "
+import sys
+rel, mean, ref = map(float, sys.argv[2:])
+bound = 0.05 if sys.argv[1] == 'far' else 1e-3
+sys.exit(0 if rel < bound and abs(mean / ref - 1) < 0.02 else 1)" "$v" "$rel" "$mean" "$ref" ||
+      { echo "FAIL $m-$v: relMSE $rel, mean $mean against $ref"; fail=1; }
+  done
+done
+exit $fail
