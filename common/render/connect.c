@@ -71,8 +71,8 @@ bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, co
 bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev) {
   c->rays++;
   /* A vertex on the environment is at infinity in direction -lv->wo from the eye vertex. */
-  if (lv->kind == PC_VTX_ENV) return pc_scene_escapes(c->scene, ev->p, ev->ng, v3_neg(lv->wo));
-  return pc_scene_visible_eps(c->scene, lv->p, lv->ng, lv->eps, ev->p, ev->ng, ev->eps);
+  if (lv->kind == PC_VTX_ENV) return pc_scene_escapes(c->scene, ev->p, ev->ng, ev->eps, v3_neg(lv->wo));
+  return pc_scene_visible(c->scene, lv->p, lv->ng, lv->eps, ev->p, ev->ng, ev->eps);
 }
 
 bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev,

@@ -45,7 +45,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
     f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
     c->rays++;
-    visible = pc_scene_escapes(s, h->p, h->ng, wi);
+    visible = pc_scene_escapes(s, h->p, h->ng, h->eps, wi);
   } else {
     pc_light_point lp;
     pc_light_sample_point(s, l, u0, u1, u2, &lp);
@@ -64,7 +64,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
     f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
     c->rays++;
-    visible = pc_scene_visible(s, h->p, h->ng, lp.p, lp.n);
+    visible = pc_scene_visible(s, h->p, h->ng, h->eps, lp.p, lp.n, pc_offset_eps(s, lp.shape, lp.prim, lp.p));
   }
   if (!visible) return v3s(0.f);
   float cosi = v3_absdot(wi, sh->sh.n), w = 1.f;
@@ -139,7 +139,7 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
     prev_pdf = bs.pdf * q;
     prev_delta = bs.is_delta;
     prev_p = h.p;
-    o = pc_offset_origin(s, h.p, h.ng, bs.wi);
+    o = pc_offset_by(h.p, h.ng, bs.wi, h.eps);
     d = bs.wi;
   }
 }

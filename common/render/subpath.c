@@ -80,7 +80,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->kind = PC_VTX_SURFACE;
     cur->p = h.p;
     cur->ng = h.ng;
-    cur->eps = pc_offset_eps(s, h.p);
+    cur->eps = h.eps;
     cur->sh = pc_shading_from_hit(s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
     cur->out = pc_bsdf_out_make(m, &cur->sh, cur->wo);
@@ -148,7 +148,7 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   out->kind = PC_VTX_LIGHT;
   out->p = lp.p;
   out->ng = lp.n;
-  out->eps = pc_offset_eps(s, lp.p);
+  out->eps = pc_offset_eps(s, lp.shape, lp.prim, lp.p);
   out->wo = v3s(0.f);
   /* A spot's profile enters with the emitted direction (pc_light_subpath, pc_connect). */
   out->beta = v3_scale(pc_light_is_delta_pos(l) ? l->intensity : l->radiance, 1.f / pa);

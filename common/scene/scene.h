@@ -147,26 +147,25 @@ typedef struct pc_hit {
   vec3 dpdu, dpdv;  /* position derivatives along uv, as Mitsuba's: a triangle's from its texture
                        coordinates (its edges p1-p0, p2-p0 without them), a sphere's analytic */
   float t;
+  float eps;        /* pc_offset_eps of the point: rays leave and reach it that far off */
   int shape, prim;
 } pc_hit;
 
 /* Closest hit along (o, d) within (0, tmax); d need not be normalised. */
 bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit);
-/* True if the open segment from a to b is unoccluded; the endpoints are offset off their
- * surfaces along their geometric normals (na or nb may be zero for points not on a surface). */
-bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb);
-/* True if the ray from p (offset off a surface with geometric normal ng, zero for none) along
- * direction d leaves the scene: the environment is visible that way. */
-bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
-/* Ray origin offset off a surface, on the side of direction d. */
-vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d);
-/* The distance pc_offset_origin moves point p by, for callers that keep it with the point (a path
- * vertex leaves or receives a ray per connection), and the offset with it. */
-float pc_offset_eps(const pc_scene *s, vec3 p);
+/* How far rays leave and reach point p on primitive prim of shape `shape` off its surface
+ * (shape < 0: a point on no surface): a few ulps of the larger of p's and the primitive's
+ * coordinates, so it is as relative as floating point itself. */
+float pc_offset_eps(const pc_scene *s, int shape, int prim, vec3 p);
+/* p moved eps off a surface with geometric normal ng, on the side of direction d. */
 static inline vec3 pc_offset_by(vec3 p, vec3 ng, vec3 d, float eps) {
   return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
 }
-/* pc_scene_visible with each end's pc_offset_eps given (ea, eb). */
-bool pc_scene_visible_eps(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb);
+/* True if the ray from p (offset ea off a surface with geometric normal ng, zero for none)
+ * along direction d leaves the scene: the environment is visible that way. */
+bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, float eps, vec3 d);
+/* True if the open segment from a to b is unoccluded; each end is offset off its surface along
+ * its geometric normal by its pc_offset_eps (na or nb zero: a point on no surface). */
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb);
 
 #endif

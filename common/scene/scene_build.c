@@ -246,6 +246,7 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
     hit->dpdv = v3_scale(v3(l.z * cosf(phi), l.z * sinf(phi), -sh->radius * sinf(theta)), PC_PI);
     if (sh->flip_normals) n = v3_neg(n);
     hit->ng = hit->ns = n;
+    hit->eps = pc_offset_eps(s, shape, hit->prim, hit->p);
     return;
   }
   const pc_mesh *m = &sh->mesh;
@@ -253,6 +254,7 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   float b1 = rh->hit.u, b2 = rh->hit.v, b0 = 1.f - b1 - b2;
   vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];
   hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
+  hit->eps = pc_offset_eps(s, shape, hit->prim, hit->p);
   vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
   vec3 ns = ng;
   if (m->n) {
@@ -315,15 +317,26 @@ bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *h
 }
 
 /* Floating point is relative, so is the offset: a hit point rebuilt from barycentrics is off
- * its triangle's plane by a few ulps of its coordinates (or, through the barycentrics' own
- * error, of the triangle's extent, which the scene's radius bounds), and 2^-20 is 8 ulps of the
- * larger. The offset was 1e-4 x max(1, |p|, radius / 100), whose share of the geometry grew as
- * the scene shrank or moved off the origin: the Cornell box at 1/1000 scale came out 0.4-0.9%
- * off, and moved 10^4 units away (an offset of 1, half the box) 13-28% (tests/cli/test_scale.sh). */
+ * its triangle's plane by a few ulps of its own or its vertices' coordinates (through the
+ * barycentrics' error), and 2^-20 is 8 ulps of the largest of them. The offset was 1e-4 x
+ * max(1, |p|, scene radius / 100), whose share of the geometry grew as the scene shrank, moved
+ * off the origin or gained a large far-away part: the Cornell box at 1/1000 scale came out
+ * 0.4-0.9% off, moved 10^4 units away (an offset of 1, half the box) 13-28%, and beside a plane
+ * 10^5 wide 0.8-1.4% with the radius as the only floor (tests/cli/test_scale.sh). */
 #define OFFSET_RELATIVE 0x1p-20f
-float pc_offset_eps(const pc_scene *s, vec3 p) { return OFFSET_RELATIVE * fmaxf(v3_maxabs(p), s->scene_radius); }
-
-vec3 pc_offset_origin(const pc_scene *s, vec3 p, vec3 ng, vec3 d) { return pc_offset_by(p, ng, d, pc_offset_eps(s, p)); }
+float pc_offset_eps(const pc_scene *s, int shape, int prim, vec3 p) {
+  float m = v3_maxabs(p);
+  if (shape >= 0 && shape < s->nshapes) {
+    const pc_shape *sh = &s->shapes[shape];
+    if (sh->kind == PC_SHAPE_SPHERE) {
+      m = fmaxf(m, v3_maxabs(sh->center) + sh->radius);
+    } else if (prim >= 0 && (size_t)prim < sh->mesh.ntris) {
+      const uint32_t *ix = sh->mesh.idx + 3 * (size_t)prim;
+      for (int k = 0; k < 3; k++) m = fmaxf(m, v3_maxabs(sh->mesh.p[ix[k]]));
+    }
+  }
+  return OFFSET_RELATIVE * m;
+}
 
 /* Whether nothing blocks the segment o + t d, t in [0, tfar). */
 static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
@@ -343,17 +356,17 @@ static bool unoccluded(const pc_scene *s, vec3 o, vec3 d, float tfar) {
   return r.tfar >= 0.f;
 }
 
-bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, vec3 d) {
-  return unoccluded(s, v3_is_zero(ng) ? p : pc_offset_origin(s, p, ng, d), d, INFINITY);
+bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, float eps, vec3 d) {
+  return unoccluded(s, v3_is_zero(ng) ? p : pc_offset_by(p, ng, d, eps), d, INFINITY);
 }
 
-bool pc_scene_visible_eps(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb) {
+bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb) {
   vec3 ab = v3_sub(b, a);
   vec3 o = v3_is_zero(na) ? a : pc_offset_by(a, na, ab, ea);
   vec3 t = v3_is_zero(nb) ? b : pc_offset_by(b, nb, v3_neg(ab), eb);
-  return unoccluded(s, o, v3_sub(t, o), 1.f - 1e-4f);
-}
-
-bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, vec3 b, vec3 nb) {
-  return pc_scene_visible_eps(s, a, na, pc_offset_eps(s, a), b, nb, pc_offset_eps(s, b));
+  /* Both ends are already off their surfaces; the segment stops 2^-20 of its length short of
+   * t on top, so that with eb the margin is at least 8 ulps of the larger end's coordinates
+   * (the far end of a long segment, or the near end of a short one). It stopped 1e-4 short,
+   * which on a 10 m segment hid an occluder within a millimetre of the light. */
+  return unoccluded(s, o, v3_sub(t, o), 1.f - 0x1p-20f);
 }

@@ -2,9 +2,11 @@
 # Scale and placement do not change the image: the Cornell box scaled by 1/1000 and by 1000
 # renders the same as the original with the same seed (every method draws the same numbers; only
 # rounding differs), and moved 10^4 units off the origin (where a float's step is 10^-3 of the
-# 2-unit box) it keeps its brightness. Ray offsets off surfaces must be relative to the
-# coordinates: with an absolute part (1e-4 x max(1, |p|, ...)) the small box came out 0.4-0.9%
-# off and the moved one 13-28% (an offset of 1 unit, half the box).
+# 2-unit box) it keeps its brightness; a black plane 10^5 wide far behind the camera changes
+# nothing. Ray offsets off surfaces must be relative to the coordinates of the primitive they
+# leave: with an absolute part (1e-4 x max(1, |p|, ...)) the small box came out 0.4-0.9% off and
+# the moved one 13-28% (an offset of 1 unit, half the box); with the scene's radius as a floor
+# the plane moved the box's image by 0.8-1.4%.
 set -u
 . "$(dirname "$0")/lib.inc"
 cp -r "$src/scenes/cornell-box/meshes" "$tmp/meshes"
@@ -20,15 +22,20 @@ for name, scale, ox in (("unit", 1, 0), ("small", 1e-3, 0), ("big", 1e3, 0), ("f
                    r'\1<transform name="toWorld"><scale value="%.9g"/><translate x="%.9g" y="0" z="0"/></transform>' % (scale, ox), s)
     assert n == 8, "the Cornell box's meshes changed: update this test"
     open("%s/%s.xml" % (out, name), "w").write(s)
+# a black plane 10^5 wide, 10^5 behind the camera, facing the box: what leaves the box ends on it
+# as it ended in the void, but the scene's radius is now 10^5
+plane = ('  <shape type="rectangle"><transform name="toWorld"><scale value="1e5"/><rotate y="1" angle="180"/>'
+         '<translate z="1e5"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf></shape>\n')
+open("%s/ground.xml" % out, "w").write(open("%s/unit.xml" % out).read().replace("</scene>", plane + "</scene>"))
 PY
 # compare's beauty row: RMSE relMSE L1 mean mean(ref)
 beauty() { awk '$1 == "beauty" { print $3, $5, $6 }' "$tmp/out"; }
 for m in pt lt bdpt pcbpt; do
-  for v in unit small big far; do
+  for v in unit small big far ground; do
     check "$m-$v" 0 "$m: 8 iterations" -- "$bin" render "$tmp/$v.xml" --method "$m" --spp 8 --width 32 --height 32 \
       --threads 2 --quiet --out "$tmp/$v-$m.exr"
   done
-  for v in small big far; do
+  for v in small big far ground; do
     check "$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/$v-$m.exr" "$tmp/unit-$m.exr"
     read -r rel mean ref <<<"$(beauty)"
     # the same samples up to rounding: the scaled boxes agree far below the noise (relMSE ~1e-5,
@@ -37,9 +44,10 @@ for m in pt lt bdpt pcbpt; do
     python3 -c "
 import sys
 rel, mean, ref = map(float, sys.argv[2:])
-bound = 0.05 if sys.argv[1] == 'far' else 1e-3
+bound = {'far': 0.05, 'ground': 0.01}.get(sys.argv[1], 1e-3)
 sys.exit(0 if rel < bound and abs(mean / ref - 1) < 0.02 else 1)" "$v" "$rel" "$mean" "$ref" ||
       { echo "FAIL $m-$v: relMSE $rel, mean $mean against $ref"; fail=1; }
+    echo "     $m-$v: relMSE $rel, mean $mean against $ref"
   done
 done
 exit $fail
