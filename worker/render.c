@@ -34,12 +34,15 @@ typedef struct job_rend {
   pc_film work;     /* one batch */
   pc_film pending;  /* batches not yet taken for upload */
   bool pending_dirty;
-  size_t bytes;     /* about what it holds: its films and the renderer's per-thread ones */
+  size_t film_bytes; /* its films and the renderer's per-thread ones */
+  size_t bytes;     /* about what it holds: film_bytes and the most its PCBPT records held */
   uint64_t used;    /* when it last rendered (a counter) */
 } job_rend;
 
-/* Renderers kept besides the current one: at most this many, holding at most this much. */
-#define KEEP_RENDERERS 4
+/* Renderers kept besides the current one: at most this many, holding at most this much. A
+ * study's group of six methods alternates range by range; with 4 kept, least recently used
+ * went first, so each range of each method found its renderer dropped and made a new one. */
+#define KEEP_RENDERERS 8
 #define KEEP_BYTES ((size_t)256 << 20)
 
 typedef struct job_ctx {
@@ -121,7 +124,7 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
       return rc;
     }
     r->job = job;
-    r->bytes = bytes;
+    r->film_bytes = r->bytes = bytes;
     c->nkept++;
   }
   r->used = ++c->clock;
@@ -250,6 +253,7 @@ static void thread_main(void *arg) {
       rc = pc_render_iterations(r->rend, first + done, batch, &r->work, &st, &w->cancel, NULL, NULL, &e);
       double dt = now_s() - t0;
       uint64_t got = r->work.layers[PC_LAYER_PT].count;
+      if (r->film_bytes + st.pmf_bytes > r->bytes) r->bytes = r->film_bytes + st.pmf_bytes;
       if (rc == PC_ECANCELED) rc = 0;
       if (rc || got > batch) break;
       if (got && (rc = pc_film_add(&r->pending, &r->work, &e)) != 0) break;
