@@ -414,7 +414,7 @@ static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stat
     int rc = pc_trace_reserve(&film->trace, film->trace.n + 1, pc_trace_blocks(r->set.width, r->set.height), e);
     if (rc != PC_OK) return rc;
   }
-  double t0 = now_seconds(), cpu0 = pc_pool_cpu_seconds(r->pool);
+  double t0 = now_seconds(), cpu0 = stats ? pc_pool_cpu_seconds(r->pool) : 0.0;
   if (r->view) {
     int rc = pc_scene_view_set_time(r->view, pc_scene_time(r->view, r->set.seed, it), e);
     if (rc != PC_OK) return rc;

@@ -38,16 +38,19 @@ for m in pt lt bdpt pcbpt; do
   for v in small big far ground; do
     check "$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/$v-$m.exr" "$tmp/unit-$m.exr"
     read -r rel mean ref <<<"$(beauty)"
-    # the same samples up to rounding: the scaled boxes agree far below the noise (relMSE ~1e-5,
-    # 4e-3 with the absolute offset); the moved one's geometry is rounded to 10^-3, which moves
-    # some samples, but not the brightness
+    # the same samples up to rounding: the scaled boxes agree far below the noise (relMSE below
+    # 3e-5; 1.3e-2 to 1.5e-1 with the absolute offset), so does the box beside the plane (0 for
+    # pt, lt and bdpt, 2.4e-3 for pcbpt; 2.4e-2 and 1.4e-1 for pt and lt with the radius as the
+    # floor); the moved one's geometry is rounded to 10^-3, which moves some samples (2.7e-2 for
+    # lt, 2e-3 to 4e-3 for the others; 0.09 to 5.7 with the absolute offset), but not the
+    # brightness
     python3 -c "
 import sys
 rel, mean, ref = map(float, sys.argv[2:])
 bound = {'far': 0.05, 'ground': 0.01}.get(sys.argv[1], 1e-3)
 sys.exit(0 if rel < bound and abs(mean / ref - 1) < 0.02 else 1)" "$v" "$rel" "$mean" "$ref" ||
-      { echo "FAIL $m-$v: relMSE $rel, mean $mean against $ref"; fail=1; }
-    echo "     $m-$v: relMSE $rel, mean $mean against $ref"
+      { echo "FAIL $m-$v: relMSE $rel, mean $mean against $ref"; fail=1; continue; }
+    echo "ok   $m-$v: relMSE $rel, mean $mean against $ref"
   done
 done
 exit $fail
