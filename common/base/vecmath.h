@@ -36,7 +36,10 @@ static inline float v3_maxc(vec3 a) { return fmaxf(a.x, fmaxf(a.y, a.z)); }
 static inline vec3 v3_min(vec3 a, vec3 b) { return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
 static inline vec3 v3_max(vec3 a, vec3 b) { return v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 static inline float v3_minc(vec3 a) { return fminf(a.x, fminf(a.y, a.z)); }
-static inline float v3_maxabs(vec3 a) { return fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z))); }
+/* max of two floats known not to be NaN: one maxss, where fmaxf is a libm call (its NaN rule
+ * keeps the compiler from inlining it without -ffinite-math-only). */
+static inline float pc_maxf(float a, float b) { return a > b ? a : b; }
+static inline float v3_maxabs(vec3 a) { return pc_maxf(fabsf(a.x), pc_maxf(fabsf(a.y), fabsf(a.z))); }
 static inline float v3_luminance(vec3 c) { return 0.212671f * c.x + 0.715160f * c.y + 0.072169f * c.z; }
 /* Rec. 709 luminance in double precision, rounded coefficients: what images are measured in
  * (the film's trace of single iterations, a study's tails and strategy shares). */

@@ -234,10 +234,10 @@ void pc_scene_free(pc_scene *s) {
  * 10^5 wide 0.8-1.4% with the radius as the only floor (tests/cli/test_scale.sh). */
 #define OFFSET_RELATIVE 0x1p-20f
 static inline float sphere_eps(const pc_shape *sh, vec3 p) {
-  return OFFSET_RELATIVE * fmaxf(v3_maxabs(p), v3_maxabs(sh->center) + sh->radius);
+  return OFFSET_RELATIVE * pc_maxf(v3_maxabs(p), v3_maxabs(sh->center) + sh->radius);
 }
 static inline float triangle_eps(vec3 p, vec3 p0, vec3 p1, vec3 p2) {
-  return OFFSET_RELATIVE * fmaxf(fmaxf(v3_maxabs(p), v3_maxabs(p0)), fmaxf(v3_maxabs(p1), v3_maxabs(p2)));
+  return OFFSET_RELATIVE * pc_maxf(pc_maxf(v3_maxabs(p), v3_maxabs(p0)), pc_maxf(v3_maxabs(p1), v3_maxabs(p2)));
 }
 
 float pc_offset_eps(const pc_scene *s, int shape, int prim, vec3 p) {
