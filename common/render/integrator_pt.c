@@ -64,7 +64,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
     f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
     c->rays++;
-    visible = pc_scene_visible(s, h->p, h->ng, h->eps, lp.p, lp.n, pc_offset_eps(s, lp.shape, lp.prim, lp.p));
+    visible = pc_scene_visible(s, h->p, h->ng, h->eps, lp.p, lp.n, lp.eps);
   }
   if (!visible) return v3s(0.f);
   float cosi = v3_absdot(wi, sh->sh.n), w = 1.f;

@@ -46,7 +46,7 @@ typedef struct pc_path_vertex {
   pc_vertex_kind kind;
   vec3 p;
   vec3 ng;         /* geometric normal (zero for the camera and point lights) */
-  float eps;       /* pc_offset_eps(p) where ng is not zero: rays leave and reach p that far off */
+  float eps;       /* where ng is not zero: rays leave and reach p that far off (PC_OFFSET_RELATIVE) */
   pc_shading sh;   /* surfaces */
   vec3 wo;         /* unit direction toward the previous vertex of the sub-path (surfaces);
                       PC_VTX_ENV: the direction its light travels into the scene */

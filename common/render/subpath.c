@@ -148,7 +148,7 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   out->kind = PC_VTX_LIGHT;
   out->p = lp.p;
   out->ng = lp.n;
-  out->eps = pc_offset_eps(s, lp.shape, lp.prim, lp.p);
+  out->eps = lp.eps;
   out->wo = v3s(0.f);
   /* A spot's profile enters with the emitted direction (pc_light_subpath, pc_connect). */
   out->beta = v3_scale(pc_light_is_delta_pos(l) ? l->intensity : l->radiance, 1.f / pa);

@@ -35,12 +35,10 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
     out->p = l->position;
     out->n = v3s(0.f);
     out->pdf_area = 1.f;
-    out->shape = -1;
-    out->prim = -1;
+    out->eps = pc_point_eps(out->p);
     return;
   }
   const pc_shape *sh = &s->shapes[l->shape];
-  out->shape = l->shape;
   out->pdf_area = 1.f / l->area;
   if (sh->kind == PC_SHAPE_SPHERE) {
     float z = 1.f - 2.f * u1;
@@ -49,7 +47,7 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
     vec3 d = v3(r * cosf(phi), r * sinf(phi), z);
     out->p = v3_madd(sh->center, d, sh->radius);
     out->n = sh->flip_normals ? v3_neg(d) : d;
-    out->prim = 0;
+    out->eps = pc_sphere_eps(sh->center, sh->radius, out->p);
     return;
   }
   float target = u0 * l->tri_cdf[l->ntris];
@@ -61,7 +59,7 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
   float b0 = 1.f - su, b1 = u2 * su;
   out->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, 1.f - b0 - b1));
   out->n = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
-  out->prim = t;
+  out->eps = pc_triangle_eps(out->p, p0, p1, p2);
 }
 
 vec3 pc_light_profile(const pc_light *l, vec3 w) {

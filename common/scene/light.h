@@ -56,7 +56,7 @@ struct pc_scene;
 typedef struct pc_light_point {
   vec3 p, n;
   float pdf_area;  /* area pdf of the point given this light (1 for point and spot lights) */
-  int shape, prim; /* the shape and primitive the point lies on (area lights) */
+  float eps;       /* its ray offset (scene.h, PC_OFFSET_RELATIVE), from the primitive it lies on */
 } pc_light_point;
 
 /* Chooses a light proportionally to power; returns its index and sets *pdf. */

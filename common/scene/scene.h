@@ -147,16 +147,29 @@ typedef struct pc_hit {
   vec3 dpdu, dpdv;  /* position derivatives along uv, as Mitsuba's: a triangle's from its texture
                        coordinates (its edges p1-p0, p2-p0 without them), a sphere's analytic */
   float t;
-  float eps;        /* pc_offset_eps of the point: rays leave and reach it that far off */
+  float eps;        /* rays leave and reach the point that far off (PC_OFFSET_RELATIVE) */
   int shape, prim;
 } pc_hit;
 
 /* Closest hit along (o, d) within (0, tmax); d need not be normalised. */
 bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit);
-/* How far rays leave and reach point p on primitive prim of shape `shape` off its surface
- * (shape < 0: a point on no surface): a few ulps of the larger of p's and the primitive's
- * coordinates, so it is as relative as floating point itself. */
-float pc_offset_eps(const pc_scene *s, int shape, int prim, vec3 p);
+/* How far rays leave and reach a point off its surface: 2^-20 (8 ulps) of the largest
+ * coordinate of the point and of the primitive it lies on. Floating point is relative, so is
+ * the offset: a hit point rebuilt from barycentrics is off its triangle's plane by a few ulps
+ * of its own or its vertices' coordinates (through the barycentrics' error). The offset was
+ * 1e-4 x max(1, |p|, scene radius / 100), whose share of the geometry grew as the scene shrank,
+ * moved off the origin or gained a large far-away part: the Cornell box at 1/1000 scale came
+ * out 0.4-0.9% off, moved 10^4 units away (an offset of 1, half the box) 13-28%, and beside a
+ * plane 10^5 wide 0.8-1.4% with the radius as the only floor (tests/cli/test_scale.sh). */
+#define PC_OFFSET_RELATIVE 0x1p-20f
+/* A point on no surface (point and spot lights). */
+static inline float pc_point_eps(vec3 p) { return PC_OFFSET_RELATIVE * v3_maxabs(p); }
+static inline float pc_sphere_eps(vec3 center, float radius, vec3 p) {
+  return PC_OFFSET_RELATIVE * pc_maxf(v3_maxabs(p), v3_maxabs(center) + radius);
+}
+static inline float pc_triangle_eps(vec3 p, vec3 p0, vec3 p1, vec3 p2) {
+  return PC_OFFSET_RELATIVE * pc_maxf(pc_maxf(v3_maxabs(p), v3_maxabs(p0)), pc_maxf(v3_maxabs(p1), v3_maxabs(p2)));
+}
 /* p moved eps off a surface with geometric normal ng, on the side of direction d. */
 static inline vec3 pc_offset_by(vec3 p, vec3 ng, vec3 d, float eps) {
   return v3_madd(p, ng, v3_dot(d, ng) >= 0.f ? eps : -eps);
@@ -165,7 +178,7 @@ static inline vec3 pc_offset_by(vec3 p, vec3 ng, vec3 d, float eps) {
  * along direction d leaves the scene: the environment is visible that way. */
 bool pc_scene_escapes(const pc_scene *s, vec3 p, vec3 ng, float eps, vec3 d);
 /* True if the open segment from a to b is unoccluded; each end is offset off its surface along
- * its geometric normal by its pc_offset_eps (na or nb zero: a point on no surface). */
+ * its geometric normal by its offset ea, eb (na or nb zero: a point on no surface). */
 bool pc_scene_visible(const pc_scene *s, vec3 a, vec3 na, float ea, vec3 b, vec3 nb, float eb);
 
 #endif

@@ -225,31 +225,6 @@ void pc_scene_free(pc_scene *s) {
   memset(s, 0, sizeof *s);
 }
 
-/* Floating point is relative, so is the offset: a hit point rebuilt from barycentrics is off
- * its triangle's plane by a few ulps of its own or its vertices' coordinates (through the
- * barycentrics' error), and 2^-20 is 8 ulps of the largest of them. The offset was 1e-4 x
- * max(1, |p|, scene radius / 100), whose share of the geometry grew as the scene shrank, moved
- * off the origin or gained a large far-away part: the Cornell box at 1/1000 scale came out
- * 0.4-0.9% off, moved 10^4 units away (an offset of 1, half the box) 13-28%, and beside a plane
- * 10^5 wide 0.8-1.4% with the radius as the only floor (tests/cli/test_scale.sh). */
-#define OFFSET_RELATIVE 0x1p-20f
-static inline float sphere_eps(const pc_shape *sh, vec3 p) {
-  return OFFSET_RELATIVE * pc_maxf(v3_maxabs(p), v3_maxabs(sh->center) + sh->radius);
-}
-static inline float triangle_eps(vec3 p, vec3 p0, vec3 p1, vec3 p2) {
-  return OFFSET_RELATIVE * pc_maxf(pc_maxf(v3_maxabs(p), v3_maxabs(p0)), pc_maxf(v3_maxabs(p1), v3_maxabs(p2)));
-}
-
-float pc_offset_eps(const pc_scene *s, int shape, int prim, vec3 p) {
-  if (shape < 0 || shape >= s->nshapes) return OFFSET_RELATIVE * v3_maxabs(p);
-  const pc_shape *sh = &s->shapes[shape];
-  if (sh->kind == PC_SHAPE_SPHERE) return sphere_eps(sh, p);
-  if (prim < 0 || (size_t)prim >= sh->mesh.ntris) return OFFSET_RELATIVE * v3_maxabs(p);
-  const uint32_t *ix = sh->mesh.idx + 3 * (size_t)prim;
-  return triangle_eps(p, sh->mesh.p[ix[0]], sh->mesh.p[ix[1]], sh->mesh.p[ix[2]]);
-}
-
-
 static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 o, vec3 d, pc_hit *hit) {
   int shape = (int)rh->hit.geomID;
   const pc_shape *sh = &s->shapes[shape];
@@ -271,7 +246,7 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
     hit->dpdv = v3_scale(v3(l.z * cosf(phi), l.z * sinf(phi), -sh->radius * sinf(theta)), PC_PI);
     if (sh->flip_normals) n = v3_neg(n);
     hit->ng = hit->ns = n;
-    hit->eps = sphere_eps(sh, hit->p);
+    hit->eps = pc_sphere_eps(sh->center, sh->radius, hit->p);
     return;
   }
   const pc_mesh *m = &sh->mesh;
@@ -279,7 +254,7 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   float b1 = rh->hit.u, b2 = rh->hit.v, b0 = 1.f - b1 - b2;
   vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];
   hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
-  hit->eps = triangle_eps(hit->p, p0, p1, p2);
+  hit->eps = pc_triangle_eps(hit->p, p0, p1, p2);
   vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
   vec3 ns = ng;
   if (m->n) {
