@@ -80,10 +80,13 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
                       int nch, const pc_exr_attr *attrs, int nattrs, exr_msg *m, pc_err *e) {
   int part = 0;
   exr_result_t rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
-  if (!rv) rv = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
-  /* deflate level 1: on noisy float pixels zlib's default level costs ~4x the time for a file
-   * a few percent smaller; the level is not stored, any reader decodes it alike */
-  if (!rv) rv = exr_set_zip_compression_level(ctx, part, 1);
+  /* RLE, not ZIP: noisy float radiance does not deflate, what compresses are the runs of
+   * zeros in the strategy layers, and RLE finds those. Measured on renders' own images
+   * (cornell-box 512x512 BDPT, 7 layers; ajar-door, outdoor, glossy-glass 256x256 PCBPT): ZIP
+   * at deflate level 1 wrote in 0.65 / 0.13 / 0.17 / 0.15 s, RLE in 0.13 / 0.035 / 0.025 /
+   * 0.038 s, for files 2-15% larger (19.4 MB against 19.0; 22.0 MB uncompressed). The farm
+   * writes one at every checkpoint of the image and a render waits for its last one. */
+  if (!rv) rv = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_RLE);
   if (rv) return exr_fail(e, path, "cannot set up the header", rv, m);
   for (int c = 0; c < nch; c++) {
     if (strlen(ch[c].name) > 31 && (rv = exr_set_longname_support(ctx, 1)))
