@@ -122,16 +122,19 @@ void pc_sched_served(pc_peer *p, uint64_t job, uint64_t iterations, double secon
 
 /* The rate a worker's ranges on j are sized by: what it claims, trusted up to 4x what its
  * uploads on j brought (so a false claim earns no more than a few seconds of real work); a
- * worker not measured on j yet gets a probe. */
-static double trusted_rate(const pc_peer *q, const pc_job *j) {
+ * worker not measured on j yet gets a probe. The embedded farm's one worker is the render
+ * command's own: its claim is trusted at once, so the range it asks for while its probe's
+ * upload is still being merged is not a second probe (at 512x512 each range's end costs
+ * ~0.2 s of packing and merging). */
+static double trusted_rate(const pc_coord *c, const pc_peer *q, const pc_job *j) {
   double mrate = q->mrate_job == j->id ? q->mrate : 0;
   if (q->mrate_job != j->id) {
     /* measured on j before it went to another job (a study group's jobs take turns) */
     int i = served_slot(q, j->id, false);
     mrate = i >= 0 ? q->served[i].mrate : 0;
   }
-  if (!(mrate > 0)) return 0;
   double claimed = q->rate_job == j->id ? q->rate : 0;
+  if (!(mrate > 0)) return c->one_worker && claimed > 0 ? claimed : 0;
   return claimed > 0 && claimed < 4 * mrate ? claimed : claimed > 0 ? 4 * mrate : mrate;
 }
 
@@ -151,7 +154,7 @@ static double study_range_seconds(const pc_coord *c, const pc_job *j, double now
 }
 
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
-  pc_range_size_in in = {.rate = trusted_rate(p, j), .range_seconds = c->range_seconds, .alone = c->one_worker};
+  pc_range_size_in in = {.rate = trusted_rate(c, p, j), .range_seconds = c->range_seconds, .alone = c->one_worker};
   if (j->halt_worker_seconds > 0) {
     in.range_seconds = study_range_seconds(c, j, now);
     /* a study's worker-seconds are counted per upload: a range sized on a one-iteration probe
@@ -171,7 +174,7 @@ static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
     for (const pc_peer *q = c->peers; q; q = q->next) {
       if (q == p || !q->authed || q->role != PCBPT__ROLE__ROLE_WORKER) continue;
       const pc_job *qj = job_of(c, q);
-      double qr = trusted_rate(q, j);
+      double qr = trusted_rate(c, q, j);
       if (!qj || qj == j) in.others_rate += qr > 0 ? qr : in.rate;
     }
   }
