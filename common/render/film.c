@@ -8,6 +8,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Zeroed sums whose pages are already written. A fresh calloc is mapped lazily, and the
+ * film's first use is a read-modify-write (sum += x): the read maps the shared zero page,
+ * then the write takes a second fault that copies it and flushes the TLB of every core the
+ * process runs on (an IPI per 4 KiB page). Writing each page first takes one plain fault.
+ * The writes go through a volatile pointer because a compiler may drop a memset of zeros
+ * after calloc. */
+static double *alloc_sums(size_t n) {
+  double *p = calloc(n, sizeof *p);
+  if (p) {
+    volatile unsigned char *b = (volatile unsigned char *)p;
+    for (size_t o = 0; o < n * sizeof *p; o += 4096) b[o] = 0;
+  }
+  return p;
+}
+
 static int add_layer(pc_film *f, const char *name, pc_norm norm, pc_err *e) {
   if (f->nlayers >= PC_FILM_MAX_LAYERS)
     return pc_errf(e, PC_ELIMIT, "film: more than %d layers", PC_FILM_MAX_LAYERS);
@@ -15,7 +30,7 @@ static int add_layer(pc_film *f, const char *name, pc_norm norm, pc_err *e) {
   snprintf(l->name, sizeof l->name, "%.15s", name);
   l->norm = norm;
   l->count = 0;
-  l->sum = calloc((size_t)f->w * f->h * 3, sizeof(double));
+  l->sum = alloc_sums((size_t)f->w * f->h * 3);
   if (!l->sum) return pc_errf(e, PC_ENOMEM, "film: out of memory for layer '%s' (%dx%d)", name, f->w, f->h);
   f->nlayers++;
   return PC_OK;
