@@ -1,8 +1,8 @@
 /* render.c: the worker's render thread: loads and builds the job's scene once per job (kept
  * for the next job of the same scene bundle, -D values and film size: a study's interleaved
  * jobs differ in method and seed only, and switch often), then renders the assigned range in
- * batches of about half a second into a scratch film, adds each finished batch to the pending
- * film, and compresses that into an upload when the loop asks. Over one scene it keeps the
+ * batches of about half a second into the pending film, and compresses that into an upload
+ * when the loop asks (between batches, on this thread, so the film is never shared). Over one scene it keeps the
  * renderers and films of the last few jobs (a study's methods and auto's pilot candidates
  * alternate range by range): a fresh renderer's first iteration pays for allocating and first
  * touching its buffers, and PCBPT's stores grow back over a few iterations, which would be
@@ -31,8 +31,7 @@ static double now_s(void) {
 typedef struct job_rend {
   uint64_t job;
   pc_renderer *rend;
-  pc_film work;     /* one batch */
-  pc_film pending;  /* batches not yet taken for upload */
+  pc_film pending;  /* iterations not yet taken for upload */
   bool pending_dirty;
   size_t film_bytes; /* its films and the renderer's per-thread ones */
   size_t bytes;     /* about what it holds: film_bytes and the most its PCBPT records held */
@@ -68,7 +67,6 @@ static void drop_rend(job_ctx *c, pc_wrender *w, int k) {
     c->cur = NULL;
   }
   pc_renderer_destroy(r->rend);
-  pc_film_free(&r->work);
   pc_film_free(&r->pending);
   job_rend *cur = c->cur;
   c->kept[k] = c->kept[--c->nkept];
@@ -97,9 +95,9 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     if (c->kept[k].job == job) r = &c->kept[k];
   if (!r) {
     size_t film = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
-    /* the job's two films, the renderer's scratch and one splat film per render thread */
+    /* the job's pending film, the renderer's scratch and one splat film per render thread */
     int threads = w->threads > 0 ? w->threads : pc_cpu_count();
-    size_t bytes = film * (size_t)pc_film_layer_count(set->strategy_layers) * (size_t)(threads + 3);
+    size_t bytes = film * (size_t)pc_film_layer_count(set->strategy_layers) * (size_t)(threads + 2);
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
       int lru = -1;
@@ -113,12 +111,8 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     r = &c->kept[c->nkept];
     memset(r, 0, sizeof *r);
     int rc = pc_renderer_create(&c->scene, set, w->threads, &r->rend, e);
-    if (!rc && (rc = pc_film_init(&r->work, set->width, set->height, set->strategy_layers, e)) != 0)
+    if (!rc && (rc = pc_film_init(&r->pending, set->width, set->height, set->strategy_layers, e)) != 0)
       pc_renderer_destroy(r->rend);
-    if (!rc && (rc = pc_film_init(&r->pending, set->width, set->height, set->strategy_layers, e)) != 0) {
-      pc_film_free(&r->work);
-      pc_renderer_destroy(r->rend);
-    }
     if (rc) {
       ctx_free(c, w);
       return rc;
@@ -248,16 +242,16 @@ static void thread_main(void *arg) {
       if (batch < 1) batch = 1;
       if (batch > count - done) batch = count - done;
       pc_render_stats st = {0};
-      pc_film_clear(&r->work);
       double t0 = now_s();
-      rc = pc_render_iterations(r->rend, first + done, batch, &r->work, &st, &w->cancel, NULL, NULL, &e);
+      /* straight into the pending film: the renderer adds whole iterations only, and st
+       * counts them, even when cancelled part-way */
+      rc = pc_render_iterations(r->rend, first + done, batch, &r->pending, &st, &w->cancel, NULL, NULL, &e);
       double dt = now_s() - t0;
-      uint64_t got = r->work.layers[PC_LAYER_PT].count;
+      uint64_t got = st.iterations;
+      r->pending_dirty |= got > 0;
       if (r->film_bytes + st.pmf_bytes > r->bytes) r->bytes = r->film_bytes + st.pmf_bytes;
       if (rc == PC_ECANCELED) rc = 0;
-      if (rc || got > batch) break;
-      if (got && (rc = pc_film_add(&r->pending, &r->work, &e)) != 0) break;
-      r->pending_dirty |= got > 0;
+      if (rc) break; /* the range goes back; its pending iterations are cleared with the next */
       uv_mutex_lock(&w->mu);
       if (got) {
         if (w->pend_count == 0) w->pend_first = first + done;
