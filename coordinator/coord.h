@@ -118,6 +118,7 @@ struct pc_peer {
   uint32_t threads;
   double connected, last_seen;
   double rate;               /* iterations/s it reports, measured on job rate_job */
+  double upload_s;           /* seconds its last upload took to compress, as it reports */
   uint64_t rate_job;         /* the job last assigned to it */
   double mrate;              /* iterations/s its uploads on job mrate_job brought, as measured
                                 here (0: none yet): bounds the range sizes its claim earns and

@@ -3,12 +3,14 @@
 
 uint64_t pc_range_size(const pc_range_size_in *in) {
   if (!(in->rate > 0)) return 1;
-  double n = in->rate * in->range_seconds;
+  double pay = in->upload_seconds > 0 ? in->upload_seconds / PC_RANGE_UPLOAD_SHARE : 0;
+  if (pay > PC_RANGE_UPLOAD_MAX_SECONDS) pay = PC_RANGE_UPLOAD_MAX_SECONDS;
+  double n = in->rate * (in->range_seconds > pay ? in->range_seconds : pay);
   if (in->bounded) {
     double others = in->others_rate > 0 ? in->others_rate : 0;
     double left = (double)in->unassigned + (in->outstanding > 0 ? in->outstanding : 0);
     double share = left * in->rate / (in->rate + others);
-    double floor_n = in->rate * PC_RANGE_MIN_SECONDS;
+    double floor_n = in->rate * (PC_RANGE_MIN_SECONDS > pay ? PC_RANGE_MIN_SECONDS : pay);
     double want = in->alone ? share : 0.5 * share;
     if (want < floor_n) want = floor_n < share ? floor_n : share;
     if (n > want) n = want;

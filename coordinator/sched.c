@@ -154,9 +154,11 @@ static double study_range_seconds(const pc_coord *c, const pc_job *j, double now
 }
 
 static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
-  pc_range_size_in in = {.rate = trusted_rate(c, p, j), .range_seconds = c->range_seconds, .alone = c->one_worker};
+  pc_range_size_in in = {.rate = trusted_rate(c, p, j), .range_seconds = c->range_seconds, .alone = c->one_worker,
+                         .upload_seconds = p->upload_s};
   if (j->halt_worker_seconds > 0) {
     in.range_seconds = study_range_seconds(c, j, now);
+    in.upload_seconds = 0; /* a study's ranges end at its snapshot times */
     /* a study's worker-seconds are counted per upload: a range sized on a one-iteration probe
      * (often several times too fast) would overrun the early snapshots and the interleaving,
      * so a worker's ranges of a study job grow from the probe by at most doubling */

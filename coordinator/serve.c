@@ -687,8 +687,9 @@ static void on_msg(pc_conn *conn, Pcbpt__Envelope *env) {
   if (p->role == PCBPT__ROLE__ROLE_WORKER) {
     switch (kind) {
     case PCBPT__ENVELOPE__MSG_WORK_REQUEST: {
-      double rate = env->work_request->iterations_per_second;
+      double rate = env->work_request->iterations_per_second, up = env->work_request->upload_seconds;
       if (rate > 0 && rate < 1e9) p->rate = rate;
+      if (up >= 0 && up < 1e6) p->upload_s = up; /* range_size caps what it earns */
       pc_sched_request(p->coord, p);
       return;
     }

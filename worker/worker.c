@@ -70,6 +70,7 @@ static void request_work(worker *w) {
   Pcbpt__WorkRequest m = PCBPT__WORK_REQUEST__INIT;
   uv_mutex_lock(&w->r.mu);
   m.iterations_per_second = w->r.rate;
+  m.upload_seconds = w->r.zip_seconds;
   uv_mutex_unlock(&w->r.mu);
   env.msg_case = PCBPT__ENVELOPE__MSG_WORK_REQUEST;
   env.work_request = &m;

@@ -38,6 +38,29 @@ static void single_requests(void **st) {
   in.outstanding = 0;
   in.unassigned = 40;
   assert_int_equal(pc_range_size(&in), 20); /* one worker so far: half kept back for any other */
+  /* a worker whose uploads take 0.4 s to compress: ranges (and the floor) of 8 s, so the
+   * upload costs it 5%; capped at PC_RANGE_UPLOAD_MAX_SECONDS; no effect on a probe */
+  in.bounded = false;
+  in.upload_seconds = 0.4;
+  assert_int_equal(pc_range_size(&in), 160);
+  in.upload_seconds = 100;
+  assert_int_equal(pc_range_size(&in), 600);
+  in.bounded = true;
+  in.unassigned = 1000;
+  in.others_rate = 20;
+  in.outstanding = 0;
+  in.upload_seconds = 0.4;
+  assert_int_equal(pc_range_size(&in), 160); /* 8 s of work, under half the share (250) */
+  in.unassigned = 200;
+  assert_int_equal(pc_range_size(&in), 100); /* the whole share (100) is under the 8 s floor (160) */
+  in.unassigned = 400;
+  assert_int_equal(pc_range_size(&in), 160); /* the floor (160) over half the share (100) */
+  in.rate = 0;
+  assert_int_equal(pc_range_size(&in), 1);
+  in.rate = 20;
+  in.upload_seconds = 0;
+  in.unassigned = 40;
+  in.others_rate = 0;
   in.alone = true;
   assert_int_equal(pc_range_size(&in), 40); /* nobody else will come: all that is left */
   in.unassigned = 100;
