@@ -15,6 +15,7 @@
 #include "auth.h"
 #include "serve.h"
 #include "wire_log.h"
+#include "wire_upload.h"
 
 static void coord_main(void *arg) {
   pc_embedded *f = arg;
@@ -98,7 +99,7 @@ int pc_embedded_start(pc_embedded *f, pc_err *e) {
    * ranges of the one worker, each ending in an upload (a --seconds budget or --halt-noise
    * stops a range early, and uploads within one are spaced by their cost: upload_share) */
   f->coord.tick_ms = 20;
-  f->coord.range_seconds = PC_WORKER_UPLOAD_MAX_INTERVAL;
+  f->coord.range_seconds = PC_WIRE_UPLOAD_MAX_INTERVAL;
   f->coord.one_worker = true;
   f->coord.exr_interval = 1e9;
   f->coord.volatile_store = true;

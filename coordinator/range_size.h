@@ -22,14 +22,6 @@ typedef struct pc_range_size_in {
   double upload_seconds;  /* what the worker's last upload took to compress (0: unknown) */
 } pc_range_size_in;
 
-/* A range ends in an upload of the whole film, which the worker's render threads wait for:
- * a range (and the floor) lasts at least the upload's cost over this share, up to
- * PC_RANGE_UPLOAD_MAX_SECONDS. At 1280x720 (a 132 MB film, ~0.4 s to compress) ranges of
- * 3 s were one iteration each, and a one-thread worker's wall time was 1.20x its render
- * time. */
-#define PC_RANGE_UPLOAD_SHARE 0.05
-#define PC_RANGE_UPLOAD_MAX_SECONDS 30.0
-
 /* The size of the next fresh range, >= 1 and (bounded) <= unassigned; the caller checks
  * that something is left. An unmeasured worker gets a 1-iteration probe, which measures
  * it. Otherwise a range is range_seconds of the worker's rate, and near the end of a
@@ -37,8 +29,8 @@ typedef struct pc_range_size_in {
  * in proportion to its rate, so all would finish together): the ranges shrink as the job
  * ends, and the half kept back evens out wrong rate estimates on later requests; alone, the
  * whole share (every range ends in an upload of a whole film). Not under
- * PC_RANGE_MIN_SECONDS of work, nor under what pays for the range's upload
- * (PC_RANGE_UPLOAD_SHARE), unless the whole share is less. */
+ * PC_RANGE_MIN_SECONDS of work, nor under what pays for the range's upload (its cost over
+ * PC_WIRE_UPLOAD_SHARE, up to PC_WIRE_UPLOAD_MAX_INTERVAL), unless the whole share is less. */
 uint64_t pc_range_size(const pc_range_size_in *in);
 
 #endif

@@ -11,6 +11,7 @@
 #include "error.h"
 #include "pcbpt.pb-c.h"
 #include "wire_seal.h"
+#include "wire_upload.h"
 
 #define PC_WIRE_PROTOCOL_VERSION 7u   /* 2: films as byte planes (PCFILM02); 3: films end with beauty_sq;
                                         * 4: sealed frames (wire_seal.h); 5: films end with beauty_max;
@@ -19,9 +20,6 @@
                                         * carry their iteration trace (PCFILM03, film_trace.h) */
 #define PC_WIRE_MAX_FRAME (1u << 20)   /* hard limit on one frame's plaintext payload */
 #define PC_WIRE_CHUNK (256u << 10)     /* bulk payload bytes per frame; well under the limit */
-/* A rendering worker uploads what it has at least this often (seconds; a range shorter than
- * this, at its end): the coordinator's progress deadlines count on it. */
-#define PC_WIRE_UPLOAD_INTERVAL 2.0
 
 typedef struct pc_wire_decoder {
   uint8_t hdr[4];

@@ -10,6 +10,7 @@
 #include "auth.h"
 #include "render_flags.h"
 #include "wire_conn.h"
+#include "wire_upload.h"
 #include "worker.h"
 
 static const char help[] =
@@ -44,7 +45,7 @@ int main(int argc, char **argv) {
   else if (getenv("XDG_CACHE_HOME")) snprintf(cache_dir, sizeof cache_dir, "%s/pcbpt", getenv("XDG_CACHE_HOME"));
   else snprintf(cache_dir, sizeof cache_dir, "/tmp/pcbpt-cache-%ld", (long)getuid());
   pc_worker_opts o = {.host = host, .port = port, .key = key, .threads = (int)threads, .name = name,
-                      .cache_dir = cache_dir, .handle_signals = true, .upload_share = PC_WORKER_FARM_UPLOAD_SHARE};
+                      .cache_dir = cache_dir, .handle_signals = true, .upload_share = PC_WIRE_UPLOAD_SHARE};
   pc_worker *w = NULL;
   int rc = pc_worker_create(&o, &w, &e);
   sodium_memzero(key, sizeof key);

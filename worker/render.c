@@ -2,11 +2,12 @@
  * for the next job of the same scene bundle, -D values and film size: a study's interleaved
  * jobs differ in method and seed only, and switch often), then renders the assigned range in
  * batches of about half a second into the pending film, and compresses that into an upload
- * when the loop asks (between batches, on this thread, so the film is never shared). Over one scene it keeps the
- * renderers and films of the last few jobs (a study's methods and auto's pilot candidates
- * alternate range by range): a fresh renderer's first iteration pays for allocating and first
- * touching its buffers, and PCBPT's stores grow back over a few iterations, which would be
- * charged to every range of every method and weigh most in the pilot's short ranges.
+ * when the loop asks (between batches, on this thread, so the film is never shared). Over
+ * one scene it keeps the renderers and films of the last few jobs (a study's methods and
+ * auto's pilot candidates alternate range by range): a fresh renderer's first iteration pays
+ * for allocating and first touching its buffers, and PCBPT's stores grow back over a few
+ * iterations, which would be charged to every range of every method and weigh most in the
+ * pilot's short ranges.
  * Cancel is polled by the renderer between work items, so it takes effect well within a
  * second. */
 #include <stdio.h>

@@ -22,6 +22,7 @@
 #include "wire_film.h"
 #include "wire_log.h"
 #include "wire_settings.h"
+#include "wire_upload.h"
 #include "worker.h"
 
 struct pc_worker {
@@ -169,7 +170,7 @@ static void finish_range(worker *w) {
 /* Seconds between uploads within a range (pc_worker_opts.upload_share). */
 static double upload_interval(const worker *w, double zip_seconds) {
   double t = w->upload_share > 0 ? zip_seconds / w->upload_share : 0;
-  return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t > PC_WORKER_UPLOAD_MAX_INTERVAL ? PC_WORKER_UPLOAD_MAX_INTERVAL : t;
+  return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t > PC_WIRE_UPLOAD_MAX_INTERVAL ? PC_WIRE_UPLOAD_MAX_INTERVAL : t;
 }
 
 /* Takes the pending delta for upload when due; finishes the range when all is acknowledged. */

@@ -66,17 +66,13 @@ typedef struct pc_worker_opts {
   const char *cache_dir;   /* scene bundles by hash (created) */
   bool handle_signals;     /* SIGINT/SIGTERM stop the worker (the standalone process) */
   /* > 0: uploads within a range are spaced so that compressing them takes at most about
-   * this share of the render thread's time (at least PC_WIRE_UPLOAD_INTERVAL and at most
-   * PC_WORKER_UPLOAD_MAX_INTERVAL apart; the render pool waits while a film is compressed);
-   * 0: every PC_WIRE_UPLOAD_INTERVAL. The embedded farm sets 0.01: its coordinator shares
-   * the machine, so every upload's sealing, decompression and merge are the render's own
-   * cost too, and a crash loses the whole render anyway. pcbpt-worker sets
-   * PC_WORKER_FARM_UPLOAD_SHARE, as the coordinator sizes its ranges (PC_RANGE_UPLOAD_SHARE):
-   * small films keep the 2 s, a lost worker loses at most an interval of work. */
+   * this share of the render thread's time (wire_upload.h: between PC_WIRE_UPLOAD_INTERVAL
+   * and PC_WIRE_UPLOAD_MAX_INTERVAL apart); 0: every PC_WIRE_UPLOAD_INTERVAL. pcbpt-worker
+   * sets PC_WIRE_UPLOAD_SHARE, the share the coordinator sizes ranges by. The embedded farm
+   * sets 0.01: its coordinator shares the machine, so every upload's sealing, decompression
+   * and merge are the render's own cost too, and a crash loses the whole render anyway. */
   double upload_share;
 } pc_worker_opts;
-#define PC_WORKER_UPLOAD_MAX_INTERVAL 30.0
-#define PC_WORKER_FARM_UPLOAD_SHARE 0.05
 
 int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);
 /* Runs the worker's loop until pc_worker_stop (or a signal with handle_signals); an error

@@ -39,7 +39,7 @@ static void single_requests(void **st) {
   in.unassigned = 40;
   assert_int_equal(pc_range_size(&in), 20); /* one worker so far: half kept back for any other */
   /* a worker whose uploads take 0.4 s to compress: ranges (and the floor) of 8 s, so the
-   * upload costs it 5%; capped at PC_RANGE_UPLOAD_MAX_SECONDS; no effect on a probe */
+   * upload costs it 5%; capped at PC_WIRE_UPLOAD_MAX_INTERVAL; no effect on a probe */
   in.bounded = false;
   in.upload_seconds = 0.4;
   assert_int_equal(pc_range_size(&in), 160);
