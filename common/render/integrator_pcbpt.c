@@ -30,13 +30,15 @@ typedef struct candidates {
 } candidates;
 
 /* Whether the target traces this candidate's shadow ray (--pcbpt-candidate-visibility):
- * always, or unless every interpolated record sees the light vertex. Tracing only where the
- * records disagree (0 < seen < 1) gained little on ajar-door (inner relMSE 0.180 against
- * 0.185 without tracing and 0.154 tracing all, N = 4): what the records get wrong is mostly
- * the light vertices none of them sees, drawn from the uniform part of p_conn. */
-static bool traces_candidate(pc_candidate_visibility mode, double seen) {
+ * always, or unless every interpolated record sees the light vertex (seen: the share of the
+ * records that do, read only when the mode needs it). Tracing only where the records disagree
+ * (0 < seen < 1) gained little on ajar-door (inner relMSE 0.180 against 0.185 without tracing
+ * and 0.154 tracing all, N = 4): what the records get wrong is mostly the light vertices none
+ * of them sees, drawn from the uniform part of p_conn. */
+static bool traces_candidate(pc_candidate_visibility mode, const pc_irec_lookup *L, int v, double *seen) {
   if (mode == PC_CANDVIS_TRACED) return true;
-  return mode == PC_CANDVIS_UNCERTAIN && seen < 1.0;
+  *seen = pc_irec_interp_seen(L, v);
+  return mode == PC_CANDVIS_UNCERTAIN && *seen < 1.0;
 }
 
 /* Target of the resampling: the luminance of the weighted contribution without visibility,
@@ -60,8 +62,8 @@ static float candidate_target(void *user, int slot, int v) {
   pc_connection *k = &cs->k[slot];
   if (!pc_connect_unoccluded(c, &c->counts, lv, cs->ev, c->weighted, k)) return 0.f;
   float h = v3_luminance(k->f) * k->weight;
-  double seen = pc_irec_interp_seen(cs->L, v);
-  if (traces_candidate(c->set->candidate_visibility, seen)) {
+  double seen = 0.0;
+  if (traces_candidate(c->set->candidate_visibility, cs->L, v, &seen)) {
     cs->visible[slot] = pc_connect_visible(c, lv, cs->ev);
     if (!cs->visible[slot]) return 0.f;
   } else {
@@ -79,7 +81,10 @@ static float candidate_target(void *user, int slot, int v) {
 static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev, const pc_irec_lookup *L,
                             double xi) {
   const pc_render_settings *set = c->set;
-  candidates cs = {.c = c, .ev = ev, .L = L};
+  candidates cs; /* not zeroed: 2 KB per eye vertex; candidate_target fills each slot it is given */
+  cs.c = c;
+  cs.ev = ev;
+  cs.L = L;
   int slot[PC_IREC_MAX_CANDIDATES];
   double factor[PC_IREC_MAX_CANDIDATES];
   int n = pc_irec_resample(L, set->pcbpt_candidates, set->pcbpt_k, xi, crng, candidate_target, &cs, slot, factor);
