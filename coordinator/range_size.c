@@ -5,8 +5,7 @@
 
 uint64_t pc_range_size(const pc_range_size_in *in) {
   if (!(in->rate > 0)) return 1;
-  double pay = in->upload_seconds > 0 ? in->upload_seconds / PC_WIRE_UPLOAD_SHARE : 0;
-  if (pay > PC_WIRE_UPLOAD_MAX_INTERVAL) pay = PC_WIRE_UPLOAD_MAX_INTERVAL;
+  double pay = pc_wire_upload_spacing(in->upload_seconds, PC_WIRE_UPLOAD_SHARE);
   double n = in->rate * (in->range_seconds > pay ? in->range_seconds : pay);
   if (in->bounded) {
     double others = in->others_rate > 0 ? in->others_rate : 0;

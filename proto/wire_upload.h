@@ -1,6 +1,6 @@
 /* wire_upload.h: how often a worker uploads, agreed by both ends of the wire: the worker
  * spaces its uploads by these, the coordinator sizes ranges (each ends in an upload) and
- * progress deadlines by them. Constants only, so the coordinator's pure range arithmetic
+ * progress deadlines by them. No dependencies, so the coordinator's pure range arithmetic
  * (range_size.c) can use them without the protocol. */
 #ifndef PC_WIRE_UPLOAD_H
 #define PC_WIRE_UPLOAD_H
@@ -16,5 +16,13 @@
  * 1280x720 film (132 MB, ~0.4 s to compress) made a one-thread worker's wall time 1.20x its
  * render time. Small films compress in milliseconds and keep PC_WIRE_UPLOAD_INTERVAL. */
 #define PC_WIRE_UPLOAD_SHARE 0.05
+
+/* The seconds of work over which an upload compressed in zip_seconds takes `share` of the
+ * time, up to PC_WIRE_UPLOAD_MAX_INTERVAL (0 when either is unknown): how far apart the worker
+ * spaces its uploads, and how long the coordinator makes the ranges that end in one. */
+static inline double pc_wire_upload_spacing(double zip_seconds, double share) {
+  double t = share > 0 && zip_seconds > 0 ? zip_seconds / share : 0;
+  return t > PC_WIRE_UPLOAD_MAX_INTERVAL ? PC_WIRE_UPLOAD_MAX_INTERVAL : t;
+}
 
 #endif

@@ -169,8 +169,8 @@ static void finish_range(worker *w) {
 
 /* Seconds between uploads within a range (pc_worker_opts.upload_share). */
 static double upload_interval(const worker *w, double zip_seconds) {
-  double t = w->upload_share > 0 ? zip_seconds / w->upload_share : 0;
-  return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t > PC_WIRE_UPLOAD_MAX_INTERVAL ? PC_WIRE_UPLOAD_MAX_INTERVAL : t;
+  double t = pc_wire_upload_spacing(zip_seconds, w->upload_share);
+  return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t;
 }
 
 /* Takes the pending delta for upload when due; finishes the range when all is acknowledged. */
