@@ -21,6 +21,7 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->knn = (uint32_t)s->knn;
   out->uniform_mix = s->uniform_mix;
   out->mis_mode = (uint32_t)s->mis_mode;
+  out->mis_count = s->mis_count;
   out->pmf_mode = (uint32_t)s->pmf_mode;
   for (int i = 0; i < s->defines.n; i++) {
     const char *n, *v;
@@ -41,7 +42,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   if (s.method == PC_METHOD_AUTO) return pc_errf(e, PC_EINVAL, "settings: method auto is chosen by the client's pilot, not sent");
   if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
       p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
-      p->mis_mode > PC_MIS_STANDARD || p->pmf_mode > PC_PMF_EXACT ||
+      p->mis_mode > PC_MIS_COUNT || p->pmf_mode > PC_PMF_EXACT ||
       p->pcbpt_candidate_visibility > PC_CANDVIS_TRACED)
     return pc_errf(e, PC_EINVAL, "settings: a value is out of range (size %ux%u)", p->width, p->height);
   s.width = (int)p->width;
@@ -59,6 +60,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.knn = (int)p->knn;
   s.uniform_mix = p->uniform_mix;
   s.mis_mode = (pc_mis_mode)p->mis_mode;
+  if (s.mis_mode == PC_MIS_COUNT) s.mis_count = p->mis_count; /* range: pc_render_settings_check */
   s.pmf_mode = (pc_pmf_mode)p->pmf_mode;
   if (p->n_define_names != p->n_define_values || p->n_define_names > PC_SCENE_MAX_DEFINES)
     return pc_errf(e, PC_EINVAL, "settings: malformed -D parameters");

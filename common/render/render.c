@@ -79,7 +79,15 @@ void pc_render_settings_default(pc_render_settings *s) {
    * in two runs differing only in iteration count), so 0.5 stays: the few per cent between
    * 0.5 and 0.7 are within the run-to-run spread. */
   s->uniform_mix = 0.5f;
-  s->mis_mode = PC_MIS_UPPER_BOUND;
+  /* Inner strategies count 2 in the weights: between the paper's conservative 1 (which treats
+   * the inner samples of a pixel as fully correlated) and M (independent). Beauty relMSE after
+   * 128 iterations at 128x128, K = 1, count 2 against 1 (docs/pmf-ceiling.md): slit-room -22%,
+   * furnace -18%, ajar-door -10%, outdoor -7%, cornell-box -5%, open-room, thin-glass and the
+   * environment scenes within 1%, glossy-floor +1.5%. Count 4 gained more on the diffuse
+   * scenes and lost 2-7% on the glossy ones; M, the spiky noise of the paper's Fig. 8 (3x on
+   * glossy-floor). The count changes no work, only how the image is shared out. */
+  s->mis_mode = PC_MIS_COUNT;
+  s->mis_count = 2.f;
   s->pmf_mode = PC_PMF_CACHED;
 }
 
@@ -104,10 +112,21 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (!(s->cache_fraction > 0.f && s->cache_fraction <= 1.f)) return pc_errf(e, PC_EINVAL, "cache-fraction %g out of range (0, 1]", s->cache_fraction);
   if (s->knn < 1 || s->knn > 64) return pc_errf(e, PC_EINVAL, "knn %d out of range 1..64", s->knn);
   if (!(s->uniform_mix >= 0.f && s->uniform_mix <= 1.f)) return pc_errf(e, PC_EINVAL, "uniform-mix %g out of range [0, 1]", s->uniform_mix);
+  if (s->mis_mode < PC_MIS_UPPER_BOUND || s->mis_mode > PC_MIS_COUNT) return pc_errf(e, PC_EINVAL, "mis mode %d unknown", (int)s->mis_mode);
+  if (s->mis_mode == PC_MIS_COUNT && !(s->mis_count >= 1.f && s->mis_count <= 100000.f))
+    return pc_errf(e, PC_EINVAL, "mis count %g out of range 1..100000", (double)s->mis_count);
   if (s->method == PC_METHOD_PCBPT && s->pmf_mode == PC_PMF_CACHED && s->uniform_mix == 0.f)
     return pc_errf(e, PC_EINVAL, "uniform-mix 0 with the cached PMF would be biased (a light vertex that no nearby "
                                  "record sees could never be sampled): use a value > 0 or --pmf exact");
   return PC_OK;
+}
+
+float pc_render_settings_inner_count(const pc_render_settings *s) {
+  switch (s->mis_mode) {
+  case PC_MIS_STANDARD: return (float)s->pcbpt_m;
+  case PC_MIS_COUNT: return s->mis_count < (float)s->pcbpt_m ? s->mis_count : (float)s->pcbpt_m;
+  default: return 1.f;
+  }
 }
 
 void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src) {
@@ -198,8 +217,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     }
     for (int i = 0; i < threads; i++) {
       r->tctx[i].pcbpt = r->pcbpt;
-      /* Correlated inner strategies count 1 (upper-bound weights, DESIGN.md §4.3) or M. */
-      if (settings->mis_mode == PC_MIS_STANDARD) r->tctx[i].counts.n_inner = (float)settings->pcbpt_m;
+      r->tctx[i].counts.n_inner = pc_render_settings_inner_count(settings);
     }
   }
   *out = r;

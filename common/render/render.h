@@ -14,7 +14,10 @@
 #include "scene.h"
 
 typedef enum { PC_MIS_BALANCE, PC_MIS_POWER } pc_mis_heuristic;
-typedef enum { PC_MIS_UPPER_BOUND, PC_MIS_STANDARD } pc_mis_mode;   /* PCBPT correlated MIS */
+/* PCBPT correlated MIS: the sample count the inner strategies carry in the weights: 1 (the
+ * upper bound of Popov et al., eqs. 16-17), M (standard, as if the stored paths were
+ * independent) or a count in between (pc_render_settings.mis_count; the default, 2). */
+typedef enum { PC_MIS_UPPER_BOUND, PC_MIS_STANDARD, PC_MIS_COUNT } pc_mis_mode;
 typedef enum { PC_PMF_CACHED, PC_PMF_EXACT } pc_pmf_mode;
 /* What the resampling target knows of a candidate connection's visibility: the records'
  * blurred estimate only, its own shadow ray unless every nearby record sees the light vertex,
@@ -38,6 +41,7 @@ typedef struct pc_render_settings {
   int knn;                 /* records interpolated per lookup (6) */
   float uniform_mix;       /* weight of the uniform PMF blended into p_conn */
   pc_mis_mode mis_mode;
+  float mis_count;         /* PC_MIS_COUNT: the inner strategies' count (>= 1; M where larger) */
   pc_pmf_mode pmf_mode;
   pc_scene_defines defines; /* -D name=value: part of what the scene is, so workers get them */
   /* Debug (tests): every strategy gets weight 1, so each per-strategy layer is on its own an
@@ -49,6 +53,8 @@ typedef struct pc_render_settings {
 void pc_render_settings_default(pc_render_settings *s);
 /* Validates ranges; message names the offending setting. */
 int pc_render_settings_check(const pc_render_settings *s, pc_err *e);
+/* The sample count of the inner strategies in the MIS weights (pc_mis_counts.n_inner). */
+float pc_render_settings_inner_count(const pc_render_settings *s);
 
 /* Time (seconds) and work spent, summed over iterations; printed and stored in headers. */
 typedef struct pc_render_stats {

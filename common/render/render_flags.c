@@ -34,7 +34,9 @@ const char pc_render_flags_help[] =
     "                        of 128*sqrt(W*H) past it (default 0.004)\n"
     "  --knn N               PCBPT records interpolated per lookup (default 6)\n"
     "  --uniform-mix F       PCBPT weight of the uniform PMF in p_conn (default 0.5)\n"
-    "  --mis MODE            PCBPT correlated MIS: upper-bound (default) or standard\n"
+    "  --mis MODE            PCBPT correlated MIS, the inner strategies' sample count in the\n"
+    "                        weights: a count (default 2; at most M), upper-bound (1, Popov et\n"
+    "                        al. eqs. 16-17) or standard (M)\n"
     "  --pmf MODE            PCBPT connection PMF: cached (default) or exact\n"
     "  -D NAME=VALUE         scene parameter: replaces $NAME in the scene (wins over <default>)\n"
     "  --strict              settings pcbpt ignores (sampler, rfilter, ...) are errors, not warnings\n"
@@ -143,7 +145,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   case 15:
     if (strcmp(v, "upper-bound") == 0) s->mis_mode = PC_MIS_UPPER_BOUND;
     else if (strcmp(v, "standard") == 0) s->mis_mode = PC_MIS_STANDARD;
-    else return pc_errf(e, PC_EINVAL, "%s: '%s' is not upper-bound or standard", flag, v);
+    else if (pc_parse_f64(v, 1.0, 100000.0, &d)) {
+      s->mis_mode = PC_MIS_COUNT;
+      s->mis_count = (float)d;
+    } else return pc_errf(e, PC_EINVAL, "%s: '%s' is not upper-bound, standard or a count >= 1", flag, v);
     break;
   case 16:
     if (strcmp(v, "cached") == 0) s->pmf_mode = PC_PMF_CACHED;
@@ -170,12 +175,15 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
 int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_t size) {
   static const char *const visibility[] = {"records", "uncertain", "traced"};
   if (s->method != PC_METHOD_PCBPT && s->method != PC_METHOD_CBDPT) return snprintf(buf, size, "%s", "");
+  char mis[32];
+  if (s->mis_mode == PC_MIS_COUNT) snprintf(mis, sizeof mis, "%g", (double)s->mis_count);
+  else snprintf(mis, sizeof mis, "%s", s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound");
   return snprintf(buf, size,
                   "--pcbpt-m %d --pcbpt-k %d --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
                   " --knn %d --uniform-mix %g --mis %s --pmf %s",
                   s->pcbpt_m, s->pcbpt_k, s->pcbpt_candidates, visibility[s->candidate_visibility],
-                  (double)s->cache_fraction, s->knn, (double)s->uniform_mix,
-                  s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound", s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
+                  (double)s->cache_fraction, s->knn, (double)s->uniform_mix, mis,
+                  s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
 }
 
 void pc_render_request_load_opts(const pc_render_request *r, pc_scene_load_opts *o) {

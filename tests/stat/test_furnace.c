@@ -24,6 +24,7 @@ typedef struct variant {
   int iterations;
   int candidates; /* PCBPT resampling candidates (1: none) */
   pc_candidate_visibility vis;
+  float count; /* PC_MIS_COUNT: the inner strategies' count */
 } variant;
 
 static void check(variant v) {
@@ -40,6 +41,7 @@ static void check(variant v) {
     req.set.seed = 1234;
     req.set.pmf_mode = v.pmf;
     req.set.mis_mode = v.mis;
+    if (v.mis == PC_MIS_COUNT) req.set.mis_count = v.count;
     /* A small light-path store and a dense cache keep the correlated estimators' cost low at
      * this resolution while exercising sampling (K > 1) and interpolation. */
     req.set.pcbpt_m = 20;
@@ -64,7 +66,7 @@ static void check(variant v) {
     double err = fabs(mean - exact);
     printf("furnace %-5s pmf %-6s mis %-11s cand %d vis %d maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
            pc_method_name(v.method), v.pmf == PC_PMF_EXACT ? "exact" : "cached",
-           v.mis == PC_MIS_STANDARD ? "standard" : "upper-bound", v.candidates, (int)v.vis, depths[k], mean, exact, err, se, 100 * err / exact);
+           v.mis == PC_MIS_STANDARD ? "standard" : v.mis == PC_MIS_COUNT ? "count" : "upper-bound", v.candidates, (int)v.vis, depths[k], mean, exact, err, se, 100 * err / exact);
     assert_true(err <= fmax(4 * se, 1e-5 * exact));
     assert_true(err <= 0.015 * exact);
     stat_free(&st);
@@ -74,33 +76,35 @@ static void check(variant v) {
 
 static void test_furnace_pt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
 }
 
 static void test_furnace_lt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
 }
 
 static void test_furnace_bdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
 }
 
 static void test_furnace_cbdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f});
 }
 
 static void test_furnace_pcbpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_RECORDS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_TRACED});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 4, PC_CANDVIS_UNCERTAIN});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1, PC_CANDVIS_RECORDS});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1, PC_CANDVIS_RECORDS});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_TRACED, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 4, PC_CANDVIS_UNCERTAIN, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 1, PC_CANDVIS_RECORDS, 4.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 3, PC_CANDVIS_TRACED, 2.5f});
 }
 
 int main(void) {

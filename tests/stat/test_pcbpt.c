@@ -3,11 +3,11 @@
  * are bit-identical to BDPT's for the same seed (same streams, same upper-bound counts), and
  * the inner layer's block means of BDPT, CBDPT, PCBPT (cached, cached with resampled
  * connections whose target knows visibility from the records, from traced shadow rays or
- * from both, exact, --mis standard) and
+ * from both, exact, --mis standard or a count between 1 and M) and
  * PCBPT with a uniform PMF and K about V (M = 20 paths, ~60 vertices) agree within 4.5
  * combined standard errors measured from independent iterations. (Uniform PCBPT with K = V
  * equals CBDPT in expectation, not sample by sample: its K draws are i.i.d.) With --mis
- * standard the inner layer has other weights, so it is compared through the beauty image.
+ * standard or a count the inner layer has other weights, so it is compared through the beauty image.
  * Every shipped scene renders finite with CBDPT and both PCBPT PMF modes. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -59,6 +59,7 @@ static void test_shared_layers_equal_bdpt(void **state) {
   for (int m = 0; m < 2; m++) {
     pc_render_settings set = rb.set;
     set.method = methods[m];
+    set.mis_mode = PC_MIS_UPPER_BOUND; /* BDPT's counts: any other count reweights every strategy */
     pc_film f;
     render_film(&scene, &set, 2, &f);
     for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
@@ -82,6 +83,7 @@ typedef struct variant {
   int candidates; /* resampling candidates (1: none) */
   pc_candidate_visibility vis;
   int layer; /* compared layer: PC_LAYER_INNER or -1 (beauty) */
+  float count; /* PC_MIS_COUNT: the inner strategies' count */
 } variant;
 
 static void test_inner_agrees(void **state) {
@@ -90,17 +92,19 @@ static void test_inner_agrees(void **state) {
   pc_scene scene = {0};
   assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
   const variant vs[] = {
-      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER},
-      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER},
-      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER},
-      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1},
-      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1},
-      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1},
+      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f},
+      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER, 0.f},
+      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
+      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1, 0.f},
+      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1, 0.f},
+      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1, 0.f},
+      {"pcbpt-mis-count", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 3.f},
+      {"pcbpt-mis-count-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.85f, 1, 3, PC_CANDVIS_TRACED, -1, 7.5f},
   };
   const int nv = sizeof vs / sizeof vs[0];
   stat_blocks ref_inner, ref_beauty;
@@ -111,6 +115,7 @@ static void test_inner_agrees(void **state) {
     set.method = vs[i].method;
     set.pmf_mode = vs[i].pmf;
     set.mis_mode = vs[i].mis;
+    if (vs[i].mis == PC_MIS_COUNT) set.mis_count = vs[i].count;
     set.uniform_mix = vs[i].u;
     set.pcbpt_k = vs[i].k;
     set.pcbpt_candidates = vs[i].candidates;
