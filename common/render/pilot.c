@@ -44,17 +44,26 @@ double pc_pilot_remaining(double seconds, double pilot_seconds) {
 
 uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
 
-static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k) {
+/* count > 0: a PCBPT candidate whose inner strategies carry that count in the MIS weights
+ * instead of the base settings' (stage 4) */
+static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k, float count) {
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
-  c->counts = m == PC_METHOD_BDPT || k <= 2; /* stage 1 runs whatever the data says */
+  c->counts = m == PC_METHOD_BDPT || (k <= 2 && count == 0); /* stage 1 runs whatever the data says */
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
   c->relmse = c->own_relmse = -1;
   if (m == PC_METHOD_PCBPT) {
     c->set.pcbpt_k = k;
-    snprintf(c->label, sizeof c->label, "pcbpt K=%d", k);
+    c->mis_raised = count > 0;
+    if (c->mis_raised) {
+      c->set.mis_mode = PC_MIS_COUNT;
+      c->set.mis_count = count;
+      snprintf(c->label, sizeof c->label, "pcbpt K=%d mis %g", k, (double)count);
+    } else {
+      snprintf(c->label, sizeof c->label, "pcbpt K=%d", k);
+    }
   } else {
     snprintf(c->label, sizeof c->label, "%s", pc_method_name(m));
   }
@@ -135,10 +144,12 @@ static void pooled_relmse(pc_pilot *p) {
     if (p->c[i].npix && p->c[i].iterations >= 2) p->c[i].relmse = sum[i] / (double)nv;
 }
 
-/* The candidate of method m and (for PCBPT) K = k, or -1. */
-static int find(const pc_pilot *p, pc_method m, int k) {
+/* The candidate of method m and (for PCBPT) K = k, with the base MIS count or the raised one,
+ * or -1. */
+static int find(const pc_pilot *p, pc_method m, int k, bool raised) {
   for (int i = 0; i < p->n; i++)
-    if (p->c[i].set.method == m && (m != PC_METHOD_PCBPT || p->c[i].set.pcbpt_k == k)) return i;
+    if (p->c[i].set.method == m && (m != PC_METHOD_PCBPT || (p->c[i].set.pcbpt_k == k && p->c[i].mis_raised == raised)))
+      return i;
   return -1;
 }
 
@@ -157,12 +168,24 @@ static bool cpu_known(const pc_pilot *p) {
 
 static double pilot_cost(const pc_pilot_candidate *c, bool cpu) { return cpu ? c->cpu_seconds : c->seconds; }
 
+/* A raised-count candidate does the work of its base candidate (same K, same iterations: the
+ * count only weights): their cost is one quantity measured twice, and the mean of the two is the
+ * better estimate of it (in the pilot of a 128x128 render on a loaded machine the two differed
+ * by up to 35%, which would have decided the choice instead of their errors). */
+static double candidate_cost(const pc_pilot *p, int i, bool cpu) {
+  const pc_pilot_candidate *c = &p->c[i];
+  if (c->set.method != PC_METHOD_PCBPT) return pilot_cost(c, cpu);
+  int twin = find(p, PC_METHOD_PCBPT, c->set.pcbpt_k, !c->mis_raised);
+  if (twin < 0 || p->c[twin].iterations != c->iterations) return pilot_cost(c, cpu);
+  return 0.5 * (pilot_cost(c, cpu) + pilot_cost(&p->c[twin], cpu));
+}
+
 void pc_pilot_choose(pc_pilot *p) {
   pooled_relmse(p);
   bool cpu = cpu_known(p);
   for (int i = 0; i < p->n; i++) {
     pc_pilot_candidate *c = &p->c[i];
-    double cost = pilot_cost(c, cpu);
+    double cost = candidate_cost(p, i, cpu);
     c->efficiency = c->relmse > 0 && cost > 0 ? 1.0 / (c->relmse * cost) : 0;
     /* an image without noise (all black, or exact) is infinitely efficient */
     if (c->relmse == 0 && c->iterations >= 2) c->efficiency = INFINITY;
@@ -170,7 +193,7 @@ void pc_pilot_choose(pc_pilot *p) {
   /* PCBPT: K = 1 unless doubling K is clearly better, step by step (pc_pilot_run) */
   int pc = -1;
   for (int k = 1; k <= 8; k *= 2) {
-    int i = find(p, PC_METHOD_PCBPT, k);
+    int i = find(p, PC_METHOD_PCBPT, k, false);
     if (i < 0) break;
     if (pc < 0) {
       if (p->c[i].efficiency > 0) pc = i;
@@ -179,8 +202,11 @@ void pc_pilot_choose(pc_pilot *p) {
     if (!(p->c[i].efficiency > PC_PILOT_K_MARGIN * p->c[pc].efficiency)) break;
     pc = i;
   }
-  int bdpt = find(p, PC_METHOD_BDPT, 0);
-  p->best = pc;
+  /* then the same K with the raised MIS count, if it was tried and is clearly better */
+  int raised = pc >= 0 ? find(p, PC_METHOD_PCBPT, p->c[pc].set.pcbpt_k, true) : -1;
+  if (raised >= 0 && p->c[raised].efficiency > PC_PILOT_COUNT_MARGIN * p->c[pc].efficiency) pc = raised;
+  int bdpt = find(p, PC_METHOD_BDPT, 0, false);
+  p->best = p->best_pcbpt = pc;
   if (bdpt >= 0 && p->c[bdpt].efficiency > 0 &&
       (pc < 0 || p->c[pc].efficiency < PC_PILOT_BDPT_MARGIN * p->c[bdpt].efficiency))
     p->best = bdpt;
@@ -259,9 +285,9 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
    * (PCBPT's connections draw from a stream of their own), so the noise of the strategies they
    * share cancels in the comparison: with a batch each of its own, slit-room's K = 1 met a
    * light path through the slit that K = 2's batch did not, and K = 2 looked 170x better */
-  add_candidate(p, base, PC_METHOD_BDPT, 0);
-  add_candidate(p, base, PC_METHOD_PCBPT, 1);
-  add_candidate(p, base, PC_METHOD_PCBPT, 2);
+  add_candidate(p, base, PC_METHOD_BDPT, 0, 0.f);
+  add_candidate(p, base, PC_METHOD_PCBPT, 1, 0.f);
+  add_candidate(p, base, PC_METHOD_PCBPT, 2, 0.f);
   uint64_t second = 0;
   int rc = render_batch(p, 0, min_it, 0, render, user, e);
   if (!rc && slice > 0 && (second = second_batch(p, slice)) != 0)
@@ -272,7 +298,16 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
    * iterations miss (docs/auto.md) */
   for (int k = 4; !rc && k <= 8; k *= 2) {
     if (p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
-    add_candidate(p, base, PC_METHOD_PCBPT, k);
+    add_candidate(p, base, PC_METHOD_PCBPT, k, 0.f);
+    rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
+    if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
+  }
+  /* stage 4: the chosen K with the inner strategies' MIS count raised to PC_PILOT_RAISED_COUNT
+   * (docs/pmf-ceiling.md: it pays on diffuse scenes and costs on glossy ones), on the same
+   * iterations: the same paths and connections, weighted otherwise, at the same cost */
+  float count = fminf(PC_PILOT_RAISED_COUNT, (float)base->pcbpt_m);
+  if (!rc && p->best_pcbpt >= 0 && count > pc_render_settings_inner_count(&p->c[p->best_pcbpt].set) && p->n < PC_PILOT_MAX) {
+    add_candidate(p, base, PC_METHOD_PCBPT, p->c[p->best_pcbpt].set.pcbpt_k, count);
     rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
     if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
   }

@@ -1,5 +1,6 @@
 /* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
- * (BDPT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid) on the same
+ * (BDPT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid, then the chosen K
+ * with a raised MIS count for its inner strategies) on the same
  * iterations (the same seeds, so they share their eye and light paths and the noise those
  * carry), measures its efficiency 1 / (estimated relMSE x render time) from the spread of its
  * iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
@@ -36,6 +37,15 @@
  * slit-room); on shared iterations it is 0.09-0.18, which would allow a smaller margin, but
  * nothing measured here asks for one. */
 #define PC_PILOT_K_MARGIN 2.0
+/* Stage 4 tries the chosen PCBPT K with its inner strategies counting this much in the MIS
+ * weights (the default is 2) and keeps it if its efficiency is higher by PC_PILOT_COUNT_MARGIN.
+ * The two candidates render the same paths and connections, only weighted otherwise, so their
+ * ratio is far less noisy than K's; the margin guards against the heavier tails of a larger
+ * count (glossy scenes), which a few iterations see less often than a long render. At 128x128
+ * and 128 iterations, count 4 against 2: slit-room -19%, furnace -13%, outdoor -8%, ajar-door
+ * -3%, glossy-floor +6% (docs/pmf-ceiling.md). */
+#define PC_PILOT_RAISED_COUNT 4.f
+#define PC_PILOT_COUNT_MARGIN 1.1
 
 /* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every
  * candidate's error is measured against the same denominator: the mean of all candidates'
@@ -47,6 +57,7 @@
 typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
+  bool mis_raised;      /* PCBPT with the raised MIS count of stage 4 */
   bool counts;          /* rendered whatever the data says (stage 1): its iterations may
                            count in the image (docs/auto.md); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
@@ -63,6 +74,7 @@ typedef struct pc_pilot_candidate {
 
 typedef struct pc_pilot {
   int n, best;
+  int best_pcbpt;       /* the PCBPT candidate chosen before the comparison with BDPT (-1: none) */
   pc_pilot_candidate c[PC_PILOT_MAX];
   double seconds;       /* wall time of the whole pilot (its cost) */
 } pc_pilot;

@@ -73,6 +73,28 @@ static void test_choose(void **state) {
   assert_true(fabs(p.c[0].efficiency - 10) < 1e-9);
 }
 
+/* The raised MIS count does its twin's work: both are charged the mean of their two measured
+ * costs, so the count is chosen by error alone. */
+static void test_choose_raised(void **state) {
+  (void)state;
+  pc_pilot p = {0};
+  set_candidate(&p, PC_METHOD_BDPT, 1, 1.0, 1.0);
+  set_candidate(&p, PC_METHOD_PCBPT, 1, 0.5, 2.0);
+  set_candidate(&p, PC_METHOD_PCBPT, 1, 0.47, 0.5); /* 6% better, but measured 4x cheaper */
+  p.c[2].mis_raised = true;
+  pc_pilot_choose(&p);
+  assert_true(fabs(p.c[1].efficiency - 1 / (0.5 * 1.25)) < 1e-9);
+  assert_true(fabs(p.c[2].efficiency - 1 / (0.47 * 1.25)) < 1e-9);
+  assert_int_equal(p.best, 1); /* within PC_PILOT_COUNT_MARGIN */
+  p.c[2].own_relmse = 0.5 / (1.01 * PC_PILOT_COUNT_MARGIN); /* just past the margin */
+  pc_pilot_choose(&p);
+  assert_int_equal(p.best, 2);
+  /* a raised candidate of other iterations is charged its own cost */
+  p.c[2].iterations = 6;
+  pc_pilot_choose(&p);
+  assert_true(fabs(p.c[2].efficiency - 1 / (p.c[2].own_relmse * 0.5)) < 1e-9);
+}
+
 /* Two candidates of equal variance whose few iterations landed on different means: measured
  * each against its own mean, the one that happened to land high looks 9x better; against the
  * pooled mean they are equal (and a third without an image keeps its own estimate). */
@@ -98,15 +120,17 @@ static void test_pooled(void **state) {
   pc_pilot_free(&p);
 }
 
-/* Scripted efficiencies: relMSE per iteration by K (cost 1 s per candidate). */
+/* Scripted efficiencies: relMSE per iteration by K, and by K with the raised MIS count (0: as
+ * with the base count) (cost 1 s per candidate). */
 typedef struct script {
-  double bdpt, k[9];
-  int calls;
+  double bdpt, k[9], raised[9];
+  int calls, raised_calls;
   uint64_t job_seed;
   bool seed_leaked;
-  /* the batches each candidate rendered (index 0 BDPT, else K): iterations and salt */
-  int nbatch[9];
-  uint64_t batch_it[9][2], batch_salt[9][2];
+  /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count):
+   * iterations and salt */
+  int nbatch[10];
+  uint64_t batch_it[10][2], batch_salt[10][2];
 } script;
 
 static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
@@ -117,11 +141,16 @@ static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t ite
     const pc_render_settings *set = &c[i].set;
     s->calls++;
     if ((set->seed ^ salt) == s->job_seed) s->seed_leaked = true;
-    int key = set->method == PC_METHOD_BDPT ? 0 : set->pcbpt_k, b = s->nbatch[key]++;
+    int key = set->method == PC_METHOD_BDPT ? 0 : c[i].mis_raised ? 9 : set->pcbpt_k, b = s->nbatch[key]++;
     if (b < 2) s->batch_it[key][b] = iterations, s->batch_salt[key][b] = salt;
     out[i].iterations = iterations;
     out[i].seconds = 0.5 * (double)iterations;
     out[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : s->k[set->pcbpt_k];
+    if (c[i].mis_raised) {
+      s->raised_calls++;
+      assert_true(set->mis_mode == PC_MIS_COUNT && set->mis_count == PC_PILOT_RAISED_COUNT);
+      if (s->raised[set->pcbpt_k] > 0) out[i].own_relmse = s->raised[set->pcbpt_k];
+    }
   }
   return 0;
 }
@@ -143,45 +172,60 @@ static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
   /* stage 1 is BDPT, K = 1 and K = 2 (a slice too small for a second batch). K=2 worse than K=1:
-   * no K=4 or 8 (however good they would have been); the job's uniform mix is kept */
+   * no K=4 or 8 (however good they would have been); the job's uniform mix is kept; stage 4
+   * tries K=1 with the raised count, which is no better: the base count stays */
   script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
   run_script(&a, 0.1, &p);
-  assert_int_equal(a.calls, 3);
+  assert_int_equal(a.calls, 4);
+  assert_int_equal(a.raised_calls, 1);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
+  assert_false(p.c[p.best].mis_raised);
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
-  /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4 */
-  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
+  /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4, and
+   * K=4 with the raised count (better than K=4 by more than its margin) */
+  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[4] = 0.08}};
   run_script(&b, 0.1, &p);
-  assert_int_equal(b.calls, 5);
+  assert_int_equal(b.calls, 6);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
+  assert_true(p.c[p.best].mis_raised && p.c[p.best].set.mis_count == PC_PILOT_RAISED_COUNT);
   pc_pilot_free(&p);
-  /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried */
-  script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01}};
+  /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried; the raised count
+   * better, but within its margin: not taken */
+  script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01},
+              .raised = {[1] = 0.4 / (0.5 * (1 + PC_PILOT_COUNT_MARGIN))}};
   run_script(&d, 0.1, &p);
-  assert_int_equal(d.calls, 3);
+  assert_int_equal(d.calls, 4);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
+  assert_false(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
-  /* BDPT best */
-  script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}};
+  /* BDPT best, also against the raised count */
+  script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}, .raised = {[1] = 0.2}};
   run_script(&c, 0.1, &p);
-  assert_int_equal(c.calls, 3);
+  assert_int_equal(c.calls, 4);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
+  pc_pilot_free(&p);
+  /* BDPT better than K=1 with the base count, but not than K=1 with the raised one */
+  script f = {.bdpt = 0.2, .k = {[1] = 0.22, [2] = 0.5}, .raised = {[1] = 0.1}};
+  run_script(&f, 0.1, &p);
+  assert_int_equal(f.calls, 4);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
+  assert_true(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
 }
 
 /* Every candidate renders the same iterations: the first batch's floor, then what the rest of
  * stage 1's 5 slices buys at the three candidates' cost (here (5 x 2 - 3 x 1) / (3 x 0.5) = 4
- * iterations), and K = 4 and 8, tried later, the same two batches. */
+ * iterations), and K = 4 and 8 and the raised count, tried later, the same two batches. */
 static void test_matched(void **state) {
   (void)state;
   pc_pilot p;
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
   run_script(&b, 2.0, &p);
-  assert_int_equal(b.calls, 10);
-  assert_int_equal(p.n, 5);
-  for (int key = 0; key <= 8; key = key ? 2 * key : 1) {
+  assert_int_equal(b.calls, 12);
+  assert_int_equal(p.n, 6);
+  for (int key = 0; key <= 9; key = key == 8 ? 9 : key ? 2 * key : 1) {
     assert_int_equal(b.nbatch[key], 2);
     assert_int_equal(b.batch_it[key][0], 2);
     assert_int_equal(b.batch_it[key][1], 4);
@@ -336,6 +380,7 @@ static void test_unbiased(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_choose),
+      cmocka_unit_test(test_choose_raised),
       cmocka_unit_test(test_pooled),
       cmocka_unit_test(test_grid),
       cmocka_unit_test(test_matched),
