@@ -139,6 +139,33 @@ static void test_inner_agrees(void **state) {
   pc_scene_free(&scene);
 }
 
+/* The inner strategies' MIS count: 2 by default, 1 for the upper bound, M for standard
+ * weights, a count otherwise, at most M; counts below 1 are refused. */
+static void test_inner_count(void **state) {
+  (void)state;
+  pc_render_settings s;
+  pc_render_settings_default(&s);
+  s.pcbpt_m = 5;
+  assert_true(pc_render_settings_inner_count(&s) == 2.f);
+  s.mis_mode = PC_MIS_UPPER_BOUND;
+  assert_true(pc_render_settings_inner_count(&s) == 1.f);
+  s.mis_mode = PC_MIS_STANDARD;
+  assert_true(pc_render_settings_inner_count(&s) == 5.f);
+  s.mis_mode = PC_MIS_COUNT;
+  s.mis_count = 3.5f;
+  assert_true(pc_render_settings_inner_count(&s) == 3.5f);
+  s.mis_count = 7.f;
+  assert_true(pc_render_settings_inner_count(&s) == 5.f);
+  pc_err e = {0};
+  s.method = PC_METHOD_PCBPT;
+  s.width = s.height = 16;
+  assert_int_equal(pc_render_settings_check(&s, &e), PC_OK);
+  s.mis_count = 0.5f;
+  assert_int_not_equal(pc_render_settings_check(&s, &e), PC_OK);
+  s.mis_count = NAN;
+  assert_int_not_equal(pc_render_settings_check(&s, &e), PC_OK);
+}
+
 /* No NaN or Inf on any shipped scene (glass and mirrors included), per-strategy layers on. */
 static void test_all_scenes_finite(void **state) {
   (void)state;
@@ -201,6 +228,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_shared_layers_equal_bdpt),
       cmocka_unit_test(test_inner_agrees),
+      cmocka_unit_test(test_inner_count),
       cmocka_unit_test(test_all_scenes_finite),
       cmocka_unit_test(test_thread_count_invariant),
   };
