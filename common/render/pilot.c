@@ -304,9 +304,14 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   }
   /* stage 4: the chosen K with the inner strategies' MIS count raised to PC_PILOT_RAISED_COUNT
    * (docs/pmf-ceiling.md: it pays on diffuse scenes and costs on glossy ones), on the same
-   * iterations: the same paths and connections, weighted otherwise, at the same cost */
+   * iterations: the same paths and connections, weighted otherwise, at the same cost. Only
+   * where stage 1 left room in the time budget for its second batch: a refinement of a few
+   * per cent is not worth a pilot past its share (glossy-floor at 60 s: 2 iterations of each
+   * candidate already take 4% of the budget) */
   float count = fminf(PC_PILOT_RAISED_COUNT, (float)base->pcbpt_m);
-  if (!rc && p->best_pcbpt >= 0 && count > pc_render_settings_inner_count(&p->c[p->best_pcbpt].set) && p->n < PC_PILOT_MAX) {
+  bool room = slice <= 0 || second > 0;
+  if (!rc && room && p->best_pcbpt >= 0 && count > pc_render_settings_inner_count(&p->c[p->best_pcbpt].set) &&
+      p->n < PC_PILOT_MAX) {
     add_candidate(p, base, PC_METHOD_PCBPT, p->c[p->best_pcbpt].set.pcbpt_k, count);
     rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
     if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);

@@ -172,21 +172,30 @@ static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
   /* stage 1 is BDPT, K = 1 and K = 2 (a slice too small for a second batch). K=2 worse than K=1:
-   * no K=4 or 8 (however good they would have been); the job's uniform mix is kept; stage 4
-   * tries K=1 with the raised count, which is no better: the base count stays */
-  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
+   * no K=4 or 8 (however good they would have been); the job's uniform mix is kept; no stage 4
+   * either (however good the raised count would have been): stage 1 took the whole budget */
+  script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}, .raised = {[1] = 0.01}};
   run_script(&a, 0.1, &p);
-  assert_int_equal(a.calls, 4);
-  assert_int_equal(a.raised_calls, 1);
+  assert_int_equal(a.calls, 3);
+  assert_int_equal(a.raised_calls, 0);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
+  /* the same with room for a second batch (two batches per candidate from here on): stage 4
+   * tries K=1 with the raised count, which is no better, so the base count stays */
+  script a2 = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
+  run_script(&a2, 2.0, &p);
+  assert_int_equal(a2.calls, 8);
+  assert_int_equal(a2.raised_calls, 2);
+  assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
+  assert_false(p.c[p.best].mis_raised);
+  pc_pilot_free(&p);
   /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4, and
    * K=4 with the raised count (better than K=4 by more than its margin) */
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[4] = 0.08}};
-  run_script(&b, 0.1, &p);
-  assert_int_equal(b.calls, 6);
+  run_script(&b, 2.0, &p);
+  assert_int_equal(b.calls, 12);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   assert_true(p.c[p.best].mis_raised && p.c[p.best].set.mis_count == PC_PILOT_RAISED_COUNT);
@@ -195,21 +204,21 @@ static void test_grid(void **state) {
    * better, but within its margin: not taken */
   script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01},
               .raised = {[1] = 0.4 / (0.5 * (1 + PC_PILOT_COUNT_MARGIN))}};
-  run_script(&d, 0.1, &p);
-  assert_int_equal(d.calls, 4);
+  run_script(&d, 2.0, &p);
+  assert_int_equal(d.calls, 8);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
   /* BDPT best, also against the raised count */
   script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}, .raised = {[1] = 0.2}};
-  run_script(&c, 0.1, &p);
-  assert_int_equal(c.calls, 4);
+  run_script(&c, 2.0, &p);
+  assert_int_equal(c.calls, 8);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
   pc_pilot_free(&p);
   /* BDPT better than K=1 with the base count, but not than K=1 with the raised one */
   script f = {.bdpt = 0.2, .k = {[1] = 0.22, [2] = 0.5}, .raised = {[1] = 0.1}};
-  run_script(&f, 0.1, &p);
-  assert_int_equal(f.calls, 4);
+  run_script(&f, 2.0, &p);
+  assert_int_equal(f.calls, 8);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_true(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
