@@ -83,9 +83,10 @@ void pc_render_settings_default(pc_render_settings *s) {
    * the inner samples of a pixel as fully correlated) and M (independent). Beauty relMSE after
    * 128 iterations at 128x128, K = 1, count 2 against 1 (docs/pmf-ceiling.md): slit-room -22%,
    * furnace -18%, ajar-door -10%, outdoor -7%, cornell-box -5%, open-room, thin-glass and the
-   * environment scenes within 1%, glossy-floor +1.5%. Count 4 gained more on the diffuse
-   * scenes and lost 2-7% on the glossy ones; M, the spiky noise of the paper's Fig. 8 (3x on
-   * glossy-floor). The count changes no work, only how the image is shared out. */
+   * environment scenes within 1%, glossy-floor +1.4%. Count 4 gained more on the diffuse
+   * scenes and lost 2-8% on open-room, thin-glass and glossy-floor (auto may choose it:
+   * pilot.h); M gave the spiky noise of the paper's Fig. 8 (3x on glossy-floor). The count
+   * changes no work, only how the image is shared out among the strategies. */
   s->mis_mode = PC_MIS_COUNT;
   s->mis_count = 2.f;
   s->pmf_mode = PC_PMF_CACHED;
