@@ -4,7 +4,8 @@
  * to the M stored light paths: CBDPT to every stored vertex, adding w f / (p M); PCBPT to K
  * vertices drawn from p_conn, adding (1/K) sum w f / (p M p_conn). The weights use the
  * method's counts (render.c): inner strategies count --mis (2 by default; 1 for the
- * upper-bound weights of eqs. 16-17, M for standard ones). Connection draws use the pixel's PC_STREAM_CONNECT stream. */
+ * upper-bound weights of eqs. 16-17, M for standard ones). Connection draws use the pixel's
+ * PC_STREAM_CONNECT stream. */
 #include <float.h>
 
 #include "bidir.h"

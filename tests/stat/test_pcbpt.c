@@ -7,7 +7,8 @@
  * PCBPT with a uniform PMF and K about V (M = 20 paths, ~60 vertices) agree within 4.5
  * combined standard errors measured from independent iterations. (Uniform PCBPT with K = V
  * equals CBDPT in expectation, not sample by sample: its K draws are i.i.d.) With --mis
- * standard or a count the inner layer has other weights, so it is compared through the beauty image.
+ * standard or a count other than 1 the inner layer has other weights, so it is compared through
+ * the beauty image, and the shared layers are no longer BDPT's.
  * Every shipped scene renders finite with CBDPT and both PCBPT PMF modes. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -69,6 +70,14 @@ static void test_shared_layers_equal_bdpt(void **state) {
     }
     pc_film_free(&f);
   }
+  /* With the default count (2) the same paths are weighted otherwise: next-event estimation
+   * gives up part of what the inner strategies now take, so its layer is no longer BDPT's */
+  pc_render_settings set = rb.set;
+  set.method = PC_METHOD_PCBPT;
+  pc_film f;
+  render_film(&scene, &set, 2, &f);
+  assert_memory_not_equal(f.layers[PC_LAYER_NEE].sum, fb.layers[PC_LAYER_NEE].sum, sizeof(double) * 3 * 16 * 16);
+  pc_film_free(&f);
   pc_film_free(&fb);
   pc_scene_free(&scene);
 }

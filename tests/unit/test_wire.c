@@ -1,5 +1,5 @@
 /* test_wire.c: frame encoding/decoding (split reads, limits, garbage), film packing with its
- * refusals, and zstd wrapping. */
+ * refusals, zstd wrapping, and the render settings' round trip. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,6 +11,7 @@
 
 #include "wire_film.h"
 #include "wire_frame.h"
+#include "wire_settings.h"
 
 static void encode_hello(uint8_t **b, size_t *n) {
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
@@ -568,11 +569,40 @@ static void film_bounds(void **st) {
   pc_film_free(&d);
 }
 
+/* The MIS mode and count reach a worker as the client set them; a count out of range or an
+ * unknown mode is refused there, not rendered. */
+static void settings_mis_roundtrip(void **st) {
+  (void)st;
+  pc_render_settings s, back;
+  pc_render_settings_default(&s);
+  s.method = PC_METHOD_PCBPT;
+  s.mis_mode = PC_MIS_COUNT;
+  s.mis_count = 3.5f;
+  Pcbpt__Settings p;
+  pc_wire_settings_buf buf;
+  pc_err e = {0};
+  pc_wire_settings_to_proto(&s, &p, &buf);
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_int_equal(back.mis_mode, PC_MIS_COUNT);
+  assert_true(back.mis_count == 3.5f);
+  s.mis_mode = PC_MIS_STANDARD;
+  pc_wire_settings_to_proto(&s, &p, &buf);
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_int_equal(back.mis_mode, PC_MIS_STANDARD);
+  p.mis_mode = PC_MIS_COUNT;
+  p.mis_count = 0.5f;
+  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  p.mis_count = 2.f;
+  p.mis_mode = PC_MIS_COUNT + 1;
+  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_trace_travels), cmocka_unit_test(film_blocks),
     cmocka_unit_test(film_without_per_iteration), cmocka_unit_test(film_max_roundtrip), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
+    cmocka_unit_test(settings_mis_roundtrip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
