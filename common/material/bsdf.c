@@ -174,17 +174,20 @@ static local_pair oriented(const pc_material *m, local_pair p) {
 
 static local_pair swapped(local_pair p) { return (local_pair){p.wi, p.wo, p.gi, p.go}; }
 
-static vec3 eval_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, local_pair p,
-                       pc_transport mode) {
+/* The pair's members in registers: a pair passed in memory (by value or by pointer) was read
+ * with loads wider or narrower than the stores that had just formed it, which cannot forward
+ * (a stall of a dozen cycles per query). */
+static vec3 eval_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi, float go,
+                       float gi, pc_transport mode) {
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
-  vec3 f = lobe_eval(&c, p.wo, p.wi);
-  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(p.wo.z, p.wi.z, p.go, p.gi));
+  vec3 f = lobe_eval(&c, wo, wi);
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(wo.z, wi.z, go, gi));
   return v3_is_finite(f) ? f : v3s(0.f);
 }
 
-static float pdf_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, local_pair p) {
+static float pdf_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi) {
   pc_lobe_ctx c = {m, texs, sh->uv, PC_RADIANCE};
-  float pdf = lobe_pdf(&c, p.wo, p.wi);
+  float pdf = lobe_pdf(&c, wo, wi);
   return (isfinite(pdf) && pdf > 0.f) ? pdf : 0.f;
 }
 
@@ -230,7 +233,8 @@ vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading
   local_pair p;
   pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
   if (!out_pair(&o, sh, wi, &p)) return v3s(0.f);
-  return eval_local(o.m, texs, sh, oriented(o.m, p), mode);
+  local_pair q = oriented(o.m, p);
+  return eval_local(o.m, texs, sh, q.wo, q.wi, q.go, q.gi, mode);
 }
 
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
@@ -238,20 +242,22 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
   local_pair p;
   pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
   if (!out_pair(&o, sh, wi, &p)) return 0.f;
-  return pdf_local(o.m, texs, sh, oriented(o.m, p));
+  local_pair q = oriented(o.m, p);
+  return pdf_local(o.m, texs, sh, q.wo, q.wi);
 }
 
 /* Both pdfs of pair p, q = oriented(o->m, p). A diffuse pair, the commonest query, skips the lobe
  * dispatch: pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped
  * pair's orientation is q's; a pair on two sides has pdfs 0 either way). */
-static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, local_pair p,
-                             local_pair q, float *pdf, float *pdf_rev) {
+static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, const local_pair *p,
+                             const local_pair *q, float *pdf, float *pdf_rev) {
   if (o->m->type == PC_MAT_DIFFUSE) {
-    *pdf = pc_diffuse_pdf(NULL, q.wo, q.wi);
-    *pdf_rev = pc_diffuse_pdf(NULL, q.wi, q.wo);
+    *pdf = pc_diffuse_pdf(NULL, q->wo, q->wi);
+    *pdf_rev = pc_diffuse_pdf(NULL, q->wi, q->wo);
   } else {
-    *pdf = pdf_local(o->m, texs, sh, q);
-    *pdf_rev = pdf_local(o->m, texs, sh, oriented(o->m, swapped(p)));
+    *pdf = pdf_local(o->m, texs, sh, q->wo, q->wi);
+    local_pair r = oriented(o->m, swapped(*p));
+    *pdf_rev = pdf_local(o->m, texs, sh, r.wo, r.wi);
   }
 }
 
@@ -259,7 +265,9 @@ void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_sha
                       float *pdf_rev) {
   local_pair p;
   *pdf = *pdf_rev = 0.f;
-  if (out_pair(o, sh, wi, &p)) pdfs_pair(o, texs, sh, p, oriented(o->m, p), pdf, pdf_rev);
+  if (!out_pair(o, sh, wi, &p)) return;
+  local_pair q = oriented(o->m, p);
+  pdfs_pair(o, texs, sh, &p, &q, pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
@@ -271,8 +279,8 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   /* A diffuse pair through the surface: value and both pdfs are 0 (pc_diffuse_eval and _pdf),
    * as the full query would find; PCBPT's connections to its stored vertices end here often. */
   if (o->m->type == PC_MAT_DIFFUSE && !(q.wo.z > 0.f && q.wi.z > 0.f)) return v3s(0.f);
-  pdfs_pair(o, texs, sh, p, q, pdf, pdf_rev);
-  return eval_local(o->m, texs, sh, q, mode);
+  pdfs_pair(o, texs, sh, &p, &q, pdf, pdf_rev);
+  return eval_local(o->m, texs, sh, q.wo, q.wi, q.go, q.gi, mode);
 }
 
 void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,

@@ -16,16 +16,19 @@
  *   n' = normalize(frame(2c - 1)) turned to the geometric normal's side, s' = dpdu projected. */
 #include "bsdf.h"
 
-/* Mitsuba's computeShadingFrame; an arbitrary tangent where dpdu is degenerate. */
-static frame shading_frame(vec3 n, vec3 dpdu) {
+/* Mitsuba's computeShadingFrame; an arbitrary tangent where dpdu is degenerate. Written in
+ * place, component by component: returned by value, the 36-byte frame went through a stack
+ * temporary whose narrow stores the copy's wide loads could not forward from. */
+static void shading_frame(frame *f, vec3 n, vec3 dpdu) {
   vec3 s = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
   float len = v3_len(s);
-  if (!(len > 1e-12f * v3_len(dpdu)) || !isfinite(len)) return frame_from_normal(n);
-  frame f;
-  f.n = n;
-  f.s = v3_scale(s, 1.f / len);
-  f.t = v3_cross(n, f.s);
-  return f;
+  if (!(len > 1e-12f * v3_len(dpdu)) || !isfinite(len)) {
+    *f = frame_from_normal(n);
+    return;
+  }
+  f->n = n;
+  f->s = v3_scale(s, 1.f / len);
+  f->t = v3_cross(n, f->s);
 }
 
 /* The bumped frame, or the unbumped one where the texture's slopes give no valid frame. */
@@ -41,7 +44,8 @@ static frame bumped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, ve
   if (!(len > 0.f) || !isfinite(len)) return f;
   vec3 nb = v3_scale(c, 1.f / len);
   if (v3_dot(nb, ng) < 0.f) nb = v3_neg(nb);
-  frame r = shading_frame(nb, pu);
+  frame r;
+  shading_frame(&r, nb, pu);
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
@@ -54,7 +58,8 @@ static frame normal_mapped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 d
   if (!(len > 0.f) || !isfinite(len)) return f;
   n = v3_scale(n, 1.f / len);
   if (v3_dot(n, ng) < 0.f) n = v3_neg(n);
-  frame r = shading_frame(n, dpdu);
+  frame r;
+  shading_frame(&r, n, dpdu);
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
@@ -78,7 +83,7 @@ pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng
   pc_shading sh;
   sh.ng = ng;
   sh.uv = uv;
-  sh.sh = shading_frame(ns, dpdu);
+  shading_frame(&sh.sh, ns, dpdu);
   sh.nb = ns;
   if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
     const pc_texture *tex = &texs[m->bump_tex];
