@@ -157,26 +157,18 @@ bool pc_nested_sample(const pc_lobe_ctx *c, const pc_material *inner, vec3 wo, f
   return true;
 }
 
-/* Local directions of a query, in the frame turned over if twosided says so. */
-typedef struct local_pair {
-  vec3 wo, wi;
-  float go, gi; /* cosines with the geometric normal (sign irrelevant: only products used) */
-} local_pair;
-
-/* The pair as the lobes see it: turned over if twosided says so for its wo. */
-static local_pair oriented(const pc_material *m, local_pair p) {
-  if (flips(m, p.wo.z)) {
-    p.wo.z = -p.wo.z;
-    p.wi.z = -p.wi.z;
+/* A query's directions as the lobes see them: both turned over if twosided says so for wo. */
+static inline void orient(const pc_material *m, vec3 *wo, vec3 *wi) {
+  if (flips(m, wo->z)) {
+    wo->z = -wo->z;
+    wi->z = -wi->z;
   }
-  return p;
 }
 
-static local_pair swapped(local_pair p) { return (local_pair){p.wi, p.wo, p.gi, p.go}; }
-
-/* The pair's members in registers: a pair passed in memory (by value or by pointer) was read
- * with loads wider or narrower than the stores that had just formed it, which cannot forward
- * (a stall of a dozen cycles per query). */
+/* A query's local directions and geometric cosines (go, gi: sign irrelevant, only products used)
+ * travel as separate values, never bundled in a struct: GCC kept such a bundle in memory and
+ * read it back with loads wider or narrower than the stores that had just formed it, which
+ * cannot forward (a stall of a dozen cycles per query). */
 static vec3 eval_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi, float go,
                        float gi, pc_transport mode) {
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
@@ -206,98 +198,109 @@ static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec
   return m->inner;
 }
 
-pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo) {
-  pc_bsdf_out o;
-  o.m = unwrap(m, sh, wo);
-  o.bump = o.m && o.m != m;
-  o.delta = o.m && pc_bsdf_is_delta(o.m);
-  o.local = frame_to_local(&sh->sh, wo);
-  o.g = v3_dot(wo, sh->ng);
-  return o;
+void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_shading *sh, vec3 wo) {
+  o->m = unwrap(m, sh, wo);
+  o->bump = o->m && o->m != m;
+  o->delta = o->m && pc_bsdf_is_delta(o->m);
+  o->local = frame_to_local(&sh->sh, wo);
+  o->g = v3_dot(wo, sh->ng);
 }
 
-/* The pair (o's wo, wi) in the shading frame, not yet turned over; false where every query of
- * the pair, either way round, is zero (a bumpmap's wi on different sides of its two frames, or
- * the sides of the shading and geometric normals disagree). */
-static inline bool out_pair(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, local_pair *p) {
+/* wi in the shading frame (li) and its geometric cosine (gi), with o's wo not yet turned over;
+ * false where every query of the pair, either way round, is zero (a bumpmap's wi on different
+ * sides of its two frames, or the sides of the shading and geometric normals disagree). */
+static inline bool out_local(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi, vec3 *li, float *gi) {
   if (!o->m || o->delta || (o->bump && !bump_side(sh, wi))) return false;
-  p->wo = o->local;
-  p->wi = frame_to_local(&sh->sh, wi);
-  p->go = o->g;
-  p->gi = v3_dot(wi, sh->ng);
-  return sides_agree(p->wo.z, p->wi.z, p->go, p->gi);
+  *li = frame_to_local(&sh->sh, wi);
+  *gi = v3_dot(wi, sh->ng);
+  return sides_agree(o->local.z, li->z, o->g, *gi);
 }
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi, pc_transport mode) {
-  local_pair p;
-  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
-  if (!out_pair(&o, sh, wi, &p)) return v3s(0.f);
-  local_pair q = oriented(o.m, p);
-  return eval_local(o.m, texs, sh, q.wo, q.wi, q.go, q.gi, mode);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, m, sh, wo);
+  vec3 li;
+  float gi;
+  if (!out_local(&o, sh, wi, &li, &gi)) return v3s(0.f);
+  vec3 lo = o.local;
+  orient(o.m, &lo, &li);
+  return eval_local(o.m, texs, sh, lo, li, o.g, gi, mode);
 }
 
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi) {
-  local_pair p;
-  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
-  if (!out_pair(&o, sh, wi, &p)) return 0.f;
-  local_pair q = oriented(o.m, p);
-  return pdf_local(o.m, texs, sh, q.wo, q.wi);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, m, sh, wo);
+  vec3 li;
+  float gi;
+  if (!out_local(&o, sh, wi, &li, &gi)) return 0.f;
+  vec3 lo = o.local;
+  orient(o.m, &lo, &li);
+  return pdf_local(o.m, texs, sh, lo, li);
 }
 
-/* Both pdfs of pair p, q = oriented(o->m, p). A diffuse pair, the commonest query, skips the lobe
- * dispatch: pc_diffuse_pdf both ways (a pair on one side turns over as a whole, so the swapped
- * pair's orientation is q's; a pair on two sides has pdfs 0 either way). */
-static inline void pdfs_pair(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, const local_pair *p,
-                             const local_pair *q, float *pdf, float *pdf_rev) {
+/* Both pdfs of the pair (o's wo, li), qo and qi the pair turned over as the lobes see it. A
+ * diffuse pair, the commonest query, skips the lobe dispatch: pc_diffuse_pdf both ways (a pair
+ * on one side turns over as a whole, so the swapped pair's orientation is the pair's; a pair on
+ * two sides has pdfs 0 either way). */
+static inline void pdfs_local(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 li, vec3 qo,
+                              vec3 qi, float *pdf, float *pdf_rev) {
   if (o->m->type == PC_MAT_DIFFUSE) {
-    *pdf = pc_diffuse_pdf(NULL, q->wo, q->wi);
-    *pdf_rev = pc_diffuse_pdf(NULL, q->wi, q->wo);
+    *pdf = pc_diffuse_pdf(NULL, qo, qi);
+    *pdf_rev = pc_diffuse_pdf(NULL, qi, qo);
   } else {
-    *pdf = pdf_local(o->m, texs, sh, q->wo, q->wi);
-    local_pair r = oriented(o->m, swapped(*p));
-    *pdf_rev = pdf_local(o->m, texs, sh, r.wo, r.wi);
+    *pdf = pdf_local(o->m, texs, sh, qo, qi);
+    vec3 ro = li, ri = o->local;
+    orient(o->m, &ro, &ri);
+    *pdf_rev = pdf_local(o->m, texs, sh, ro, ri);
   }
 }
 
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
                       float *pdf_rev) {
-  local_pair p;
+  vec3 li;
+  float gi;
   *pdf = *pdf_rev = 0.f;
-  if (!out_pair(o, sh, wi, &p)) return;
-  local_pair q = oriented(o->m, p);
-  pdfs_pair(o, texs, sh, &p, &q, pdf, pdf_rev);
+  if (!out_local(o, sh, wi, &li, &gi)) return;
+  vec3 qo = o->local, qi = li;
+  orient(o->m, &qo, &qi);
+  pdfs_local(o, texs, sh, li, qo, qi, pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
                            pc_transport mode, float *pdf, float *pdf_rev) {
-  local_pair p;
+  vec3 li;
+  float gi;
   *pdf = *pdf_rev = 0.f;
-  if (!out_pair(o, sh, wi, &p)) return v3s(0.f);
-  local_pair q = oriented(o->m, p);
+  if (!out_local(o, sh, wi, &li, &gi)) return v3s(0.f);
+  vec3 qo = o->local, qi = li;
+  orient(o->m, &qo, &qi);
   /* A diffuse pair through the surface: value and both pdfs are 0 (pc_diffuse_eval and _pdf),
    * as the full query would find; PCBPT's connections to its stored vertices end here often. */
-  if (o->m->type == PC_MAT_DIFFUSE && !(q.wo.z > 0.f && q.wi.z > 0.f)) return v3s(0.f);
-  pdfs_pair(o, texs, sh, &p, &q, pdf, pdf_rev);
-  return eval_local(o->m, texs, sh, q.wo, q.wi, q.go, q.gi, mode);
+  if (o->m->type == PC_MAT_DIFFUSE && !(qo.z > 0.f && qi.z > 0.f)) return v3s(0.f);
+  pdfs_local(o, texs, sh, li, qo, qi, pdf, pdf_rev);
+  return eval_local(o->m, texs, sh, qo, qi, o->g, gi, mode);
 }
 
 void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
                   float *pdf, float *pdf_rev) {
-  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, m, sh, wo);
   pc_bsdf_pdfs_out(&o, texs, sh, wi, pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                        vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
-  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, m, sh, wo);
   return pc_bsdf_eval_pdfs_out(&o, texs, sh, wi, mode, pdf, pdf_rev);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
-  pc_bsdf_out o = pc_bsdf_out_make(m, sh, wo);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, m, sh, wo);
   return pc_bsdf_sample_out(&o, texs, sh, u0, u1, u2, mode, out);
 }
 

@@ -114,13 +114,13 @@ typedef struct pc_bsdf_sampled {
   bool is_delta;
 } pc_bsdf_sampled;
 
-/* The shading point of a surface hit as Mitsuba's computeShadingFrame makes it (normal ns,
+/* Fills *sh: the shading point of a surface hit as Mitsuba's computeShadingFrame makes it (normal ns,
  * tangent s along dpdu projected into the tangent plane), and for a bumpmap material the frame
  * its displacement texture perturbs (bsdf_bumpmap.c). dpdu and dpdv are the position's
  * derivatives along the texture coordinates; wo the direction the path arrived from (a twosided
  * bumpmap seen from behind mirrors its frame to that side). */
-pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu, vec3 dpdv,
-                           vec2 uv, vec3 wo);
+void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
+                     vec3 dpdv, vec2 uv, vec3 wo);
 
 /* Precomputes derived data (plastic tables, sampling weights). Call once per material after parsing. A textured
  * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set
@@ -150,7 +150,9 @@ typedef struct pc_bsdf_out {
   vec3 local;           /* wo in the shading frame (not turned over by twosided) */
   float g;              /* wo . ng */
 } pc_bsdf_out;
-pc_bsdf_out pc_bsdf_out_make(const pc_material *m, const pc_shading *sh, vec3 wo);
+/* Fills *o in place: a struct returned by value was copied with loads wider than the stores
+ * that formed it, which cannot forward (pc_shading_make likewise). */
+void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_shading *sh, vec3 wo);
 vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
                            pc_transport mode, float *pdf, float *pdf_rev);
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,

@@ -78,17 +78,15 @@ static void to_back(pc_shading *sh) {
   sh->nb = v3_neg(nb);
 }
 
-pc_shading pc_shading_make(const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu, vec3 dpdv,
-                           vec2 uv, vec3 wo) {
-  pc_shading sh;
-  sh.ng = ng;
-  sh.uv = uv;
-  shading_frame(&sh.sh, ns, dpdu);
-  sh.nb = ns;
+void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
+                     vec3 dpdv, vec2 uv, vec3 wo) {
+  sh->ng = ng;
+  sh->uv = uv;
+  shading_frame(&sh->sh, ns, dpdu);
+  sh->nb = ns;
   if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
     const pc_texture *tex = &texs[m->bump_tex];
-    sh.sh = m->normal_map ? normal_mapped_frame(tex, ng, sh.sh, dpdu, uv) : bumped_frame(tex, ng, sh.sh, dpdu, dpdv, uv);
-    if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(&sh);
+    sh->sh = m->normal_map ? normal_mapped_frame(tex, ng, sh->sh, dpdu, uv) : bumped_frame(tex, ng, sh->sh, dpdu, dpdv, uv);
+    if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(sh);
   }
-  return sh;
 }

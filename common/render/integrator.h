@@ -42,9 +42,9 @@ static inline float pc_mis_term(const pc_render_settings *s, float p) {
 
 /* The shading point of a hit reached from direction wo, shared by integrators (its material's
  * bump map applied). */
-static inline pc_shading pc_shading_from_hit(const pc_scene *s, const pc_hit *h, vec3 wo) {
+static inline void pc_shading_from_hit(pc_shading *sh, const pc_scene *s, const pc_hit *h, vec3 wo) {
   const pc_material *m = &s->materials[s->shapes[h->shape].material];
-  return pc_shading_make(m, s->textures, h->ng, h->ns, h->dpdu, h->dpdv, h->uv, wo);
+  pc_shading_make(sh, m, s->textures, h->ng, h->ns, h->dpdu, h->dpdv, h->uv, wo);
 }
 
 /* Unidirectional path tracer with next-event estimation (strategies s=0 and s=1). */

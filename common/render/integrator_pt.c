@@ -121,7 +121,8 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
     }
     if (depth >= c->max_segments) break;
     const pc_material *m = &s->materials[shape->material];
-    pc_shading sh = pc_shading_from_hit(s, &h, wo);
+    pc_shading sh;
+    pc_shading_from_hit(&sh, s, &h, wo);
     float q = pc_bsdf_continuation(m, s->textures, &sh);
 
     if (!pc_bsdf_is_delta(m)) {

@@ -81,9 +81,9 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->p = h.p;
     cur->ng = h.ng;
     cur->eps = h.eps;
-    cur->sh = pc_shading_from_hit(s, &h, v3_neg(da));
+    pc_shading_from_hit(&cur->sh, s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
-    cur->out = pc_bsdf_out_make(m, &cur->sh, cur->wo);
+    pc_bsdf_out_make(&cur->out, m, &cur->sh, cur->wo);
     cur->beta = beta;
     cur->material = shape->material;
     cur->light = shape->light;

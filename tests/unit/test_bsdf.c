@@ -1052,8 +1052,10 @@ static void test_normalmap_frame(void **state) {
   nmap.bump_tex = 0;
   vec3 ng = v3_norm(v3(0.2f, -0.3f, 0.9f)), ns = v3_norm(v3(0.25f, -0.2f, 0.9f));
   vec3 dpdu = v3(1.5f, 0.3f, -0.2f), dpdv = v3(-0.1f, 0.8f, 0.4f);
-  pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
-  pc_shading mapped = pc_shading_make(&nmap, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+  pc_shading plain;
+  pc_shading_make(&plain, &inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+  pc_shading mapped;
+  pc_shading_make(&mapped, &nmap, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
   assert_true(close3(mapped.sh.n, plain.sh.n, 0, 1e-6f) && close3(mapped.sh.s, plain.sh.s, 0, 1e-6f));
   pc_rng r = pc_rng_make(10, 0, PC_STREAM_MISC, 10);
   for (int i = 0; i < 2000; i++) {
@@ -1065,15 +1067,16 @@ static void test_normalmap_frame(void **state) {
   }
   vec3 x = v3(1, 0, 0), y = v3(0, 1, 0), z = v3(0, 0, 1);
   texs[0].value = v3(1.f, 0.5f, 1.f); /* (1, 0, 1) locally: 45 degrees toward +u */
-  pc_shading sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  pc_shading sh;
+  pc_shading_make(&sh, &nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(1, 0, 1)), 0, 1e-6f));
   assert_true(close3(sh.sh.s, v3_norm(v3(1, 0, -1)), 0, 1e-6f));
   assert_true(close3(sh.nb, z, 0, 0));
   texs[0].value = v3(0.5f, 0.75f, 0.f); /* (0, 0.5, -1): below the surface, turned over */
-  sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  pc_shading_make(&sh, &nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(0, -0.5f, 1)), 0, 1e-6f));
   texs[0].value = v3(0.5f, 0.5f, 0.5f); /* the zero vector: no direction, the frame is kept */
-  sh = pc_shading_make(&nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
+  pc_shading_make(&sh, &nmap, texs, z, z, x, y, (vec2){0.5f, 0.5f}, z);
   assert_true(close3(sh.sh.n, z, 0, 0));
 }
 
@@ -1103,8 +1106,10 @@ static void test_bumpmap_frame(void **state) {
   vec3 dpdu = v3(1.5f, 0.3f, -0.2f), dpdv = v3(-0.1f, 0.8f, 0.4f);
   for (int t = 0; t < 2; t++) {
     bump.bump_tex = t;
-    pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
-    pc_shading bumped = pc_shading_make(&bump, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+    pc_shading plain;
+    pc_shading_make(&plain, &inner, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
+    pc_shading bumped;
+    pc_shading_make(&bumped, &bump, texs, ng, ns, dpdu, dpdv, (vec2){0.3f, 0.6f}, ns);
     assert_true(close3(bumped.sh.n, plain.sh.n, 0, 1e-5f) && close3(bumped.sh.s, plain.sh.s, 0, 1e-5f));
     for (int i = 0; i < 2000; i++) {
       vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
@@ -1115,32 +1120,34 @@ static void test_bumpmap_frame(void **state) {
     }
   }
   /* The Mitsuba frame's tangent follows dp/du. */
-  pc_shading plain = pc_shading_make(&inner, texs, ng, ns, dpdu, dpdv, (vec2){0, 0}, ns);
+  pc_shading plain;
+  pc_shading_make(&plain, &inner, texs, ng, ns, dpdu, dpdv, (vec2){0, 0}, ns);
   assert_true(v3_dot(plain.sh.s, dpdu) > 0.f && fabsf(v3_dot(plain.sh.s, ns)) < 1e-6f);
   assert_true(close3(v3_cross(plain.sh.s, plain.sh.t), ns, 0, 1e-6f));
   /* The ramp, between texel centres 1 and 2 (u in (3/8, 5/8)). */
   bump.bump_tex = 2;
   vec3 z = v3(0, 0, 1);
-  pc_shading sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading sh;
+  pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(-4, 0, 1)), 0, 1e-5f));
   assert_true(close3(sh.nb, z, 0, 0));
   /* The same ramp down the image's rows: v grows downward (Mitsuba's uv), so dh/dv = +4. */
   texs[2].img = (pc_image){1, 4, ramp};
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f}, z);
+  pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(0, -4, 1)), 0, 1e-5f));
   texs[2].img = (pc_image){4, 1, ramp};
   /* Mitsuba's `scale` texture scales the slope; filterType nearest has none. */
   texs[2].scaled = true;
   texs[2].scale = v3s(0.25f);
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(-1, 0, 1)), 0, 1e-5f));
   texs[2].nearest = true;
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   assert_true(close3(sh.sh.n, z, 0, 1e-6f));
   /* A direction on different sides of the two frames sees nothing, either way round. */
   texs[2].nearest = false;
   texs[2].scale = v3s(1.f);
-  sh = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
   pc_material d = mk_diffuse();
   bump.inner = &d;
   vec3 grazing = v3_norm(v3(1, 0, 0.1f)); /* above z, below the bumped normal */
@@ -1154,8 +1161,10 @@ static void test_bumpmap_frame(void **state) {
   bump.inner = &gl;
   bump.twosided = true;
   vec3 mz = v3(0, 0, -1);
-  pc_shading front = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
-  pc_shading behind = pc_shading_make(&bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, mz);
+  pc_shading front;
+  pc_shading_make(&front, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, z);
+  pc_shading behind;
+  pc_shading_make(&behind, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.45f, 0.5f}, mz);
   int nonzero = 0;
   for (int i = 0; i < 2000; i++) {
     vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
