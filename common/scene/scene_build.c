@@ -55,8 +55,10 @@ static int build_lights(pc_scene *s, pc_err *e) {
       } else {
         const pc_mesh *m = &sh->mesh;
         free(l->tri_cdf);
+        free(l->tri_n);
         l->tri_cdf = malloc(sizeof(float) * ((size_t)m->ntris + 1));
-        if (!l->tri_cdf) return pc_errf(e, PC_ENOMEM, "%s: out of memory for light %d", s->path, i);
+        l->tri_n = malloc(sizeof(vec3) * ((size_t)m->ntris + 1));
+        if (!l->tri_cdf || !l->tri_n) return pc_errf(e, PC_ENOMEM, "%s: out of memory for light %d", s->path, i);
         double acc = 0.0;
         l->tri_cdf[0] = 0.f;
         for (uint32_t t = 0; t < m->ntris; t++) {
@@ -64,6 +66,7 @@ static int build_lights(pc_scene *s, pc_err *e) {
           vec3 c = v3_cross(v3_sub(m->p[ix[1]], m->p[ix[0]]), v3_sub(m->p[ix[2]], m->p[ix[0]]));
           acc += 0.5 * (double)v3_len(c);
           l->tri_cdf[t + 1] = (float)acc;
+          l->tri_n[t] = v3_norm(c);
         }
         l->ntris = m->ntris;
         l->area = (float)acc;
@@ -201,6 +204,7 @@ void pc_scene_free(pc_scene *s) {
   for (int i = 0; i < s->ntextures; i++) pc_texture_free(&s->textures[i]);
   for (int i = 0; i < s->nlights; i++) {
     free(s->lights[i].tri_cdf);
+    free(s->lights[i].tri_n);
     pc_light_free(&s->lights[i]);
   }
   for (int i = 0; i < s->nmotions; i++) {
