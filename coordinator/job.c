@@ -217,7 +217,7 @@ static int write_ckpt_file(pc_op *op, pc_job *j, const char *dir) {
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) return pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
   file_sink fs = {fd, tmp};
-  int rc = pc_wire_film_compress(&j->film, write_sink, &fs, NULL, &op->err);
+  int rc = pc_wire_film_compress(&j->film, 1, write_sink, &fs, NULL, &op->err);
   if (!rc && fsync(fd) != 0) rc = pc_errf(&op->err, PC_EIO, "%s: %s", tmp, strerror(errno));
   if (rc) {
     close(fd);

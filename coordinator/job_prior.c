@@ -96,7 +96,7 @@ static int save(const pc_coord *c, const pc_job *j, pc_err *e) {
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
   uint8_t *z = NULL;
   size_t zn = 0;
-  int rc = pc_wire_film_zip(&j->prior, &z, &zn, e);
+  int rc = pc_wire_film_zip(&j->prior, 1, &z, &zn, e);
   if (rc) return rc;
   int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) rc = pc_errf(e, PC_EIO, "%s: %s", tmp, strerror(errno));

@@ -56,10 +56,13 @@ int pc_wire_film_load(const uint8_t *z, size_t zn, pc_film *into, pc_err *e);
 typedef int (*pc_wire_sink)(void *user, const uint8_t *p, size_t n, pc_err *e);
 /* Serializes and compresses f as one zstd frame (what pc_wire_compress of pc_wire_film_pack
  * gives, and the loaders read) through a 1 MiB staging buffer, so no serialized copy of the
- * film is ever whole in memory; *zn (may be NULL) gets the compressed size. */
-int pc_wire_film_compress(const pc_film *f, pc_wire_sink sink, void *user, size_t *zn, pc_err *e);
+ * film is ever whole in memory; *zn (may be NULL) gets the compressed size. threads > 1: zstd
+ * compresses on that many threads of its own while this one stages (a worker's render pool
+ * waits for its uploads); the frame is another but decodes to the same film. A libzstd built
+ * without threads compresses on this one. */
+int pc_wire_film_compress(const pc_film *f, int threads, pc_wire_sink sink, void *user, size_t *zn, pc_err *e);
 /* The same into a malloc'd buffer (an upload). */
-int pc_wire_film_zip(const pc_film *f, uint8_t **out, size_t *outn, pc_err *e);
+int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);

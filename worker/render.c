@@ -174,7 +174,7 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   pc_err e = {0};
   double t0 = now_s();
   job_rend *r = c->loaded ? c->cur : NULL;
-  int rc = count && r ? pc_wire_film_zip(&r->pending, &z, &zn, &e) : 0;
+  int rc = count && r ? pc_wire_film_zip(&r->pending, w->threads > 0 ? w->threads : pc_cpu_count(), &z, &zn, &e) : 0;
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);

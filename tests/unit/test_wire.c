@@ -195,7 +195,7 @@ static void film_streamed(void **st) {
   pc_err e;
   uint8_t *z, *raw, *back;
   size_t zn, rn;
-  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&a, 1, &z, &zn, &e), 0);
   assert_int_equal(pc_wire_film_pack(&a, &raw, &rn, &e), 0);
   assert_true(rn > ((size_t)1 << 20) && zn < rn);
   /* the same bytes as packing, then compressing */
@@ -204,6 +204,16 @@ static void film_streamed(void **st) {
   /* set, then add */
   assert_int_equal(pc_wire_film_load(z, zn, &b, &e), 0);
   assert_true(films_equal(&a, &b));
+  /* compressed on zstd's threads too (a worker's uploads): the same film */
+  pc_film t;
+  make_film(&t, w, h);
+  uint8_t *zt;
+  size_t ztn;
+  assert_int_equal(pc_wire_film_zip(&a, 3, &zt, &ztn, &e), 0);
+  assert_int_equal(pc_wire_film_load(zt, ztn, &t, &e), 0);
+  assert_true(films_equal(&a, &t));
+  free(zt);
+  free_film(&t);
   assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), 0);
   assert_int_equal(b.layers[0].count, 10);
   assert_true(b.layers[0].sum[n - 1] == 2 * a.layers[0].sum[n - 1] && b.dropped_nonfinite == 4);
@@ -220,7 +230,7 @@ static void film_streamed(void **st) {
   /* a NaN in the last block, far past the first window, refuses the whole upload */
   a.layers[1].sum[n - 1] = 0.0 / 0.0;
   free(z);
-  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&a, 1, &z, &zn, &e), 0);
   assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), PC_ENUMERIC);
   assert_true(films_equal(&b, &before));
   /* not a zstd frame */
@@ -339,7 +349,7 @@ static void film_trace_travels(void **st) {
   }
   uint8_t *z, *raw, *back;
   size_t zn, rn;
-  assert_int_equal(pc_wire_film_zip(&a, &z, &zn, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&a, 1, &z, &zn, &e), 0);
   assert_int_equal(pc_wire_film_pack(&a, &raw, &rn, &e), 0);
   assert_int_equal(rn, pc_wire_film_size_traced(&a, PC_TRACE_ITERATIONS));
   assert_int_equal(pc_wire_decompress(z, zn, rn, rn, &back, &e), 0);
@@ -478,8 +488,8 @@ static void film_max_roundtrip(void **st) {
   }
   uint8_t *za, *zb;
   size_t zan, zbn;
-  assert_int_equal(pc_wire_film_zip(&a, &za, &zan, &e), 0);
-  assert_int_equal(pc_wire_film_zip(&b, &zb, &zbn, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&a, 1, &za, &zan, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&b, 1, &zb, &zbn, &e), 0);
   assert_int_equal(pc_film_init(&ab, 50, 50, 0, &e), 0);
   assert_int_equal(pc_film_init(&ba, 50, 50, 0, &e), 0);
   assert_int_equal(pc_film_init(&back, 50, 50, 0, &e), 0);
@@ -497,7 +507,7 @@ static void film_max_roundtrip(void **st) {
   /* a checkpoint of the merged film loads back whole */
   uint8_t *zc;
   size_t zcn;
-  assert_int_equal(pc_wire_film_zip(&ab, &zc, &zcn, &e), 0);
+  assert_int_equal(pc_wire_film_zip(&ab, 1, &zc, &zcn, &e), 0);
   assert_int_equal(pc_wire_film_load(zc, zcn, &back, &e), 0);
   for (int l = 0; l < ab.nlayers; l++) {
     assert_int_equal(back.layers[l].count, ab.layers[l].count);
