@@ -58,6 +58,9 @@ typedef struct job_ctx {
   pc_scene_defines defines;
 } job_ctx;
 
+/* The render pool's size (threads 0: one per core), which also compresses the uploads. */
+static int pool_threads(const pc_wrender *w) { return w->threads > 0 ? w->threads : pc_cpu_count(); }
+
 /* Kept renderer k (withdrawn from the loop's progress reads first when it is the current). */
 static void drop_rend(job_ctx *c, pc_wrender *w, int k) {
   job_rend *r = &c->kept[k];
@@ -97,7 +100,7 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
   if (!r) {
     size_t film = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
     /* the job's pending film, the renderer's scratch and one splat film per render thread */
-    int threads = w->threads > 0 ? w->threads : pc_cpu_count();
+    int threads = pool_threads(w);
     size_t bytes = film * (size_t)pc_film_layer_count(set->strategy_layers) * (size_t)(threads + 2);
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
@@ -174,7 +177,7 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   pc_err e = {0};
   double t0 = now_s();
   job_rend *r = c->loaded ? c->cur : NULL;
-  int rc = count && r ? pc_wire_film_zip(&r->pending, w->threads > 0 ? w->threads : pc_cpu_count(), &z, &zn, &e) : 0;
+  int rc = count && r ? pc_wire_film_zip(&r->pending, pool_threads(w), &z, &zn, &e) : 0;
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);

@@ -114,9 +114,9 @@ typedef struct pc_bsdf_sampled {
   bool is_delta;
 } pc_bsdf_sampled;
 
-/* Fills *sh: the shading point of a surface hit as Mitsuba's computeShadingFrame makes it (normal ns,
- * tangent s along dpdu projected into the tangent plane), and for a bumpmap material the frame
- * its displacement texture perturbs (bsdf_bumpmap.c). dpdu and dpdv are the position's
+/* Fills *sh: the shading point of a surface hit as Mitsuba's computeShadingFrame makes it
+ * (normal ns, tangent s along dpdu projected into the tangent plane), and for a bumpmap material
+ * the frame its displacement texture perturbs (bsdf_bumpmap.c). dpdu and dpdv are the position's
  * derivatives along the texture coordinates; wo the direction the path arrived from (a twosided
  * bumpmap seen from behind mirrors its frame to that side). */
 void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,

@@ -57,7 +57,7 @@ static int build_lights(pc_scene *s, pc_err *e) {
         free(l->tri_cdf);
         free(l->tri_n);
         l->tri_cdf = malloc(sizeof(float) * ((size_t)m->ntris + 1));
-        l->tri_n = malloc(sizeof(vec3) * ((size_t)m->ntris + 1));
+        l->tri_n = malloc(sizeof(vec3) * (m->ntris ? (size_t)m->ntris : 1));
         if (!l->tri_cdf || !l->tri_n) return pc_errf(e, PC_ENOMEM, "%s: out of memory for light %d", s->path, i);
         double acc = 0.0;
         l->tri_cdf[0] = 0.f;
