@@ -3,6 +3,8 @@
 
 #include <errno.h>
 #include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <sodium.h>
 #include <stdio.h>
@@ -98,6 +100,17 @@ int pc_client_connect_as(const char *hostport, const char *token_file, Pcbpt__Ro
   }
   freeaddrinfo(ai);
   if (cl->fd < 0) return pc_errf(e, PC_EIO, "cannot connect to %s:%d: %s", host, port, strerror(errno));
+  /* Requests are small and each waits for its answer: with Nagle's algorithm one sent while
+   * the coordinator has not yet acknowledged the previous bytes (a bundle's last chunk) waits
+   * for its delayed ACK, 40 ms on Linux (measured: a render's submit reached the coordinator
+   * 37 ms after it was sent). */
+  int one = 1;
+  if (setsockopt(cl->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
+    rc = pc_errf(e, PC_EIO, "%s:%d: cannot set TCP_NODELAY: %s", host, port, strerror(errno));
+    close(cl->fd);
+    cl->fd = -1;
+    return rc;
+  }
   uint8_t cn[PC_AUTH_NONCE], sn[PC_AUTH_NONCE], mac[PC_AUTH_MAC];
   pc_auth_nonce(cn);
   Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
