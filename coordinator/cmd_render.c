@@ -277,12 +277,8 @@ int pc_cmd_render(int argc, char **argv) {
   if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
-  {
-    /* settings the renderer refuses (e.g. a method not built in) are refused here too */
-    pc_renderer *probe = NULL;
-    if (pc_renderer_create(&scene, &req.set, 1, &probe, &err) != PC_OK) goto fail;
-    pc_renderer_destroy(probe);
-  }
+  /* settings the renderer refuses (e.g. a method not built in) are refused here too */
+  if (pc_renderer_check(&scene, &req.set, &err) != PC_OK) goto fail;
   double pilot_s = 0;
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);

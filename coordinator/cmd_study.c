@@ -282,9 +282,7 @@ static int check_methods(const study_args *a, const pc_render_request *req, cons
     set.method = sm->method;
     if (sm->pcbpt_k > 0) set.pcbpt_k = sm->pcbpt_k;
     if (set.method == PC_METHOD_AUTO) set.method = PC_METHOD_PCBPT; /* its candidates: bdpt and pcbpt */
-    pc_renderer *r = NULL;
-    int rc = pc_renderer_create(scene, &set, 1, &r, e);
-    pc_renderer_destroy(r);
+    int rc = pc_renderer_check(scene, &set, e);
     if (rc != PC_OK) return rc;
   }
   return PC_OK;

@@ -170,8 +170,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   r->scene = scene;
   r->tiles_x = (settings->width + TILE - 1) / TILE;
   r->tiles_y = (settings->height + TILE - 1) / TILE;
-  rc = pc_film_init(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
-  pc_film_drop_per_iteration(&r->scratch); /* fold_iteration writes them straight into the caller's film */
+  /* fold_iteration writes beauty_sq and beauty_max straight into the caller's film */
+  rc = pc_film_init_rendered_into(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
   if (rc == PC_OK) rc = pc_pool_create(threads, &r->pool, e);
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
@@ -183,10 +183,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     if (!r->splat || !r->tctx || !r->splatq || !r->verts || !r->band_blocks)
       rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
-  for (int i = 0; rc == PC_OK && i < threads; i++) {
-    rc = pc_film_init(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
-    pc_film_drop_per_iteration(&r->splat[i]);
-  }
+  for (int i = 0; rc == PC_OK && i < threads; i++)
+    rc = pc_film_init_rendered_into(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
   if (rc != PC_OK) {
     pc_renderer_destroy(r);
     return rc;
@@ -223,6 +221,17 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   }
   *out = r;
   return PC_OK;
+}
+
+int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings, pc_err *e) {
+  int rc = pc_render_settings_check(settings, e);
+  if (rc != PC_OK) return rc;
+  pc_render_settings tiny = *settings;
+  tiny.width = tiny.height = 1;
+  pc_renderer *r = NULL;
+  rc = pc_renderer_create(scene, &tiny, 1, &r, e);
+  pc_renderer_destroy(r);
+  return rc;
 }
 
 void pc_renderer_destroy(pc_renderer *r) {

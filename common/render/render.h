@@ -81,6 +81,10 @@ typedef struct pc_renderer pc_renderer; /* thread pool + per-thread scratch for 
  * initialised with the settings' width and height. */
 int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings, int threads,
                        pc_renderer **out, pc_err *e);
+/* What pc_renderer_create would refuse for these settings and this scene, without allocating
+ * what grows with the image (its films): the settings are checked, then a renderer of one
+ * thread is made at 1x1. Every refusal but running out of memory is independent of the size. */
+int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings, pc_err *e);
 void pc_renderer_destroy(pc_renderer *r);
 int pc_renderer_threads(const pc_renderer *r);
 /* How much of the iteration being rendered is done, in [0, 1) (0 between iterations); safe
