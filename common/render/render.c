@@ -150,6 +150,44 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The scratch film and the per-thread splat films, one per pool item so their pages are
+ * first written on every core at once: a fresh page costs its clearing, ~1 GB/s on the VMs
+ * measured here (3840x2160: 0.8 GB a film). fold_iteration writes beauty_sq and beauty_max
+ * straight into the caller's film, so these have none. */
+typedef struct film_job {
+  pc_renderer *r;
+  int *rc;
+  pc_err *err;
+} film_job;
+
+static void make_film(void *arg, int thread, int item) {
+  (void)thread;
+  film_job *j = arg;
+  const pc_render_settings *s = &j->r->set;
+  pc_film *f = item == 0 ? &j->r->scratch : &j->r->splat[item - 1];
+  j->rc[item] = pc_film_init_rendered_into(f, s->width, s->height, s->strategy_layers, &j->err[item]);
+}
+
+static int make_films(pc_renderer *r, int threads, pc_err *e) {
+  int *rc = calloc((size_t)threads + 1, sizeof *rc);
+  pc_err *err = calloc((size_t)threads + 1, sizeof *err);
+  if (!rc || !err) {
+    free(rc);
+    free(err);
+    return pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+  }
+  film_job j = {r, rc, err};
+  pc_pool_run(r->pool, threads + 1, make_film, &j);
+  int bad = -1;
+  for (int i = 0; i <= threads && bad < 0; i++)
+    if (rc[i] != PC_OK) bad = i;
+  int out = bad < 0 ? PC_OK : rc[bad];
+  if (bad >= 0 && e) *e = err[bad];
+  free(rc);
+  free(err);
+  return out;
+}
+
 int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings, int threads, pc_renderer **out,
                        pc_err *e) {
   int rc = pc_render_settings_check(settings, e);
@@ -170,9 +208,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
   r->scene = scene;
   r->tiles_x = (settings->width + TILE - 1) / TILE;
   r->tiles_y = (settings->height + TILE - 1) / TILE;
-  /* fold_iteration writes beauty_sq and beauty_max straight into the caller's film */
-  rc = pc_film_init_rendered_into(&r->scratch, settings->width, settings->height, settings->strategy_layers, e);
-  if (rc == PC_OK) rc = pc_pool_create(threads, &r->pool, e);
+  rc = pc_pool_create(threads, &r->pool, e);
   if (rc == PC_OK) {
     r->splat = calloc((size_t)threads, sizeof(pc_film));
     r->tctx = calloc((size_t)threads, sizeof(pc_tctx));
@@ -183,8 +219,7 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
     if (!r->splat || !r->tctx || !r->splatq || !r->verts || !r->band_blocks)
       rc = pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
   }
-  for (int i = 0; rc == PC_OK && i < threads; i++)
-    rc = pc_film_init_rendered_into(&r->splat[i], settings->width, settings->height, settings->strategy_layers, e);
+  if (rc == PC_OK) rc = make_films(r, threads, e);
   if (rc != PC_OK) {
     pc_renderer_destroy(r);
     return rc;
