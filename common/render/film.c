@@ -23,8 +23,9 @@ static double *alloc_sums(size_t n) {
   return p;
 }
 
-/* sums: false leaves the layer without storage (a film only rendered into). */
-static int add_layer(pc_film *f, const char *name, pc_norm norm, bool sums, pc_err *e) {
+/* A layer whose norm is not in `stored` (PC_FILM_NORM bits) has no storage. */
+static int add_layer(pc_film *f, const char *name, pc_norm norm, unsigned stored, pc_err *e) {
+  bool sums = stored & PC_FILM_NORM(norm);
   if (f->nlayers >= PC_FILM_MAX_LAYERS)
     return pc_errf(e, PC_ELIMIT, "film: more than %d layers", PC_FILM_MAX_LAYERS);
   pc_film_layer *l = &f->layers[f->nlayers];
@@ -37,7 +38,7 @@ static int add_layer(pc_film *f, const char *name, pc_norm norm, bool sums, pc_e
   return PC_OK;
 }
 
-static int film_init(pc_film *f, int w, int h, int strategy_depth, bool per_iteration_sums, pc_err *e) {
+int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e) {
   memset(f, 0, sizeof *f);
   if (w < 1 || h < 1 || w > 16384 || h > 16384)
     return pc_errf(e, PC_EINVAL, "film: size %dx%d out of range 1..16384", w, h);
@@ -49,28 +50,24 @@ static int film_init(pc_film *f, int w, int h, int strategy_depth, bool per_iter
   static const char *std_names[PC_LAYER_STD_COUNT] = {"pt", "nee", "lt", "inner"};
   int rc = PC_OK;
   for (int i = 0; i < PC_LAYER_STD_COUNT && rc == PC_OK; i++)
-    rc = add_layer(f, std_names[i], i == PC_LAYER_LT ? PC_NORM_LIGHT : PC_NORM_EYE, true, e);
+    rc = add_layer(f, std_names[i], i == PC_LAYER_LT ? PC_NORM_LIGHT : PC_NORM_EYE, stored, e);
   /* Path length k (segments) has strategies s + t = k + 1, t >= 1. */
   for (int k = 1; k <= strategy_depth && rc == PC_OK; k++)
     for (int t = 1; t <= k + 1 && rc == PC_OK; t++) {
       char name[32];
       snprintf(name, sizeof name, "s%dt%d", k + 1 - t, t);
-      rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, true, e);
+      rc = add_layer(f, name, t == 1 ? PC_NORM_LIGHT : PC_NORM_EYE, stored, e);
       if (rc == PC_OK) f->strategy_index[k + 1 - t][t] = (int8_t)(f->nlayers - 1);
     }
   /* last, so a film serialized before they existed is this film's layers but the last */
-  if (rc == PC_OK) rc = add_layer(f, "beauty_sq", PC_NORM_SQUARE, per_iteration_sums, e);
-  if (rc == PC_OK) rc = add_layer(f, "beauty_max", PC_NORM_MAX, per_iteration_sums, e);
+  if (rc == PC_OK) rc = add_layer(f, "beauty_sq", PC_NORM_SQUARE, stored, e);
+  if (rc == PC_OK) rc = add_layer(f, "beauty_max", PC_NORM_MAX, stored, e);
   if (rc != PC_OK) pc_film_free(f);
   return rc;
 }
 
 int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
-  return film_init(f, w, h, strategy_depth, true, e);
-}
-
-int pc_film_init_rendered_into(pc_film *f, int w, int h, int strategy_depth, pc_err *e) {
-  return film_init(f, w, h, strategy_depth, false, e);
+  return pc_film_init_stored(f, w, h, strategy_depth, PC_FILM_NORMS_ALL, e);
 }
 
 void pc_film_free(pc_film *f) {

@@ -38,8 +38,8 @@ typedef enum { PC_NORM_EYE, PC_NORM_LIGHT, PC_NORM_SQUARE, PC_NORM_MAX } pc_norm
 typedef struct pc_film_layer {
   char name[16];   /* "pt", "nee", "lt", "inner", or "s2t3" for per-strategy debug layers */
   pc_norm norm;
-  double *sum;     /* w*h*3; NULL for beauty_sq and beauty_max in films only rendered into
-                      (pc_film_init_rendered_into, pc_film_drop_per_iteration) */
+  double *sum;     /* w*h*3; NULL for the layers a film only rendered into does not take
+                      (pc_film_init_stored, pc_film_drop_per_iteration) */
   uint64_t count;  /* iterations (eye) or light paths (light) accumulated */
 } pc_film_layer;
 
@@ -56,10 +56,13 @@ typedef struct pc_film {
  * s+t-1 <= strategy_depth (path length in segments), named "s%dt%d"; then beauty_sq and
  * beauty_max. */
 int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
-/* The same layers for a film only rendered into and never read or merged (the renderer's
- * scratch and per-thread splats): beauty_sq and beauty_max without storage, so a job holds
- * them once per film it keeps, not per thread, and never writes their pages. */
-int pc_film_init_rendered_into(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
+/* The same layers, with storage only for those whose norm is in `stored` (PC_FILM_NORM bits):
+ * for a film only rendered into and never read or merged, so its other layers' pages are
+ * neither held nor written (the renderer's scratch takes no beauty_sq or beauty_max, its
+ * per-thread light splats only the light layers: at 3840x2160 a layer is 0.2 GB). */
+#define PC_FILM_NORM(n) (1u << (n))
+#define PC_FILM_NORMS_ALL (PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT) | PC_FILM_NORM(PC_NORM_SQUARE) | PC_FILM_NORM(PC_NORM_MAX))
+int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e);
 /* The layers pc_film_init makes for a strategy_depth: the four standard, k + 1 per path length
  * k <= strategy_depth, beauty_sq and beauty_max. */
 static inline int pc_film_layer_count(int strategy_depth) {
@@ -78,8 +81,7 @@ int pc_film_max_layer(const pc_film *f);
 /* Index of the first of the per-iteration layers at the end (beauty_sq, beauty_max): a
  * checkpoint written before they existed holds the layers before it. */
 int pc_film_per_iteration_first(const pc_film *f);
-/* Frees the beauty_sq and beauty_max storage of a film, which then is as
- * pc_film_init_rendered_into makes it. */
+/* Frees the beauty_sq and beauty_max storage of a film. */
 void pc_film_drop_per_iteration(pc_film *f);
 /* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max; the traces
  * concatenated (refused, dst unchanged, when an iteration is traced in both). */
