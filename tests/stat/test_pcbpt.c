@@ -9,13 +9,16 @@
  * equals CBDPT in expectation, not sample by sample: its K draws are i.i.d.) With --mis
  * standard or a count other than 1 the inner layer has other weights, so it is compared through
  * the beauty image, and the shared layers are no longer BDPT's.
- * Every shipped scene renders finite with CBDPT and both PCBPT PMF modes. */
+ * Every shipped scene renders finite with CBDPT and both PCBPT PMF modes. pc_renderer_check
+ * refuses what pc_renderer_create refuses without building films of the image's size. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
 #include <math.h>
+#include <string.h>
+#include <sys/resource.h>
 
 #include "stat_util.h"
 
@@ -233,6 +236,41 @@ static void test_thread_count_invariant(void **state) {
   pc_scene_free(&scene);
 }
 
+/* The CLI's check of a job's settings builds no film of the image's size (a renderer at
+ * 2048x2048 writes 0.1 GB per layer it stores, 0.5 GB on one thread: the peak memory would
+ * show it), and refuses what pc_renderer_create refuses, with the same message. */
+static long peak_kb(void) {
+  struct rusage u;
+  assert_int_equal(getrusage(RUSAGE_SELF, &u), 0);
+  return u.ru_maxrss;
+}
+
+static void test_renderer_check(void **state) {
+  (void)state;
+  pc_render_request req = request(PC_METHOD_PCBPT, 16, -1);
+  pc_scene scene = {0};
+  assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
+  pc_render_settings big = req.set;
+  big.width = big.height = 2048;
+  pc_err e = {0};
+  long before = peak_kb();
+  assert_int_equal(pc_renderer_check(&scene, &big, &e), PC_OK);
+  assert_true(peak_kb() - before < 64 * 1024);
+  big.width = PC_SCENE_MAX_FILM_DIM + 1;
+  assert_int_equal(pc_renderer_check(&scene, &big, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "resolution"));
+  pc_render_settings biased = req.set;
+  biased.uniform_mix = 0.f;
+  pc_err ec = {0}, ek = {0};
+  pc_renderer *r = NULL;
+  int rc = pc_renderer_create(&scene, &biased, 1, &r, &ec);
+  pc_renderer_destroy(r);
+  assert_int_not_equal(rc, PC_OK);
+  assert_int_equal(pc_renderer_check(&scene, &biased, &ek), rc);
+  assert_string_equal(ek.msg, ec.msg);
+  pc_scene_free(&scene);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_shared_layers_equal_bdpt),
@@ -240,6 +278,7 @@ int main(void) {
       cmocka_unit_test(test_inner_count),
       cmocka_unit_test(test_all_scenes_finite),
       cmocka_unit_test(test_thread_count_invariant),
+      cmocka_unit_test(test_renderer_check),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

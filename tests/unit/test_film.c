@@ -373,6 +373,34 @@ static void test_bad_sizes(void **state) {
   assert_int_not_equal(pc_film_init(&f, 4, 4, 9, &e), 0);
 }
 
+/* A film only rendered into has every layer of pc_film_init's, with storage only for the
+ * norms asked for (the renderer's light splats: lt and the t = 1 strategy layers). */
+static void test_stored_norms(void **state) {
+  (void)state;
+  pc_film all, light;
+  pc_err e = {0};
+  assert_int_equal(pc_film_init(&all, 3, 2, 2, &e), 0);
+  assert_int_equal(pc_film_init_stored(&light, 3, 2, 2, PC_FILM_NORM(PC_NORM_LIGHT), &e), 0);
+  assert_int_equal(light.nlayers, all.nlayers);
+  int stored = 0;
+  for (int i = 0; i < all.nlayers; i++) {
+    assert_string_equal(light.layers[i].name, all.layers[i].name);
+    assert_int_equal(light.layers[i].norm, all.layers[i].norm);
+    assert_non_null(all.layers[i].sum);
+    if (light.layers[i].norm == PC_NORM_LIGHT) {
+      assert_non_null(light.layers[i].sum);
+      stored++;
+    } else {
+      assert_null(light.layers[i].sum);
+    }
+  }
+  assert_int_equal(stored, 3); /* lt, s1t1, s2t1 */
+  assert_int_equal(light.layers[PC_LAYER_LT].sum[5], 0.0);
+  pc_film_clear(&light);
+  pc_film_free(&light);
+  pc_film_free(&all);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_layers_and_normalization),
@@ -381,6 +409,7 @@ int main(void) {
       cmocka_unit_test(test_mix),
       cmocka_unit_test(test_trace),
       cmocka_unit_test(test_bad_sizes),
+      cmocka_unit_test(test_stored_norms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
