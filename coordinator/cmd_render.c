@@ -306,7 +306,7 @@ int pc_cmd_render(int argc, char **argv) {
   if (prog.show) fputc('\n', stderr);
   if (rc != PC_OK) goto fail;
 
-  if (pc_exr_read_layers(out, &img, &err) != PC_OK) goto fail;
+  if (pc_exr_read_beauty_attrs(out, &img, &err) != PC_OK) goto fail;
   int beauty = -1;
   for (int i = 0; i < img.nlayers; i++)
     if (img.names[i][0] == '\0') beauty = i;

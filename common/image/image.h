@@ -53,6 +53,9 @@ typedef struct pc_exr_file {
   char **attr_values; /* attribute values printed as text */
 } pc_exr_file;
 int pc_exr_read_layers(const char *path, pc_exr_file *out, pc_err *e);
+/* The same with only the first layer, the beauty when there is one (name ""), and every
+ * attribute: what a render's summary and preview need, without the other layers' memory. */
+int pc_exr_read_beauty_attrs(const char *path, pc_exr_file *out, pc_err *e);
 void pc_exr_file_free(pc_exr_file *f);
 
 /* 8-bit sRGB PNG of rgb * 2^exposure (clamped), atomically written. */

@@ -349,7 +349,11 @@ static int collect_attrs(exr_context_t ctx, const char *path, pc_exr_file *out, 
   return PC_OK;
 }
 
-static int exr_read_part(exr_context_t ctx, const char *path, int beauty_only, pc_exr_file *out,
+/* What exr_read keeps: every layer or the beauty alone (the first triplet: group_layers puts
+ * the unnamed one first), and the header's attributes or not. */
+#define READ_BEAUTY_ONLY 1
+#define READ_ATTRS 2
+static int exr_read_part(exr_context_t ctx, const char *path, int what, pc_exr_file *out,
                          exr_msg *m, pc_err *e) {
   int nparts = 0;
   exr_storage_t storage;
@@ -383,7 +387,7 @@ static int exr_read_part(exr_context_t ctx, const char *path, int beauty_only, p
     rc = pc_errf(e, PC_EUNSUPPORTED, "%s: no R,G,B channel triplet", path);
     goto done;
   }
-  if (beauty_only) nl = 1;
+  if (what & READ_BEAUTY_ONLY) nl = 1;
   out->names = calloc((size_t)nl, sizeof *out->names);
   out->layers = calloc((size_t)nl, sizeof *out->layers);
   if (!out->names || !out->layers) {
@@ -404,14 +408,14 @@ static int exr_read_part(exr_context_t ctx, const char *path, int beauty_only, p
     for (int c = 0; c < 3; c++) dst[lay[k].chan[c]] = out->layers[k].rgb + c;
   }
   rc = exr_decode(ctx, path, storage, dw, dst, nchan, m, e);
-  if (!rc && !beauty_only) rc = collect_attrs(ctx, path, out, m, e);
+  if (!rc && (what & READ_ATTRS)) rc = collect_attrs(ctx, path, out, m, e);
 done:
   free(lay);
   free(dst);
   return rc;
 }
 
-static int exr_read(const char *path, int beauty_only, pc_exr_file *out, pc_err *e) {
+static int exr_read(const char *path, int what, pc_exr_file *out, pc_err *e) {
   memset(out, 0, sizeof *out);
   exr_msg m = {0};
   exr_context_initializer_t init = exr_init(&m);
@@ -419,7 +423,7 @@ static int exr_read(const char *path, int beauty_only, pc_exr_file *out, pc_err 
   exr_result_t rv = exr_start_read(&ctx, path, &init);
   int rc;
   if (rv) rc = exr_fail(e, path, rv == EXR_ERR_FILE_ACCESS ? "cannot open" : "bad header", rv, &m);
-  else rc = exr_read_part(ctx, path, beauty_only, out, &m, e);
+  else rc = exr_read_part(ctx, path, what, out, &m, e);
   if (ctx) exr_finish(&ctx); /* a read context has nothing left to flush */
   if (rc) pc_exr_file_free(out);
   return rc;
@@ -427,12 +431,17 @@ static int exr_read(const char *path, int beauty_only, pc_exr_file *out, pc_err 
 
 int pc_exr_read_layers(const char *path, pc_exr_file *out, pc_err *e) {
   if (!path || !out) return pc_errf(e, PC_EINVAL, "pc_exr_read_layers: NULL argument");
-  return exr_read(path, 0, out, e);
+  return exr_read(path, READ_ATTRS, out, e);
+}
+
+int pc_exr_read_beauty_attrs(const char *path, pc_exr_file *out, pc_err *e) {
+  if (!path || !out) return pc_errf(e, PC_EINVAL, "pc_exr_read_beauty_attrs: NULL argument");
+  return exr_read(path, READ_BEAUTY_ONLY | READ_ATTRS, out, e);
 }
 
 int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e) {
   pc_exr_file f;
-  int rc = exr_read(path, 1, &f, e);
+  int rc = exr_read(path, READ_BEAUTY_ONLY, &f, e);
   if (rc) return rc;
   *out = f.layers[0];
   f.layers[0].rgb = NULL;

@@ -165,6 +165,15 @@ static void test_exr_roundtrip(void **state) {
   assert_true(strtod(find_attr(&f, "pcbpt.tenth"), NULL) == 0.1);
   pc_exr_file_free(&f);
 
+  /* the beauty alone, with every attribute (what render's summary and preview read) */
+  assert_int_equal(pc_exr_read_beauty_attrs(path, &f, &e), PC_OK);
+  assert_int_equal(f.nlayers, 1);
+  assert_string_equal(f.names[0], "");
+  assert_memory_equal(f.layers[0].rgb, px[1], sizeof(float) * 3 * w * h);
+  assert_string_equal(find_attr(&f, "pcbpt.method"), "pcbpt with spaces");
+  assert_string_equal(find_attr(&f, "pcbpt.light_paths"), "12345678901");
+  pc_exr_file_free(&f);
+
   pc_image img;
   assert_int_equal(pc_image_read(path, 1, &img, &e), PC_OK);
   assert_int_equal(img.w, w);
