@@ -98,10 +98,9 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
   for (int k = 0; k < c->nkept && !r; k++)
     if (c->kept[k].job == job) r = &c->kept[k];
   if (!r) {
-    size_t film = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
-    /* the job's pending film, the renderer's scratch and one splat film per render thread */
-    int threads = pool_threads(w);
-    size_t bytes = film * (size_t)pc_film_layer_count(set->strategy_layers) * (size_t)(threads + 2);
+    /* the job's pending film, and the renderer's scratch and light-splat films */
+    size_t layer = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
+    size_t bytes = layer * (size_t)pc_film_layer_count(set->strategy_layers) + pc_renderer_film_bytes(set, w->threads);
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
       int lru = -1;

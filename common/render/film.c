@@ -92,14 +92,6 @@ int pc_film_per_iteration_first(const pc_film *f) {
   return i;
 }
 
-void pc_film_drop_per_iteration(pc_film *f) {
-  for (int i = 0; i < f->nlayers; i++)
-    if (per_iteration(f->layers[i].norm)) {
-      free(f->layers[i].sum);
-      f->layers[i].sum = NULL;
-    }
-}
-
 bool pc_film_max_complete(const pc_film *f) {
   int m = pc_film_max_layer(f);
   return m >= 0 && f->layers[m].sum && f->layers[m].count > 0 && f->layers[m].count == f->layers[PC_LAYER_PT].count;

@@ -39,7 +39,7 @@ typedef struct pc_film_layer {
   char name[16];   /* "pt", "nee", "lt", "inner", or "s2t3" for per-strategy debug layers */
   pc_norm norm;
   double *sum;     /* w*h*3; NULL for the layers a film only rendered into does not take
-                      (pc_film_init_stored, pc_film_drop_per_iteration) */
+                      (pc_film_init_stored) */
   uint64_t count;  /* iterations (eye) or light paths (light) accumulated */
 } pc_film_layer;
 
@@ -61,12 +61,20 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
  * neither held nor written (the renderer's scratch takes no beauty_sq or beauty_max, its
  * per-thread light splats only the light layers: at 3840x2160 a layer is 0.2 GB). */
 #define PC_FILM_NORM(n) (1u << (n))
-#define PC_FILM_NORMS_ALL (PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT) | PC_FILM_NORM(PC_NORM_SQUARE) | PC_FILM_NORM(PC_NORM_MAX))
+#define PC_FILM_NORMS_ALL                                                                          \
+  (PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT) | PC_FILM_NORM(PC_NORM_SQUARE) |          \
+   PC_FILM_NORM(PC_NORM_MAX))
 int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e);
-/* The layers pc_film_init makes for a strategy_depth: the four standard, k + 1 per path length
- * k <= strategy_depth, beauty_sq and beauty_max. */
+/* The layers pc_film_init makes for a strategy_depth, and how many of them pc_film_init_stored
+ * gives storage: the four standard (lt light, the others eye), k + 1 per path length
+ * k <= strategy_depth (t = 1 light, the other k eye), beauty_sq and beauty_max. */
 static inline int pc_film_layer_count(int strategy_depth) {
   return PC_LAYER_STD_COUNT + strategy_depth * (strategy_depth + 3) / 2 + 2;
+}
+static inline int pc_film_stored_layer_count(int strategy_depth, unsigned stored) {
+  int light = 1 + strategy_depth, eye = PC_LAYER_STD_COUNT - 1 + strategy_depth * (strategy_depth + 1) / 2;
+  return (stored & PC_FILM_NORM(PC_NORM_EYE) ? eye : 0) + (stored & PC_FILM_NORM(PC_NORM_LIGHT) ? light : 0) +
+         (stored & PC_FILM_NORM(PC_NORM_SQUARE) ? 1 : 0) + (stored & PC_FILM_NORM(PC_NORM_MAX) ? 1 : 0);
 }
 void pc_film_free(pc_film *f);
 void pc_film_clear(pc_film *f); /* zero sums and counts, keep layers */
@@ -81,8 +89,6 @@ int pc_film_max_layer(const pc_film *f);
 /* Index of the first of the per-iteration layers at the end (beauty_sq, beauty_max): a
  * checkpoint written before they existed holds the layers before it. */
 int pc_film_per_iteration_first(const pc_film *f);
-/* Frees the beauty_sq and beauty_max storage of a film. */
-void pc_film_drop_per_iteration(pc_film *f);
 /* Adds src into dst (same shape, same layers): sums and counts; beauty_max by max; the traces
  * concatenated (refused, dst unchanged, when an iteration is traced in both). */
 int pc_film_add(pc_film *dst, const pc_film *src, pc_err *e);

@@ -155,6 +155,16 @@ static double now_seconds(void) {
  * measured here (3840x2160: 0.2 GB a layer). fold_iteration writes beauty_sq and beauty_max
  * straight into the caller's film, so these have none, and the splats (t = 1, queued by
  * pc_lt_splat) and their fold are of the light layers alone. */
+#define SCRATCH_NORMS (PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT))
+#define SPLAT_NORMS PC_FILM_NORM(PC_NORM_LIGHT)
+
+size_t pc_renderer_film_bytes(const pc_render_settings *s, int threads) {
+  if (threads == 0) threads = pc_cpu_count();
+  size_t layer = (size_t)s->width * (size_t)s->height * 3 * sizeof(double);
+  return layer * (size_t)(pc_film_stored_layer_count(s->strategy_layers, SCRATCH_NORMS) +
+                          threads * pc_film_stored_layer_count(s->strategy_layers, SPLAT_NORMS));
+}
+
 typedef struct film_job {
   pc_renderer *r;
   int *rc;
@@ -166,7 +176,7 @@ static void make_film(void *arg, int thread, int item) {
   film_job *j = arg;
   const pc_render_settings *s = &j->r->set;
   pc_film *f = item == 0 ? &j->r->scratch : &j->r->splat[item - 1];
-  unsigned stored = item == 0 ? PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT) : PC_FILM_NORM(PC_NORM_LIGHT);
+  unsigned stored = item == 0 ? SCRATCH_NORMS : SPLAT_NORMS;
   j->rc[item] = pc_film_init_stored(f, s->width, s->height, s->strategy_layers, stored, &j->err[item]);
 }
 

@@ -85,6 +85,9 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
  * what grows with the image (its films): the settings are checked, then a renderer of one
  * thread is made at 1x1. Every refusal but running out of memory is independent of the size. */
 int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings, pc_err *e);
+/* Bytes of the films a renderer of these settings and threads (0: one per core) holds: its
+ * scratch and its per-thread light splats. */
+size_t pc_renderer_film_bytes(const pc_render_settings *settings, int threads);
 void pc_renderer_destroy(pc_renderer *r);
 int pc_renderer_threads(const pc_renderer *r);
 /* How much of the iteration being rendered is done, in [0, 1) (0 between iterations); safe

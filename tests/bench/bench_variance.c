@@ -2,7 +2,7 @@
  * beauty_max cost (docs/variance.md).
  *   bench_variance SCENE.xml [ITERATIONS [THREADS [with|without]]]     (defaults 8, 2)
  * Renders the scene (its own method and size) one iteration at a time, alternating a film with
- * beauty_sq and one without it (pc_film_drop_per_iteration: the fold then skips the squares), so
+ * beauty_sq and one without it (pc_film_init_stored without beauty_sq: the fold then skips the squares), so
  * both see the same machine load; prints the mean CPU time of an iteration of each and the
  * difference.
  * Then packs a 4-iteration delta with and without its last layer, beauty_max, and prints the
@@ -60,12 +60,13 @@ int main(int argc, char **argv) {
   }
   if (!rc) rc = pc_renderer_create(&scene, &req.set, threads, &r, &e);
   if (!rc) rc = pc_film_init(&with, req.set.width, req.set.height, 0, &e);
-  if (!rc) rc = pc_film_init(&without, req.set.width, req.set.height, 0, &e);
+  if (!rc)
+    rc = pc_film_init_stored(&without, req.set.width, req.set.height, 0,
+                             PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT), &e);
   if (rc) {
     fprintf(stderr, "bench_variance: %s\n", e.msg);
     return 1;
   }
-  pc_film_drop_per_iteration(&without);
   if (argc > 4) { /* one variant only, for instruction counts */
     if (strcmp(argv[4], "with") != 0 && strcmp(argv[4], "without") != 0) return 2;
     pc_film *f = strcmp(argv[4], "without") == 0 ? &without : &with;

@@ -395,6 +395,16 @@ static void test_stored_norms(void **state) {
     }
   }
   assert_int_equal(stored, 3); /* lt, s1t1, s2t1 */
+  /* what the worker's memory bound counts, against what pc_film_init_stored allocates */
+  for (int d = 0; d <= 8; d++)
+    for (unsigned mask = 0; mask <= PC_FILM_NORMS_ALL; mask++) {
+      pc_film g;
+      assert_int_equal(pc_film_init_stored(&g, 1, 1, d, mask, &e), 0);
+      int n = 0;
+      for (int i = 0; i < g.nlayers; i++) n += g.layers[i].sum != NULL;
+      assert_int_equal(pc_film_stored_layer_count(d, mask), n);
+      pc_film_free(&g);
+    }
   assert_int_equal(light.layers[PC_LAYER_LT].sum[5], 0.0);
   pc_film_clear(&light);
   pc_film_free(&light);
