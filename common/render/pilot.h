@@ -34,8 +34,9 @@
  * glass-lamp in one of two tables, by 2-9%: docs/auto.md), so a wrong doubling costs little and
  * a doubling that truly pays twice still gets through. Before the candidates shared their
  * iterations, the pilot's K=2/K=1 ratio was noise (sd of its log 0.44-1.37 on ajar-door and
- * slit-room); on shared iterations it is 0.09-0.18, which would allow a smaller margin, but
- * nothing measured here asks for one. */
+ * slit-room). Measured from the ring (pooled_relmse), its relMSE part is within 2% of a long
+ * render's, sd of its log 0.004-0.044 over pilots of 14 iterations (tests/bench/bench_pilot);
+ * the cost's is larger (K = 2 over K = 1 1.00-1.27 in three pilots of ajar-door). */
 #define PC_PILOT_K_MARGIN 2.0
 /* Stage 4 tries the chosen PCBPT K with its inner strategies counting this much in the MIS
  * weights (the default is 2) and keeps it if its efficiency is higher by PC_PILOT_COUNT_MARGIN.
@@ -69,6 +70,7 @@ typedef struct pc_pilot_candidate {
                            own estimate when no image was kept); < 0: could not tell */
   double efficiency;    /* 1 / (relmse * seconds); 0 when it could not tell */
   int npix;             /* pixels kept (0: none) */
+  int nx;               /* their grid's width (npix / nx rows) */
   float *mean, *var;    /* npix * 3: the image and the variance of each value's mean */
 } pc_pilot_candidate;
 

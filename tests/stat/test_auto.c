@@ -25,6 +25,7 @@
 #include <math.h>
 
 #include "pilot.h"
+#include "rng.h"
 #include "stat_util.h"
 
 static void set_candidate(pc_pilot *p, pc_method m, int k, double relmse, double seconds) {
@@ -110,13 +111,66 @@ static void test_pooled(void **state) {
   assert_int_equal(pc_pilot_keep_image(&p.c[0], 2, 2, mean_a, var, &e), 0);
   assert_int_equal(pc_pilot_keep_image(&p.c[1], 2, 2, mean_b, var, &e), 0);
   pc_pilot_choose(&p);
-  double expect = 0.01 / (4.0 - 0.5 * 0.5 * 0.01 * 2 + PC_RELMSE_EPS);
+  /* each pixel's denominator comes from its 3 neighbours: their pooled mean 2, less the
+     variance of that ring mean (3 values of variance 0.25 * 0.01 * 2, over 3^2) */
+  double expect = 0.01 / (4.0 - 3 * 0.25 * 0.01 * 2 / 9 + PC_RELMSE_EPS);
   assert_true(fabs(p.c[0].relmse - expect) < 1e-6 && fabs(p.c[1].relmse - expect) < 1e-6);
   assert_true(p.c[2].relmse == 0.3);
   assert_int_equal(p.best, 0); /* a tie: BDPT */
   /* without variance there is no image to pool */
   assert_int_equal(pc_pilot_keep_image(&p.c[1], 2, 2, mean_b, NULL, &e), 0);
   assert_int_equal(p.c[1].npix, 0);
+  pc_pilot_free(&p);
+}
+
+/* The image of n iterations of a heavy-tailed estimator of the value 1 + q x everywhere: each
+ * iteration 1, plus x with probability q (a rare large contribution), per pixel; its mean and
+ * the variance of that mean, the same in the three channels. */
+static void heavy_tailed_image(uint64_t seed, int w, int h, int n, double q, double x, float *mean, float *var) {
+  pc_rng r = pc_rng_make(seed, 0, PC_STREAM_MISC, 0);
+  for (int k = 0; k < w * h; k++) {
+    double s = 0, s2 = 0;
+    for (int i = 0; i < n; i++) {
+      double b = 1.0 + (pc_rng_f(&r) < q ? x : 0.0);
+      s += b;
+      s2 += b * b;
+    }
+    double m = s / n, v = (s2 / n - m * m) / (n - 1);
+    for (int ch = 0; ch < 3; ch++) mean[3 * k + ch] = (float)m, var[3 * k + ch] = (float)v;
+  }
+}
+
+/* Candidates share their paths, so the pooled mean carries each one's noise: a candidate that met
+ * a rare large contribution at a pixel also raised the pooled mean there, and a denominator taken
+ * at the pixel divided its own variance away. Here BDPT and PCBPT K = 1 are estimators of equal
+ * variance, K = 1 with its stage-4 twin (the same image), which puts its noise twice in the pool:
+ * both must measure alike, near their true relMSE q (1 - q) x^2 / n / ((1 + q x)^2 + eps) = 0.873
+ * (the ring's own noise in the denominator raises both by 8%: E[1 / d] > 1 / E[d]). Over the seed
+ * pairs (2 s + 1, 2 s + 2), s = 1..40, at this size: each estimate 1.078x the true one, sd 0.030;
+ * K = 1 over BDPT 1.006, sd 0.042. With the denominator at the pixel (before 2026-11-25) K = 1
+ * measured 0.345x the true relMSE and BDPT 0.815x, so the pilot saw K = 1 2.4x better. The
+ * tolerances are 4 sd. */
+static void test_pooled_own_noise(void **state) {
+  (void)state;
+  enum { W = 64, H = 64, N = 14 };
+  const double q = 0.02, x = 50, exact = q * (1 - q) * x * x / N / ((1 + q * x) * (1 + q * x) + PC_RELMSE_EPS);
+  pc_pilot p = {0};
+  set_candidate(&p, PC_METHOD_BDPT, 1, -1, 1.0);
+  set_candidate(&p, PC_METHOD_PCBPT, 1, -1, 1.0);
+  set_candidate(&p, PC_METHOD_PCBPT, 1, -1, 1.0);
+  p.c[2].mis_raised = true;
+  for (int i = 0; i < 3; i++) p.c[i].iterations = N;
+  static float mean[2][W * H * 3], var[2][W * H * 3];
+  heavy_tailed_image(3, W, H, N, q, x, mean[0], var[0]);
+  heavy_tailed_image(4, W, H, N, q, x, mean[1], var[1]);
+  pc_err e = {0};
+  for (int i = 0; i < 3; i++) assert_int_equal(pc_pilot_keep_image(&p.c[i], W, H, mean[i > 0], var[i > 0], &e), 0);
+  pc_pilot_choose(&p);
+  printf("pooled own noise: exact %.4f, bdpt %.4f, pcbpt K=1 %.4f (twice in the pool)\n", exact, p.c[0].relmse,
+         p.c[1].relmse);
+  assert_true(fabs(p.c[0].relmse / exact - 1.078) < 4 * 0.030);
+  assert_true(fabs(p.c[1].relmse / exact - 1.078) < 4 * 0.030);
+  assert_true(fabs(p.c[1].relmse / p.c[0].relmse - 1) < 4 * 0.042);
   pc_pilot_free(&p);
 }
 
@@ -391,6 +445,7 @@ int main(void) {
       cmocka_unit_test(test_choose),
       cmocka_unit_test(test_choose_raised),
       cmocka_unit_test(test_pooled),
+      cmocka_unit_test(test_pooled_own_noise),
       cmocka_unit_test(test_grid),
       cmocka_unit_test(test_matched),
       cmocka_unit_test(test_picks_winner),
