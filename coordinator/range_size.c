@@ -17,6 +17,10 @@ uint64_t pc_range_size(const pc_range_size_in *in) {
     if (n > want) n = want;
   }
   uint64_t k = n < 1 ? 1 : n > 1e6 ? 1000000 : (uint64_t)n;
+  if (in->bounded && in->interleaved) {
+    uint64_t turn = (in->interleaved + PC_RANGE_INTERLEAVE - 1) / PC_RANGE_INTERLEAVE;
+    if (k > turn) k = turn;
+  }
   if (in->bounded && k > in->unassigned) k = in->unassigned;
   return k < 1 ? 1 : k;
 }

@@ -20,7 +20,21 @@ typedef struct pc_range_size_in {
   double range_seconds;   /* target length of a range in the asking worker's time */
   bool alone;             /* no other worker will share the job: nothing to keep back */
   double upload_seconds;  /* what the worker's last upload took to compress (0: unknown) */
+  uint64_t interleaved;   /* bounded, > 0: the job's iteration count, shared out in ranges of at
+                             most 1 / PC_RANGE_INTERLEAVE of it (see there) */
 } pc_range_size_in;
+
+/* An iteration-bounded job of a study group (the candidates of --method auto's pilot,
+ * docs/auto.md) is measured against the other jobs of its group: its cost per iteration is
+ * compared with theirs, so a change of the machine's load must fall on all of them alike.
+ * The group's work requests alternate between its jobs, but a range sized by time alone holds
+ * all a small job has left after its probe: one candidate's iterations in one stretch, then
+ * the next's (at 128x128 a pilot's second batch was three stretches of 27 iterations, 0.3-0.4 s
+ * each), and a slow moment of the machine fell on one candidate only (one pilot of outdoor
+ * measured K = 1 at 0.995x BDPT's CPU time per iteration, against 1.28-1.34x in the two others).
+ * In ranges of at most an eighth of the job the candidates take turns (the price: up to 8
+ * uploads of a film per candidate instead of 1). */
+#define PC_RANGE_INTERLEAVE 8
 
 /* The size of the next fresh range, >= 1 and (bounded) <= unassigned; the caller checks
  * that something is left. An unmeasured worker gets a 1-iteration probe, which measures

@@ -169,6 +169,7 @@ static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
   if (j->halt_iterations) {
     in.bounded = true;
     in.unassigned = j->halt_iterations - j->next_iter;
+    if (j->study_group) in.interleaved = j->halt_iterations;
     /* p asks only when its own ranges are rendered; every other open range is still to do */
     for (const pc_range *r = j->ranges; r; r = r->next)
       if (r->owner != p) in.outstanding += r->owner ? unrendered(r, now) : (double)(r->count - r->merged);

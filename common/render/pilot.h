@@ -29,15 +29,16 @@
  * pilot's few iterations see heavy tails (PCBPT's fireflies) less often than a long render does,
  * so its estimate of a heavy-tailed method is more often low than high. */
 #define PC_PILOT_BDPT_MARGIN 1.05
-/* A doubled K replaces the smaller one only if its efficiency is higher by this factor. At 128x128
- * and 60 s the best PCBPT K beat the next by 1-14% (K = 1 on most scenes; K = 2 on ajar-door and
- * glass-lamp in one of two tables, by 2-9%: docs/auto.md), so a wrong doubling costs little and
- * a doubling that truly pays twice still gets through. Before the candidates shared their
- * iterations, the pilot's K=2/K=1 ratio was noise (sd of its log 0.44-1.37 on ajar-door and
- * slit-room). Measured from the ring (pooled_relmse), its relMSE part is within 2% of a long
- * render's, sd of its log 0.004-0.044 over pilots of 14 iterations (tests/bench/bench_pilot);
- * the cost's is larger (K = 2 over K = 1 1.00-1.27 in three pilots of ajar-door). */
-#define PC_PILOT_K_MARGIN 2.0
+/* A doubled K replaces the smaller one only if its efficiency is higher by this factor. The
+ * pilot measures the K = 2 / K = 1 efficiency ratio to about 5% (sd of its log): its relMSE
+ * part from the ring (pooled_relmse) within 2% of a long render's, sd 0.004-0.044 over pilots
+ * of 14 iterations (tests/bench/bench_pilot), its cost part, with the candidates taking turns
+ * (PC_RANGE_INTERLEAVE), to sd 0.014-0.019. A doubling worth 13% (ajar-door's K = 2 in CPU
+ * time, 1.106x at equal wall time with both threads) then gets through in about 9 pilots of
+ * 10, and one 3-5% worse (glossy-floor, slit-room, cornell-box) in about 1 of 20. (It was 2
+ * while the pilot's K ratio was noise: sd of its log 0.44-1.37 when the candidates rendered
+ * iterations of their own, docs/auto.md.) */
+#define PC_PILOT_K_MARGIN 1.05
 /* Stage 4 tries the chosen PCBPT K with its inner strategies counting this much in the MIS
  * weights (the default is 2) and keeps it if its efficiency is higher by PC_PILOT_COUNT_MARGIN.
  * The two candidates render the same paths and connections, only weighted otherwise, so their

@@ -65,6 +65,22 @@ static void single_requests(void **st) {
   assert_int_equal(pc_range_size(&in), 40); /* nobody else will come: all that is left */
   in.unassigned = 100;
   assert_int_equal(pc_range_size(&in), 60); /* still the cap */
+  /* a job of a study group bound at 100 iterations takes turns with the others of its group:
+     ranges of at most 100 / PC_RANGE_INTERLEAVE, rounded up; not below 1, never past what is
+     left, and a probe stays a probe */
+  in.interleaved = 100;
+  assert_int_equal(pc_range_size(&in), (100 + PC_RANGE_INTERLEAVE - 1) / PC_RANGE_INTERLEAVE);
+  in.unassigned = 3;
+  assert_int_equal(pc_range_size(&in), 3);
+  in.interleaved = 2;
+  assert_int_equal(pc_range_size(&in), 1);
+  in.rate = 0;
+  assert_int_equal(pc_range_size(&in), 1);
+  /* only a bounded job: a time-bounded one is sized by time */
+  in.rate = 20;
+  in.bounded = false;
+  in.interleaved = 100;
+  assert_int_equal(pc_range_size(&in), 60);
 }
 
 #define NW 3
