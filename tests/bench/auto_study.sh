@@ -6,15 +6,18 @@
 # of each configuration, auto's ratio to the best fixed one and to BDPT, and what auto chose.
 # Errors are against REFS_DIR/ref-<scene>.exr when that exists at the study's size, else each
 # image's own estimate (docs/variance.md).
-#   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN, THREADS and
-#   OUT from the environment; with OUT of an earlier run, scenes already studied there are kept, so
-#   two runs over halves of the scenes with THREADS=1 can share a 2-core machine and one table)
+#   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN, THREADS,
+#   OUT and FIXED from the environment; with OUT of an earlier run, scenes already studied there
+#   are kept, so two runs over halves of the scenes with THREADS=1 can share a 2-core machine and
+#   one table; FIXED, e.g. "bdpt,pcbpt-k1,pcbpt-k2", studies only those fixed configurations beside
+#   auto, where the others are known to lose, and the table's best is the best of those)
 set -eu
 BIN=${BIN:-build/pcbpt-coord}
 T=${1:?seconds}; S=${2:?size}; RUNS=${3:?runs}
 shift 3
 SCENES=${*:-"cornell-box furnace ajar-door slit-room open-room glossy-glass glossy-floor glass-lamp outdoor env-constant env-white-map env-objects thin-glass"}
 OUT=${OUT:-$(mktemp -d)}
+FIXED=${FIXED:-bdpt,pcbpt-k1,pcbpt-k2,pcbpt-k4,pcbpt-k8}
 mkdir -p "$OUT"
 far=""
 [ -n "${HOST:-}" ] && far="--host $HOST --token-file $TOKEN"
@@ -24,7 +27,7 @@ for sc in $SCENES; do
   ref=""
   [ -n "${REFS_DIR:-}" ] && [ -f "$REFS_DIR/ref-$sc.exr" ] && ref="--reference $REFS_DIR/ref-$sc.exr"
   # shellcheck disable=SC2086
-  "$BIN" study "scenes/$sc/scene.xml" --methods bdpt,pcbpt-k1,pcbpt-k2,pcbpt-k4,pcbpt-k8,auto --seconds "$T" \
+  "$BIN" study "scenes/$sc/scene.xml" --methods "$FIXED,auto" --seconds "$T" \
     --runs "$RUNS" --width "$S" --height "$S" --out "$OUT/$sc" $ref $far > "$OUT/$sc.log" 2>&1 ||
     { echo "$sc: study failed: $(tail -3 "$OUT/$sc.log")"; continue; }
 done
@@ -53,7 +56,7 @@ for sc in scenes:
         if r["method"] == "auto" and r.get("auto"):
             m = re.match(r"chose (.*) \(pilot ([0-9.]+) s\)", r["auto"])
             chose.append("%s (%s s)" % m.groups() if m else r["auto"].split(";")[0])
-    best = min(med[c] for c in cfgs[:-1])
+    best = min(med[c] for c in cfgs[:-1] if med[c] == med[c])
     kind = "reference" if d.get("reference") else "estimated"
     print("%-15s" % sc + "".join("%-11.4g" % med[c] for c in cfgs) +
           "%-9.3f %-9.3f %-20s %-10s %s" % (med["auto"] / best, med["auto"] / med["bdpt"], per_run, kind, "; ".join(chose)))
