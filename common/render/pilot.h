@@ -35,7 +35,9 @@
  * of 14 iterations (tests/bench/bench_pilot), its cost part, with the candidates taking turns
  * (PC_RANGE_INTERLEAVE), to sd 0.014-0.019. A doubling worth 13% (ajar-door's K = 2 in CPU
  * time, 1.106x at equal wall time with both threads) then gets through in about 9 pilots of
- * 10, and one 3-5% worse (glossy-floor, slit-room, cornell-box) in about 1 of 20. (It was 2
+ * 10, and one 3-5% worse (glossy-floor, slit-room, cornell-box) in about 1 of 20, by those
+ * spreads; measured over 10 pilots each, ajar-door took K = 2 in 10 and cornell-box kept K = 1
+ * in 10. (It was 2
  * while the pilot's K ratio was noise: sd of its log 0.44-1.37 when the candidates rendered
  * iterations of their own, docs/auto.md.) */
 #define PC_PILOT_K_MARGIN 1.05

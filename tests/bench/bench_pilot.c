@@ -18,18 +18,9 @@
 #include "render.h"
 #include "render_flags.h"
 #include "scene.h"
+#include "study.h"
 
 enum { NCAND = 4, BDPT = 0, K1 = 1, K2 = 2, TWIN = 3 };
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp_double);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 static void fail(const pc_err *e) {
   fprintf(stderr, "bench_pilot: %s\n", e->msg);
@@ -131,7 +122,7 @@ int main(int argc, char **argv) {
     double eff = (truth[K1] * cpu[K1]) / (truth[c] * cpu[c]);
     printf("%-16s %12.4g %10.2f %12.3f |", names[c], truth[c], 1e3 * cpu[c] / its, eff);
     for (int t = 0; t < 2; t++) {
-      if (t == 1 && c == TWIN) {
+      if (c == K1 || (t == 1 && c == TWIN)) { /* K = 1 is the unit; stage 1 has no twin */
         printf(" %-34s |", "");
         continue;
       }
@@ -144,9 +135,9 @@ int main(int argc, char **argv) {
         side += (ratio[t][c][b] > 1) == (truth[c] > truth[K1]);
       }
       double mu = sl / pilots, sd = sqrt(fmax(sl2 / pilots - mu * mu, 0));
-      printf(" %8.3f %8.3f %6.0f%%%*s |", median(ratio[t][c], pilots), sd, 100.0 * side / pilots, 9, "");
+      printf(" %8.3f %8.3f %6.0f%%%*s |", pc_study_median(ratio[t][c], pilots, NULL, NULL), sd, 100.0 * side / pilots, 9, "");
     }
-    printf(" %.4g\n", median(rel[c], pilots));
+    printf(" %.4g\n", pc_study_median(rel[c], pilots, NULL, NULL));
   }
   for (int t = 0; t < 2; t++) {
     printf("pilots chose (%s):", t ? "stage 1 alone" : "with the twin");

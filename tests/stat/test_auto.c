@@ -8,6 +8,9 @@
  * - matched: every candidate renders the same iterations (the same batches, seeds and counts).
  * - pooled: candidates are measured against the pooled mean of their images, not each against
  *   its own few iterations' mean.
+ * - pooled own noise: that mean is taken around each pixel, not at it, so a candidate whose rare
+ *   large contributions are also in the pool (shared paths, stage 4's twin) is not favoured
+ *   (equal heavy-tailed estimators, tolerances from their spread over 40 seeds).
  * - picks the clear winner on a real scene: ajar-door, where PCBPT K=1's relMSE per iteration is
  *   about half BDPT's (48x48, 64 iterations, seeds 5-7, each image's own estimate: 0.427, 0.457,
  *   0.433 against 0.197, 0.220, 0.243) at a lower cost per iteration, so no timing noise of a
