@@ -44,7 +44,7 @@ static const char study_help[] =
     "Without a reference the beauty's relMSE and RMSE are each image's own estimates from the spread of\n"
     "its iterations (docs/variance.md; L1 and the other layers are not measured), and the output says so.\n\n"
     "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt, pcbpt-kN (pcbpt with K=N),\n"
-    "                        auto (each at most once, at most 8;\n"
+    "                        pcbpt-kN-rR (and --pcbpt-rate R), auto (each at most once, at most 8;\n"
     "                        auto: --method auto's pilot as farm jobs charged to its budget, then the\n"
     "                        winner for the rest; docs/auto.md)\n"
     "  --seconds S           render time per method on the farm (S x workers worker-seconds)\n"
@@ -279,8 +279,7 @@ static int check_methods(const study_args *a, const pc_render_request *req, cons
     pc_render_settings set = req->set;
     if (m == a->nmethods && !(a->ref_seconds > 0)) break;
     const pc_study_method *sm = m < a->nmethods ? &a->methods[m] : &a->ref_method;
-    set.method = sm->method;
-    if (sm->pcbpt_k > 0) set.pcbpt_k = sm->pcbpt_k;
+    pc_study_method_apply(sm, &set);
     if (set.method == PC_METHOD_AUTO) set.method = PC_METHOD_PCBPT; /* its candidates: bdpt and pcbpt */
     int rc = pc_renderer_check(scene, &set, e);
     if (rc != PC_OK) return rc;

@@ -103,8 +103,7 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
 static int submit(pc_client *cl, const pc_study_group *g, const pc_study_method *method, const auto_choice *ac,
                   uint64_t group, uint64_t *job, pc_err *e) {
   pc_render_settings set = g->req->set;
-  set.method = method->method;
-  if (method->pcbpt_k > 0) set.pcbpt_k = method->pcbpt_k;
+  pc_study_method_apply(method, &set);
   set.seed = g->seed;
   double budget = g->seconds * g->workers;
   if (method->method == PC_METHOD_AUTO) {

@@ -53,6 +53,7 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->strategy_layers = 0;
   s->pcbpt_m = 100;
   s->pcbpt_k = 1;
+  s->pcbpt_rate = 1.f;
   s->pcbpt_candidates = 1;
   /* With resampling on, the candidates' own shadow rays in the target: inner relMSE per
    * iteration at N = 4 (K = 1, 128x128, 64 iterations, median of 3 seeds) 0.154 against 0.185
@@ -103,6 +104,7 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e) {
   if (s->strategy_layers < 0 || s->strategy_layers > 8) return pc_errf(e, PC_EINVAL, "strategy-layers %d out of range 0..8", s->strategy_layers);
   if (s->pcbpt_m < 1 || s->pcbpt_m > 100000) return pc_errf(e, PC_EINVAL, "pcbpt-m %d out of range 1..100000", s->pcbpt_m);
   if (s->pcbpt_k < 1 || s->pcbpt_k > 1000000) return pc_errf(e, PC_EINVAL, "pcbpt-k %d out of range 1..1000000", s->pcbpt_k);
+  if (!(s->pcbpt_rate > 0.f && s->pcbpt_rate <= 1.f)) return pc_errf(e, PC_EINVAL, "pcbpt-rate %g out of range (0, 1]", (double)s->pcbpt_rate);
   if (s->pcbpt_candidates < 1 || s->pcbpt_candidates > PC_IREC_MAX_CANDIDATES)
     return pc_errf(e, PC_EINVAL, "pcbpt-candidates %d out of range 1..%d", s->pcbpt_candidates, PC_IREC_MAX_CANDIDATES);
   if (s->pcbpt_candidates > 1 && s->pcbpt_k > PC_IREC_MAX_CANDIDATES)

@@ -25,6 +25,9 @@ const char pc_render_flags_help[] =
     "  --strategy-layers D   also write one layer per (s,t) up to path length D\n"
     "  --pcbpt-m M           PCBPT stored light paths per iteration (default 100)\n"
     "  --pcbpt-k K           PCBPT connections per eye vertex (default 1)\n"
+    "  --pcbpt-rate R        CBDPT and PCBPT share of eye vertices that connect to the stored\n"
+    "                        paths, in (0, 1] (default 1): each connects with probability R\n"
+    "                        and counts 1/R, for scenes whose inner paths carry little\n"
     "  --pcbpt-candidates N  PCBPT candidates drawn from p_conn per eye vertex, K of them\n"
     "                        resampled by their contribution (1: no resampling)\n"
     "  --pcbpt-candidate-visibility V  what the resampling knows of a candidate's visibility:\n"
@@ -52,7 +55,7 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
                                       "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
-                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", NULL};
+                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", "--pcbpt-rate", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -169,6 +172,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     else if (strcmp(v, "traced") == 0) s->candidate_visibility = PC_CANDVIS_TRACED;
     else return pc_errf(e, PC_EINVAL, "%s: '%s' is not traced, uncertain or records", flag, v);
     break;
+  case 20:
+    if (!pc_parse_f64(v, 1e-6, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
+    s->pcbpt_rate = (float)d;
+    break;
   }
   return 1;
 }
@@ -180,9 +187,9 @@ int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_
   if (s->mis_mode == PC_MIS_COUNT) snprintf(mis, sizeof mis, "%g", (double)s->mis_count);
   else snprintf(mis, sizeof mis, "%s", s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound");
   return snprintf(buf, size,
-                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
+                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-rate %g --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
                   " --knn %d --uniform-mix %g --mis %s --pmf %s",
-                  s->pcbpt_m, s->pcbpt_k, s->pcbpt_candidates, visibility[s->candidate_visibility],
+                  s->pcbpt_m, s->pcbpt_k, (double)s->pcbpt_rate, s->pcbpt_candidates, visibility[s->candidate_visibility],
                   (double)s->cache_fraction, s->knn, (double)s->uniform_mix, mis,
                   s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
 }

@@ -41,16 +41,20 @@ static inline bool pc_study_ref_has(const pc_study_ref *r, int slot) {
   return r->rgb[slot] || (r->estimated && slot == PC_STUDY_BEAUTY);
 }
 
-/* A method of a study: an estimator and, for pcbpt, optionally its own K ("pcbpt-k2"), so one
- * study can compare K values side by side on the same workers. `name` is what the study's
- * files, tables and charts call it. */
+/* A method of a study: an estimator and, for pcbpt, optionally its own K and connection rate
+ * ("pcbpt-k2", "pcbpt-k1-r0.25"), so one study can compare them side by side on the same
+ * workers. `name` is what the study's files, tables and charts call it. */
 typedef struct pc_study_method {
   pc_method method;
   int pcbpt_k;          /* > 0: --pcbpt-k for this method only; 0: the study's */
-  char name[16];
+  float pcbpt_rate;     /* > 0: --pcbpt-rate for this method only; 0: the study's */
+  char name[24];
 } pc_study_method;
-/* "pt", "lt", "bdpt", "cbdpt", "pcbpt", "auto", or "pcbpt-kN" (1 <= N <= 64). */
+/* "pt", "lt", "bdpt", "cbdpt", "pcbpt", "auto", "pcbpt-kN" (1 <= N <= 64) or "pcbpt-kN-rR"
+ * (0 < R <= 1). */
 int pc_study_method_parse(const char *s, pc_study_method *out, pc_err *e);
+/* Sets the method and its own K and rate in settings that hold the study's. */
+void pc_study_method_apply(const pc_study_method *m, pc_render_settings *set);
 
 typedef struct pc_study_snap {
   double seconds;       /* render time when it was taken (metrics time excluded); on the

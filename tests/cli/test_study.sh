@@ -23,6 +23,9 @@ check halt-noise-refused 2 "--halt-noise" -- "$bin" study "$scene" "${ok[@]}" --
 check bad-methods 2 "--methods" -- "$bin" study "$scene" "${ok[@]}" --methods pt,magic
 check twice-methods 2 "twice" -- "$bin" study "$scene" "${ok[@]}" --methods pt,pt
 check bad-k-method 2 "pcbpt-k0" -- "$bin" study "$scene" "${ok[@]}" --methods bdpt,pcbpt-k0
+check bad-rate-method 2 "pcbpt-k1-r0" -- "$bin" study "$scene" "${ok[@]}" --methods bdpt,pcbpt-k1-r0
+check bad-rate-method-high 2 "pcbpt-k1-r2" -- "$bin" study "$scene" "${ok[@]}" --methods bdpt,pcbpt-k1-r2
+check bad-rate-method-k 2 "pcbpt-kx-r0.5" -- "$bin" study "$scene" "${ok[@]}" --methods bdpt,pcbpt-kx-r0.5
 check bad-seconds 2 "--seconds" -- "$bin" study "$scene" "${ok[@]}" --seconds 0
 check missing-value 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots
 check bad-snapshots 2 "--snapshots" -- "$bin" study "$scene" "${ok[@]}" --snapshots 0

@@ -96,6 +96,7 @@ typedef struct variant {
   pc_candidate_visibility vis;
   int layer; /* compared layer: PC_LAYER_INNER or -1 (beauty) */
   float count; /* PC_MIS_COUNT: the inner strategies' count */
+  float rate;  /* --pcbpt-rate */
 } variant;
 
 static void test_inner_agrees(void **state) {
@@ -104,19 +105,22 @@ static void test_inner_agrees(void **state) {
   pc_scene scene = {0};
   assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
   const variant vs[] = {
-      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f},
-      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER, 0.f},
-      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f},
-      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1, 0.f},
-      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1, 0.f},
-      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1, 0.f},
-      {"pcbpt-mis-count", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 3.f},
-      {"pcbpt-mis-count-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.85f, 1, 3, PC_CANDVIS_TRACED, -1, 7.5f},
+      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
+      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1, 0.f, 1.f},
+      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1, 0.f, 1.f},
+      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1, 0.f, 1.f},
+      {"pcbpt-mis-count", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 3.f, 1.f},
+      {"pcbpt-mis-count-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.85f, 1, 3, PC_CANDVIS_TRACED, -1, 7.5f, 1.f},
+      {"pcbpt-rate", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 2.f, 0.3f},
+      {"pcbpt-rate-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.85f, 1, 3, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 0.5f},
+      {"cbdpt-rate", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 0.4f},
   };
   const int nv = sizeof vs / sizeof vs[0];
   stat_blocks ref_inner, ref_beauty;
@@ -132,6 +136,7 @@ static void test_inner_agrees(void **state) {
     set.pcbpt_k = vs[i].k;
     set.pcbpt_candidates = vs[i].candidates;
     set.candidate_visibility = vs[i].vis;
+    set.pcbpt_rate = vs[i].rate;
     stat_blocks st;
     const stat_blocks *ref = vs[i].layer < 0 ? &ref_beauty : &ref_inner;
     assert_int_equal(stat_render_blocks(&scene, &set, 2, 1000, ITER, vs[i].layer, BS, &st), 0);

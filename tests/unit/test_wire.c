@@ -1,5 +1,6 @@
 /* test_wire.c: frame encoding/decoding (split reads, limits, garbage), film packing with its
  * refusals, zstd wrapping, and the render settings' round trip. */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -607,12 +608,37 @@ static void settings_mis_roundtrip(void **st) {
   assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
 }
 
+/* The connection rate reaches a worker as set; 0 (settings from before the field) reads as 1,
+ * and a rate outside (0, 1] is refused. */
+static void settings_rate_roundtrip(void **st) {
+  (void)st;
+  pc_render_settings s, back;
+  pc_render_settings_default(&s);
+  s.method = PC_METHOD_PCBPT;
+  s.pcbpt_rate = 0.25f;
+  Pcbpt__Settings p;
+  pc_wire_settings_buf buf;
+  pc_err e = {0};
+  pc_wire_settings_to_proto(&s, &p, &buf);
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_true(back.pcbpt_rate == 0.25f);
+  p.pcbpt_rate = 0.f;
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_true(back.pcbpt_rate == 1.f);
+  p.pcbpt_rate = 1.5f;
+  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  p.pcbpt_rate = -0.5f;
+  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  p.pcbpt_rate = NAN;
+  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_trace_travels), cmocka_unit_test(film_blocks),
     cmocka_unit_test(film_without_per_iteration), cmocka_unit_test(film_max_roundtrip), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
-    cmocka_unit_test(settings_mis_roundtrip),
+    cmocka_unit_test(settings_mis_roundtrip), cmocka_unit_test(settings_rate_roundtrip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
