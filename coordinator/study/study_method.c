@@ -12,10 +12,11 @@ int pc_study_method_parse(const char *s, pc_study_method *out, pc_err *e) {
   snprintf(out->name, sizeof out->name, "%s", s);
   if (strncmp(s, "pcbpt-k", 7) == 0) {
     const char *rate = strstr(s + 7, "-r");
-    char digits[8];
+    char digits[8] = "";
     size_t n = rate ? (size_t)(rate - (s + 7)) : strlen(s + 7);
+    if (n < sizeof digits) memcpy(digits, s + 7, n); /* longer: stays empty, refused below */
     long long k;
-    if (n >= sizeof digits || (memcpy(digits, s + 7, n), digits[n] = '\0', !pc_parse_i64(digits, 1, 64, &k)))
+    if (!pc_parse_i64(digits, 1, 64, &k))
       return pc_errf(e, PC_EINVAL, "method '%s': K must be a whole number from 1 to 64 (e.g. pcbpt-k2)", s);
     double r = 0.0;
     if (rate && !pc_parse_f64(rate + 2, 1e-6, 1.0, &r))
