@@ -3,7 +3,8 @@
 # Per scene, one study renders BDPT, PCBPT with K = 1, 2, 4, 8 and auto (its pilot charged to
 # its budget) interleaved on the same farm, RUNS seeds, SECONDS each, so the machine's other
 # load falls on every configuration alike. Prints per scene the median final beauty relMSE
-# of each configuration, auto's ratio to the best fixed one and to BDPT, and what auto chose.
+# of each configuration (scaled from its last snapshot's time to the budget: relMSE falls as
+# 1/time), auto's ratio to the best fixed one and to BDPT, and what auto chose.
 # Errors are against REFS_DIR/ref-<scene>.exr when that exists at the study's size, else each
 # image's own estimate (docs/variance.md).
 #   tests/bench/auto_study.sh SECONDS SIZE RUNS [SCENES...]   (REFS_DIR, BIN, HOST/TOKEN, THREADS,
@@ -42,14 +43,21 @@ for sc in scenes:
     if not os.path.exists(p):
         print("%-15s (no study)" % sc); continue
     d = json.load(open(p))
+    # A method's last snapshot comes when the ranges in flight at its budget have finished, up to
+    # 5% past the budget and differently per method; relMSE falls as 1/time, so each is scaled
+    # to the budget itself, the equal time the table is about.
+    def at_budget(r):
+        s = r["snapshots"][-1]
+        e = s["layers"]["beauty"]["relmse"]
+        return None if e is None else e * s["seconds"] / d["seconds"]
     med, chose, last = {}, [], {}
     for r in d["methods"]:
         if r["snapshots"]:
-            last[(r["run"], r["method"])] = r["snapshots"][-1]["layers"]["beauty"]["relmse"]
+            last[(r["run"], r["method"])] = at_budget(r)
     per_run = ",".join("%.2f" % (last[(k, "auto")] / last[(k, "bdpt")])
                        for k in sorted({k for k, _ in last}) if last.get((k, "auto")) and last.get((k, "bdpt")))
     for c in cfgs:
-        v = [r["snapshots"][-1]["layers"]["beauty"]["relmse"] for r in d["methods"] if r["method"] == c and r["snapshots"]]
+        v = [at_budget(r) for r in d["methods"] if r["method"] == c and r["snapshots"]]
         v = [x for x in v if x is not None]
         med[c] = statistics.median(v) if v else float("nan")
     for r in d["methods"]:
