@@ -82,7 +82,7 @@ static float candidate_target(void *user, int slot, int v) {
  * strategies' (they do not involve p_conn), so only this estimate of the sum over the stored
  * vertices changes; it stays unbiased for any p_conn > 0. */
 static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev, const pc_irec_lookup *L,
-                            double xi, double rate) {
+                            double xi, double m_eff) {
   const pc_render_settings *set = c->set;
   candidates cs; /* not zeroed: 2 KB per eye vertex; candidate_target fills each slot it is given */
   cs.c = c;
@@ -96,7 +96,7 @@ static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_pat
     const pc_path_vertex *lv = &c->pcbpt->lv[cs.v[slot[k]]];
     int visible = cs.visible[slot[k]];
     if (visible == 0 || (visible < 0 && !pc_connect_visible(c, lv, ev))) continue;
-    float scale = (float)(factor[k] / ((double)n * c->pcbpt->m * rate));
+    float scale = (float)(factor[k] / ((double)n * m_eff));
     pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
                          v3_scale(con->f, con->weight * scale));
   }
@@ -110,8 +110,9 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
    * The draw is taken only when R < 1, so R = 1 renders what it did before the setting. */
   double rate = set->pcbpt_rate;
   if (rate < 1.0 && !((double)pc_rng_f(crng) < rate)) return;
+  double m_eff = (double)p->m * rate; /* what the sum over the stored paths is divided by */
   if (set->method == PC_METHOD_CBDPT) {
-    float inv_m = 1.f / ((float)p->m * set->pcbpt_rate);
+    float inv_m = 1.f / (float)m_eff;
     for (int v = 0; v < p->nv; v++) add_inner(c, x, y, &p->lv[v], ev, inv_m);
     return;
   }
@@ -130,7 +131,7 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
    * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */
   double xi = (double)pc_rng_f(crng);
   if (set->pcbpt_candidates > 1) {
-    resample_stored(c, x, y, crng, ev, &L, xi, rate);
+    resample_stored(c, x, y, crng, ev, &L, xi, m_eff);
     return;
   }
   for (int k = 0; k < set->pcbpt_k; k++) {
@@ -138,7 +139,7 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     double pconn;
     if (!pc_irec_sample_mix(&L, ((double)k + xi) / set->pcbpt_k, crng, &v, &pconn))
       return; /* u = 0 and no PMF here: reported as no sample */
-    add_inner(c, x, y, &p->lv[v], ev, (float)(1.0 / ((double)set->pcbpt_k * p->m * pconn * rate)));
+    add_inner(c, x, y, &p->lv[v], ev, (float)(1.0 / ((double)set->pcbpt_k * m_eff * pconn)));
   }
 }
 
