@@ -362,7 +362,7 @@ static int scene_path_join(char *out, size_t n, const char *dir, const char *lea
 }
 
 static void print_spread(FILE *f, const study_args *a, const scene_study *s, int size, const pc_study_table *t) {
-  fprintf(f, "over %lld run%s on %d worker%s (median [min..max]; time = farm render seconds):\n", a->runs,
+  fprintf(f, "over %lld run%s on %d worker%s (median [min..max]; time = farm render seconds; final = at the budget):\n", a->runs,
           a->runs > 1 ? "s" : "", a->workers[size], a->workers[size] > 1 ? "s" : "");
   fprintf(f, "%-7s %-6s %30s %34s %24s\n", "layer", "method", "final relMSE", "time to target", "time ratio per run");
   for (int row = 0; row < t->nlayers; row++)
@@ -373,7 +373,7 @@ static void print_spread(FILE *f, const study_args *a, const scene_study *s, int
         first[r] = *run_at(a, (scene_study *)s, size, r, 0);
       }
       pc_study_spread c;
-      pc_study_spread_cell(runs, (int)a->runs, first, t->slot[row], t->target[row], false, &c);
+      pc_study_spread_cell(runs, (int)a->runs, first, t->slot[row], t->target[row], false, a->seconds, &c);
       if (runs[0].layer_empty[t->slot[row]]) {
         fprintf(f, "%-7s %-6s  (layer empty)\n", pc_study_layer_name(t->slot[row]), a->methods[m].name);
         continue;
@@ -481,7 +481,7 @@ static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
     double t_base = NAN;
     for (int size = 0; size < a->nsizes; size++) {
       pc_study_spread c;
-      pc_study_spread_cell(per[size], (int)a->runs, per[0], slot, target, true, &c);
+      pc_study_spread_cell(per[size], (int)a->runs, per[0], slot, target, true, 0, &c);
       if (size == 0) t_base = c.time_med;
       /* why a speed-up falls short: workers idle (busy < size) or slower per second (it/ws) */
       double busy[PC_STUDY_MAX_RUNS], speed[PC_STUDY_MAX_RUNS];

@@ -144,7 +144,11 @@ int pc_study_median_run(const pc_study_run *runs, int nruns, int npoints, double
                         pc_study_band band[PC_STUDY_NLAYERS], pc_err *e);
 void pc_study_band_free(pc_study_band band[PC_STUDY_NLAYERS]);
 /* One method's runs on one layer: final relMSE and time to target (median, min, max; the
- * runs that reached it), and the per-run ratio of its time to first_runs' (paired by run). */
+ * runs that reached it), and the per-run ratio of its time to first_runs' (paired by run).
+ * With t_end > 0 (render seconds) a run's final relMSE is its error at t_end, log-log
+ * interpolated as the median curves are: a job's last snapshot comes up to a few per cent
+ * past the budget, by how long its ranges in flight take, which differs per method. With
+ * t_end <= 0 it is the last snapshot's. */
 typedef struct pc_study_spread {
   int n, reached;
   double final_med, final_lo, final_hi;
@@ -152,7 +156,7 @@ typedef struct pc_study_spread {
   double ratio_med, ratio_lo, ratio_hi;
 } pc_study_spread;
 void pc_study_spread_cell(const pc_study_run *runs, int nruns, const pc_study_run *first_runs, int slot, double target,
-                          bool wall, pc_study_spread *c);
+                          bool wall, double t_end, pc_study_spread *c);
 
 /* How a method reached a target error. */
 typedef enum {

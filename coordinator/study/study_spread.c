@@ -140,12 +140,14 @@ static void times_to(const pc_study_run *runs, int nruns, int slot, double targe
 }
 
 void pc_study_spread_cell(const pc_study_run *runs, int nruns, const pc_study_run *first_runs, int slot, double target,
-                          bool wall, pc_study_spread *c) {
+                          bool wall, double t_end, pc_study_spread *c) {
   double f[PC_STUDY_MAX_RUNS], t[PC_STUDY_MAX_RUNS], t0[PC_STUDY_MAX_RUNS], ratio[PC_STUDY_MAX_RUNS];
   if (nruns > PC_STUDY_MAX_RUNS) nruns = PC_STUDY_MAX_RUNS;
   memset(c, 0, sizeof *c);
   c->n = nruns;
-  for (int r = 0; r < nruns; r++) f[r] = runs[r].nsnaps ? runs[r].snaps[runs[r].nsnaps - 1].m[slot].relmse : NAN;
+  for (int r = 0; r < nruns; r++)
+    f[r] = t_end > 0 ? at_time(&runs[r], slot, 0, t_end, false)
+           : runs[r].nsnaps ? runs[r].snaps[runs[r].nsnaps - 1].m[slot].relmse : NAN;
   c->final_med = pc_study_median(f, nruns, &c->final_lo, &c->final_hi);
   times_to(runs, nruns, slot, target, wall, t);
   times_to(first_runs, nruns, slot, target, wall, t0);

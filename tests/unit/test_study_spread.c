@@ -93,15 +93,20 @@ static void test_spread_cell(void **state) {
     power_run(&base[r], b[r], 0.0625, 9);
   }
   pc_study_spread c;
-  pc_study_spread_cell(m, 3, base, PC_STUDY_BEAUTY, 0.5, false, &c);
+  pc_study_spread_cell(m, 3, base, PC_STUDY_BEAUTY, 0.5, false, 0, &c);
   assert_int_equal(c.n, 3);
   assert_int_equal(c.reached, 3);
   assert_true(fabs(c.time_med - 4) < 1e-9 && fabs(c.time_lo - 2) < 1e-9 && fabs(c.time_hi - 8) < 1e-9);
   assert_true(fabs(c.final_med - 2 / 16.0) < 1e-12);
   /* per-run ratios a_r / b_r: 0.5, 0.25, 1 */
   assert_true(fabs(c.ratio_med - 0.5) < 1e-9 && fabs(c.ratio_lo - 0.25) < 1e-9 && fabs(c.ratio_hi - 1) < 1e-9);
+  /* at a budget of 15 s, which every run's last snapshot (16 s) passes: each run's error
+   * there, a_r / 15 on these power-law curves, not its last snapshot's a_r / 16 */
+  pc_study_spread_cell(m, 3, base, PC_STUDY_BEAUTY, 0.5, false, 15, &c);
+  assert_true(fabs(c.final_med - 2 / 15.0) < 1e-12 && fabs(c.final_lo - 1 / 15.0) < 1e-12 &&
+              fabs(c.final_hi - 4 / 15.0) < 1e-12);
   /* a target one run never reaches (its final is 4/16) */
-  pc_study_spread_cell(m, 3, base, PC_STUDY_BEAUTY, 0.2, false, &c);
+  pc_study_spread_cell(m, 3, base, PC_STUDY_BEAUTY, 0.2, false, 0, &c);
   assert_int_equal(c.reached, 2);
   for (int r = 0; r < 3; r++) {
     pc_study_run_free(&m[r]);
