@@ -159,13 +159,20 @@ float pc_pcbpt_importance(void *user, int thread, const pc_irec_site *z, int v) 
   return lum > 0.f && isfinite(lum) ? lum : 0.f;
 }
 
+bool pc_pcbpt_reads_records(const pc_render_settings *set) {
+  if (set->pmf_mode == PC_PMF_EXACT) return false;
+  if (set->uniform_mix < 1.f) return true;
+  return set->pcbpt_candidates > 1 && set->candidate_visibility != PC_CANDVIS_TRACED;
+}
+
 int pc_pcbpt_prepare(pc_pcbpt *p, pc_tctx *tctx, pc_pool *pool, pc_err *e) {
   p->tctx = tctx;
   /* Both threads work on every phase: the M light paths, the cache eye paths and the records'
    * R*V connections; the gathers keep the arrays in path order. */
   int rc = gather_paths(p, pool, p->m, light_path_item, &p->lv, &p->cap_v, &p->nv, e);
   if (rc != PC_OK || !p->store) return rc;
-  if (tctx[0].set->pmf_mode == PC_PMF_EXACT) return pc_irec_build(p->store, NULL, 0, p->nv, pc_pcbpt_importance, p, pool, e);
+  /* The cache eye paths have their own stream, so leaving them out changes no other sample. */
+  if (!pc_pcbpt_reads_records(tctx[0].set)) return pc_irec_build(p->store, NULL, 0, p->nv, pc_pcbpt_importance, p, pool, e);
   rc = trace_cache_paths(p, pool, e);
   if (rc != PC_OK) return rc;
   return pc_irec_build(p->store, p->sites, p->nr, p->nv, pc_pcbpt_importance, p, pool, e);

@@ -45,8 +45,15 @@ typedef struct pc_pcbpt {
 int pc_pcbpt_create(const pc_render_settings *set, int nthreads, pc_pcbpt **out, pc_err *e);
 void pc_pcbpt_destroy(pc_pcbpt *p);
 
+/* Whether PCBPT's connections read the cached records: not with --pmf exact, nor with a
+ * uniform mix of 1, where p_conn is the uniform PMF whatever the records say, unless the
+ * resampling's target reads their seen share (visibility records or uncertain). */
+bool pc_pcbpt_reads_records(const pc_render_settings *set);
+
 /* Prepares iteration tctx[0].iteration: stores the light vertices of light paths 0..M-1 and,
- * for PCBPT with --pmf cached, traces the cache eye paths and builds their records on pool. */
+ * for PCBPT whose connections read the records, traces the cache eye paths and builds their
+ * records on pool (otherwise an empty store of the light vertices, whose lookups give the
+ * uniform PMF or the exact one). */
 int pc_pcbpt_prepare(pc_pcbpt *p, pc_tctx *tctx, pc_pool *pool, pc_err *e);
 
 /* Where eye vertex v is, as the importance records see it. */

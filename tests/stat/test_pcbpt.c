@@ -20,6 +20,7 @@
 #include <string.h>
 #include <sys/resource.h>
 
+#include "pcbpt.h"
 #include "stat_util.h"
 
 static pc_render_request request(pc_method method, int res, int depth) {
@@ -276,6 +277,52 @@ static void test_renderer_check(void **state) {
   pc_scene_free(&scene);
 }
 
+/* Records are built only where the connections read them: with a uniform mix of 1, p_conn is
+ * the uniform PMF and the build (R x V connections) was pure cost, unless the resampling's
+ * target reads the records' seen share. */
+static size_t record_bytes(const pc_scene *scene, pc_render_settings set) {
+  pc_film film;
+  pc_err e = {0};
+  pc_renderer *r = NULL;
+  assert_int_equal(pc_film_init(&film, set.width, set.height, 0, &e), 0);
+  assert_int_equal(pc_renderer_create(scene, &set, 2, &r, &e), 0);
+  pc_render_stats st = {0};
+  assert_int_equal(pc_render_iterations(r, 0, 2, &film, &st, NULL, NULL, NULL, &e), 0);
+  pc_renderer_destroy(r);
+  pc_film_free(&film);
+  return st.pmf_bytes;
+}
+
+static void test_uniform_builds_no_records(void **state) {
+  (void)state;
+  pc_render_request req = request(PC_METHOD_PCBPT, 24, -1);
+  pc_render_settings s = req.set;
+  assert_true(pc_pcbpt_reads_records(&s));
+  s.uniform_mix = 1.f;
+  assert_false(pc_pcbpt_reads_records(&s));
+  s.pcbpt_candidates = 3;
+  s.candidate_visibility = PC_CANDVIS_TRACED;
+  assert_false(pc_pcbpt_reads_records(&s));
+  s.candidate_visibility = PC_CANDVIS_RECORDS;
+  assert_true(pc_pcbpt_reads_records(&s));
+  s.candidate_visibility = PC_CANDVIS_UNCERTAIN;
+  assert_true(pc_pcbpt_reads_records(&s));
+  s = req.set;
+  s.pmf_mode = PC_PMF_EXACT;
+  assert_false(pc_pcbpt_reads_records(&s));
+
+  pc_scene scene = {0};
+  assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
+  pc_render_settings uniform = req.set, seen = req.set;
+  uniform.uniform_mix = seen.uniform_mix = 1.f;
+  seen.pcbpt_candidates = 3;
+  seen.candidate_visibility = PC_CANDVIS_RECORDS;
+  size_t built = record_bytes(&scene, req.set), none = record_bytes(&scene, uniform);
+  assert_true(none < built);
+  assert_true(record_bytes(&scene, seen) > none);
+  pc_scene_free(&scene);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_shared_layers_equal_bdpt),
@@ -284,6 +331,7 @@ int main(void) {
       cmocka_unit_test(test_all_scenes_finite),
       cmocka_unit_test(test_thread_count_invariant),
       cmocka_unit_test(test_renderer_check),
+      cmocka_unit_test(test_uniform_builds_no_records),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
