@@ -174,7 +174,8 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     else return pc_errf(e, PC_EINVAL, "%s: '%s' is not traced, uncertain or records", flag, v);
     break;
   case 20:
-    if (!pc_parse_f64(v, 1e-6, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
+    /* (0, 1] as the settings hold it: a positive rate that rounds to a float 0 is 0 */
+    if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
     s->pcbpt_rate = (float)d;
     break;
   }

@@ -19,7 +19,7 @@ int pc_study_method_parse(const char *s, pc_study_method *out, pc_err *e) {
     if (!pc_parse_i64(digits, 1, 64, &k))
       return pc_errf(e, PC_EINVAL, "method '%s': K must be a whole number from 1 to 64 (e.g. pcbpt-k2)", s);
     double r = 0.0;
-    if (rate && !pc_parse_f64(rate + 2, 1e-6, 1.0, &r))
+    if (rate && (!pc_parse_f64(rate + 2, 0.0, 1.0, &r) || !((float)r > 0.f)))
       return pc_errf(e, PC_EINVAL, "method '%s': the rate must be in (0, 1] (e.g. pcbpt-k1-r0.25)", s);
     out->method = PC_METHOD_PCBPT;
     out->pcbpt_k = (int)k;

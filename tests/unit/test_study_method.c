@@ -47,12 +47,15 @@ static void test_rate(void **state) {
   pc_study_method_apply(&m, &set);
   assert_int_equal(set.pcbpt_k, 2);
   assert_true(set.pcbpt_rate == 0.5f);
+  /* small rates are rates (the bound is 0, not a guess above it) */
+  assert_int_equal(pc_study_method_parse("pcbpt-k1-r1e-7", &m, &e), PC_OK);
+  assert_true(m.pcbpt_rate == 1e-7f);
 }
 
 static void test_refusals(void **state) {
   (void)state;
   const char *bad[] = {"pcbpt-k0", "pcbpt-k65", "pcbpt-k", "pcbpt-kx", "pcbpt-k-r0.5", "pcbpt-k12345678-r0.5",
-                       "pcbpt-k1-r", "pcbpt-k1-r0", "pcbpt-k1-r1.5", "pcbpt-k1-rx", "pcbpt-k1-r-0.5", "magic"};
+                       "pcbpt-k1-r", "pcbpt-k1-r0", "pcbpt-k1-r1.5", "pcbpt-k1-rx", "pcbpt-k1-r-0.5", "pcbpt-k1-r1e-300", "magic"};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     pc_study_method m;
     pc_err e = {0};
