@@ -3,7 +3,7 @@
  * same threads, one iteration of each in turn, so that a load that comes and goes, the CPU's
  * clock and the memory's state fall on both alike. After one untimed iteration of each (the
  * first touch of their buffers), it prints each method's mean wall and CPU time per iteration
- * (pc_render_stats: the render threads' own clocks), how busy the threads were, and the
+ * (pc_render_stats: the render threads' own clocks), how busy the threads were, the rays, and the
  * ratios. bench_pcbpt_cost.sh measures the same on one thread from whole processes.
  *   bench_alternate SCENE.xml [--iterations N] [--threads T] [render flags for the PCBPT side:
  *                   --pcbpt-k, --pcbpt-m, --width, --max-depth, ...]
@@ -74,10 +74,10 @@ int main(int argc, char **argv) {
   for (int m = 0; m < NSIDES; m++) {
     double n = (double)st[m].iterations;
     printf("  %-6s %8.2f ms wall, %8.2f ms CPU per iteration; threads busy %5.1f%%; phases (ms): paths %.2f, light "
-           "tracing %.2f, PMF %.2f, connect %.2f\n",
+           "tracing %.2f, PMF %.2f, connect %.2f; %.0fk rays\n",
            m == BDPT ? "bdpt" : "pcbpt", 1e3 * st[m].t_total / n, 1e3 * st[m].t_cpu / n,
            100 * st[m].t_cpu / (st[m].t_total * nthreads), 1e3 * st[m].t_paths / n, 1e3 * st[m].t_lt / n,
-           1e3 * st[m].t_pmf / n, 1e3 * st[m].t_connect / n);
+           1e3 * st[m].t_pmf / n, 1e3 * st[m].t_connect / n, 1e-3 * (double)st[m].rays / n);
   }
   printf("  pcbpt / bdpt: %.3f wall, %.3f CPU\n", st[PCBPT].t_total / st[BDPT].t_total, st[PCBPT].t_cpu / st[BDPT].t_cpu);
   for (int m = 0; m < NSIDES; m++) {
