@@ -16,6 +16,7 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->pcbpt_m = (uint32_t)s->pcbpt_m;
   out->pcbpt_k = (uint32_t)s->pcbpt_k;
   out->pcbpt_rate = s->pcbpt_rate;
+  out->pcbpt_unseen_rate = s->pcbpt_unseen_rate;
   out->pcbpt_candidates = (uint32_t)s->pcbpt_candidates;
   out->pcbpt_candidate_visibility = (uint32_t)s->candidate_visibility;
   out->cache_fraction = s->cache_fraction;
@@ -56,6 +57,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.pcbpt_m = (int)p->pcbpt_m;
   s.pcbpt_k = (int)p->pcbpt_k;
   s.pcbpt_rate = p->pcbpt_rate == 0.f ? 1.f : p->pcbpt_rate; /* range: pc_render_settings_check */
+  s.pcbpt_unseen_rate = p->pcbpt_unseen_rate == 0.f ? 1.f : p->pcbpt_unseen_rate;
   s.pcbpt_candidates = (int)p->pcbpt_candidates;
   s.candidate_visibility = (pc_candidate_visibility)p->pcbpt_candidate_visibility;
   s.cache_fraction = p->cache_fraction;

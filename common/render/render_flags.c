@@ -28,6 +28,8 @@ const char pc_render_flags_help[] =
     "  --pcbpt-rate R        CBDPT and PCBPT share of eye vertices that connect to the stored\n"
     "                        paths, in (0, 1] (default 1): each connects with probability R\n"
     "                        and counts 1/R, for scenes whose inner paths carry little\n"
+    "  --pcbpt-unseen-rate R PCBPT share of the eye vertices whose nearest records see no light\n"
+    "                        vertex that connect to the stored paths, in (0, 1] (default 0.25)\n"
     "  --pcbpt-candidates N  PCBPT candidates drawn from p_conn per eye vertex, K of them\n"
     "                        resampled by their contribution (1: no resampling)\n"
     "  --pcbpt-candidate-visibility V  what the resampling knows of a candidate's visibility:\n"
@@ -56,7 +58,7 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
                                       "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
-                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", "--pcbpt-rate", NULL};
+                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", "--pcbpt-rate", "--pcbpt-unseen-rate", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -174,9 +176,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     else return pc_errf(e, PC_EINVAL, "%s: '%s' is not traced, uncertain or records", flag, v);
     break;
   case 20:
+  case 21:
     /* (0, 1] as the settings hold it: a positive rate that rounds to a float 0 is 0 */
     if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
-    s->pcbpt_rate = (float)d;
+    *(which == 20 ? &s->pcbpt_rate : &s->pcbpt_unseen_rate) = (float)d;
     break;
   }
   return 1;
@@ -189,9 +192,9 @@ int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_
   if (s->mis_mode == PC_MIS_COUNT) snprintf(mis, sizeof mis, "%g", (double)s->mis_count);
   else snprintf(mis, sizeof mis, "%s", s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound");
   return snprintf(buf, size,
-                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-rate %g --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
+                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-rate %g --pcbpt-unseen-rate %g --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
                   " --knn %d --uniform-mix %g --mis %s --pmf %s",
-                  s->pcbpt_m, s->pcbpt_k, (double)s->pcbpt_rate, s->pcbpt_candidates, visibility[s->candidate_visibility],
+                  s->pcbpt_m, s->pcbpt_k, (double)s->pcbpt_rate, (double)s->pcbpt_unseen_rate, s->pcbpt_candidates, visibility[s->candidate_visibility],
                   (double)s->cache_fraction, s->knn, (double)s->uniform_mix, mis,
                   s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
 }

@@ -608,29 +608,32 @@ static void settings_mis_roundtrip(void **st) {
   assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
 }
 
-/* The connection rate reaches a worker as set; 0 (settings from before the field) reads as 1,
- * and a rate outside (0, 1] is refused. */
+/* The connection rates (--pcbpt-rate, --pcbpt-unseen-rate) reach a worker as set; 0 (settings
+ * from before the field) reads as 1, and a rate outside (0, 1] is refused. */
 static void settings_rate_roundtrip(void **st) {
   (void)st;
-  pc_render_settings s, back;
-  pc_render_settings_default(&s);
-  s.method = PC_METHOD_PCBPT;
-  s.pcbpt_rate = 0.25f;
-  Pcbpt__Settings p;
-  pc_wire_settings_buf buf;
-  pc_err e = {0};
-  pc_wire_settings_to_proto(&s, &p, &buf);
-  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
-  assert_true(back.pcbpt_rate == 0.25f);
-  p.pcbpt_rate = 0.f;
-  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
-  assert_true(back.pcbpt_rate == 1.f);
-  p.pcbpt_rate = 1.5f;
-  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
-  p.pcbpt_rate = -0.5f;
-  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
-  p.pcbpt_rate = NAN;
-  assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  for (int unseen = 0; unseen < 2; unseen++) {
+    pc_render_settings s, back;
+    pc_render_settings_default(&s);
+    s.method = PC_METHOD_PCBPT;
+    *(unseen ? &s.pcbpt_unseen_rate : &s.pcbpt_rate) = 0.25f;
+    Pcbpt__Settings p;
+    pc_wire_settings_buf buf;
+    pc_err e = {0};
+    pc_wire_settings_to_proto(&s, &p, &buf);
+    float *wire = unseen ? &p.pcbpt_unseen_rate : &p.pcbpt_rate;
+    const float *got = unseen ? &back.pcbpt_unseen_rate : &back.pcbpt_rate;
+    assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+    assert_true(*got == 0.25f);
+    *wire = 0.f;
+    assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+    assert_true(*got == 1.f);
+    const float bad[] = {1.5f, -0.5f, NAN};
+    for (int i = 0; i < 3; i++) {
+      *wire = bad[i];
+      assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+    }
+  }
 }
 
 int main(void) {
