@@ -8,9 +8,8 @@
  * PC_STREAM_CONNECT stream. With --pcbpt-rate R < 1 an eye vertex connects to the stored paths
  * only with probability R, and what it adds counts 1/R: unbiased for any R > 0, and the MIS
  * weights, which do not involve how often the inner strategies are tried, stay as they are.
- * PCBPT applies --pcbpt-unseen-rate the same way where the lookup finds that no nearby record
- * sees a light vertex: a function of the eye vertex and the iteration's records only, decided
- * before any draw from p_conn, so the estimate stays unbiased. */
+ * PCBPT applies --pcbpt-unseen-rate the same way in an iteration none of whose records sees a
+ * light vertex: a fact of the iteration, known before any of its pixels draws. */
 #include <float.h>
 
 #include "bidir.h"
@@ -119,6 +118,13 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     for (int v = 0; v < p->nv; v++) add_inner(c, x, y, &p->lv[v], ev, inv_m);
     return;
   }
+  /* No record sees a light vertex (slit-room while no stored path got through the slit): the
+   * stored paths are unlikely to reach this vertex either. Drawn only when the rate is < 1. */
+  double unseen = set->pcbpt_unseen_rate;
+  if (unseen < 1.0 && pc_irec_none_seen(p->store)) {
+    if (!((double)pc_rng_f(crng) < unseen)) return;
+    m_eff *= unseen;
+  }
   pc_irec_lookup L;
   if (set->pmf_mode == PC_PMF_EXACT) {
     pc_path_vertex unit = *ev; /* pc_pcbpt_importance wants throughput 1 */
@@ -129,12 +135,6 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   } else {
     pc_irec_site z = pc_pcbpt_site(c->scene, ev);
     pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
-    /* Drawn only when the rate is < 1, so a rate of 1 renders what it did before the setting. */
-    double unseen = set->pcbpt_unseen_rate;
-    if (L.unseen && unseen < 1.0) {
-      if (!((double)pc_rng_f(crng) < unseen)) return;
-      m_eff *= unseen;
-    }
   }
   /* The draws' component choices are stratified: each draw alone follows p_conn (so every
    * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */

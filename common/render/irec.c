@@ -172,6 +172,8 @@ size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight) {
   return bytes_for(s, (size_t)nrecords, mass, scratch, memo_bits(s, nrecords));
 }
 
+bool pc_irec_none_seen(const pc_irec_store *s) { return s->R > 0 && s->nseen == 0; }
+
 int pc_irec_count(const pc_irec_store *s) { return s->R; }
 int pc_irec_light_count(const pc_irec_store *s) { return s->V; }
 const float *pc_irec_pmf(const pc_irec_store *s, int r) { return s->mass + 2 * (size_t)r * (size_t)s->V; }
@@ -433,7 +435,6 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   L->V = s->V;
   L->u = uniform_mix;
   L->n = 0;
-  L->unseen = s->R > 0; /* a build without records (none read) says nothing of what is seen */
   if (s->V == 0 || s->nseen == 0) return;
   if (knn < 1) knn = 1;
   if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
@@ -441,7 +442,6 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   double d[PC_IREC_MAX_KNN], dsum = 0.0;
   const int *idx = neighbours(s, thread, z->p, knn, buf, &k, &seen);
   if (seen == 0) return; /* none of them has a distribution */
-  L->unseen = false;
   for (int j = 0; j < k; j++) {
     d[j] = v3_len(v3_sub(z->p, s->rec[idx[j]].p));
     dsum += d[j];
@@ -466,7 +466,6 @@ int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc
   L->V = s->V;
   L->u = uniform_mix;
   L->n = 0;
-  L->unseen = false;
   if (thread < 0 || thread >= s->nthreads) return pc_errf(e, PC_EINVAL, "importance records: thread %d out of range", thread);
   if (s->V == 0) return PC_OK;
   float *pmf = s->scratch + 2 * (size_t)thread * (size_t)s->V, *cmf = pmf + s->V;

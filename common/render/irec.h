@@ -76,6 +76,8 @@ size_t pc_irec_bytes(const pc_irec_store *s);
  * SIZE_MAX when the figure overflows. */
 size_t pc_irec_bytes_needed(const pc_irec_store *s, int nrecords, int nlight);
 int pc_irec_count(const pc_irec_store *s);
+/* Records were built and none of them sees a light vertex (every lookup is then uniform). */
+bool pc_irec_none_seen(const pc_irec_store *s);
 int pc_irec_light_count(const pc_irec_store *s);
 /* Record r's PMF and CMF (V floats each, inside the one shared array) and its unnormalized
  * importance sum; a record with sum 0 sees no light vertex and holds zeros. */
@@ -88,7 +90,6 @@ typedef struct pc_irec_lookup {
   int V;
   float u;                               /* uniform mix in [0, 1] */
   int n;                                 /* distributions interpolated; 0: none (see below) */
-  bool unseen;                           /* records were built and none near z sees a light vertex */
   double w[PC_IREC_MAX_KNN];             /* their weights, summing to 1 */
   const float *pmf[PC_IREC_MAX_KNN], *cmf[PC_IREC_MAX_KNN];
 } pc_irec_lookup;
@@ -104,9 +105,9 @@ typedef struct pc_irec_lookup {
  * PMFs do not depend on wi, and the factor only lowers the number of records that count);
  * records with a non-positive cosine or weight, and records that see no light
  * vertex, are dropped. If every record with a PMF is dropped for its weight, p_conn falls
- * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF (or no
- * record of the build has one), n = 0 and `unseen`: p_conn is then the uniform PMF when u > 0,
- * and undefined (pc_irec_sample draws nothing) when u == 0. */
+ * back to the uniform PMF (n = 0, u = 1). If none of the found records has a PMF, n = 0:
+ * p_conn is then the uniform PMF when u > 0, and undefined (pc_irec_sample draws nothing)
+ * when u == 0. */
 void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L);
 

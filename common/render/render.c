@@ -54,17 +54,15 @@ void pc_render_settings_default(pc_render_settings *s) {
   s->pcbpt_m = 100;
   s->pcbpt_k = 1;
   s->pcbpt_rate = 1.f;
-  /* An eye vertex whose nearest records see no light vertex (the lookup's `unseen`) connects
-   * with probability 1/4 and counts 4: there the stored paths add little (over 8 iterations at
-   * 128x128, such vertices made 27% of PCBPT's connections on ajar-door for 6.5% of the inner
-   * contribution, 6% on open-room for 0.1%, 2% on glossy-floor for 0.01%, and all of
-   * slit-room's while no path got through the slit, for ~0), while their lookup, draw and
-   * connection cost as much as anywhere. Estimated beauty relMSE after
-   * 64 iterations (seeds 1, 2) unchanged to 4 digits on slit-room, open-room, outdoor,
-   * env-objects, glossy-floor, glass-lamp, glossy-glass, thin-glass and cornell-box, +1.5-2.5%
-   * on ajar-door (+1.1-1.2% at 1/2); PCBPT's time per iteration over BDPT's (bench_alternate,
-   * 256x256, 2 threads) 1.12-1.16 -> 1.08-1.10 on slit-room, 1.08 -> 1.04-1.055 on ajar-door
-   * (docs/pmf-ceiling.md). */
+  /* In an iteration none of whose records sees a light vertex (slit-room while no stored path
+   * got through the slit), an eye vertex connects with probability 1/4 and counts 4: its lookup
+   * and connection cost as much as ever and almost never find anything (over 8 such iterations
+   * at 128x128, 501162 connections added 0.53 in luminance; 8 iterations of ajar-door, 17627).
+   * On slit-room the estimated beauty relMSE after 64 iterations is the same to 4 digits (seeds
+   * 1-3) and PCBPT's time per iteration over BDPT's goes from 1.12 to 1.04 (bench_alternate,
+   * 256x256, 2 threads); every other shipped scene has records that see something in every
+   * iteration and renders bit-identically. The same rule per eye vertex (its nearest records
+   * see nothing) cost ajar-door 9% in beauty relMSE against a reference (docs/pmf-ceiling.md). */
   s->pcbpt_unseen_rate = 0.25f;
   s->pcbpt_candidates = 1;
   /* With resampling on, the candidates' own shadow rays in the target: inner relMSE per

@@ -36,7 +36,7 @@ typedef struct pc_render_settings {
   int pcbpt_m;             /* stored light paths per iteration (default 100) */
   int pcbpt_k;             /* connections per eye vertex */
   float pcbpt_rate;        /* share of eye vertices that connect to the stored paths, (0, 1] */
-  float pcbpt_unseen_rate; /* PCBPT: the same where no nearby record sees a light vertex, (0, 1] */
+  float pcbpt_unseen_rate; /* PCBPT: the same in an iteration whose records see no light vertex */
   int pcbpt_candidates;    /* candidates drawn from p_conn and resampled per eye vertex (1: none) */
   pc_candidate_visibility candidate_visibility;
   float cache_fraction;    /* importance-record eye paths per pixel (0.004; pc_cache_path_count) */

@@ -157,19 +157,20 @@ static void test_inner_agrees(void **state) {
   pc_scene_free(&scene);
 }
 
-/* --pcbpt-unseen-rate: where no nearby record sees a light vertex an eye vertex connects with
- * probability R and counts 1/R. One stored path, the records of one cache path and one
- * neighbour per lookup make such eye vertices common on the Cornell box (a record on the floor
- * sees nothing of a light vertex on the floor), and enough of the inner layer comes from them
- * that leaving out the 1/R fails this (4 blocks of 12x12, 320 iterations a side): the layer
- * agrees with BDPT's at R = 0.25 and 0.5, and with R = 1. */
+/* --pcbpt-unseen-rate: in an iteration none of whose records sees a light vertex, an eye
+ * vertex connects with probability R and counts 1/R. One stored path, the records of one cache
+ * path and paths of at most 3 segments (s = t = 2 only) make such iterations common on the
+ * Cornell box (a record on the floor sees nothing of a light vertex on the floor) while other
+ * eye vertices do see the light vertex, so enough of the inner layer comes from them that
+ * leaving out the 1/R fails this (4 blocks of 12x12, 640 iterations a side): the layer agrees
+ * with BDPT's at R = 0.25 and 0.5, and with R = 1. */
 static void test_unseen_rate_agrees(void **state) {
   (void)state;
-  pc_render_request req = request(PC_METHOD_BDPT, RES, -1);
+  pc_render_request req = request(PC_METHOD_BDPT, RES, 3);
   pc_scene scene = {0};
   assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
   stat_blocks ref;
-  assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, 8 * ITER, PC_LAYER_INNER, 12, &ref), 0);
+  assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, 16 * ITER, PC_LAYER_INNER, 12, &ref), 0);
   const float rates[] = {0.25f, 0.5f, 1.f};
   for (int i = 0; i < 3; i++) {
     pc_render_settings set = req.set;
@@ -181,7 +182,7 @@ static void test_unseen_rate_agrees(void **state) {
     set.cache_fraction = 1.f / (RES * RES);
     set.pcbpt_unseen_rate = rates[i];
     stat_blocks st;
-    assert_int_equal(stat_render_blocks(&scene, &set, 2, 1000, 8 * ITER, PC_LAYER_INNER, 12, &st), 0);
+    assert_int_equal(stat_render_blocks(&scene, &set, 2, 1000, 16 * ITER, PC_LAYER_INNER, 12, &st), 0);
     double worst = 0;
     for (int b = 0; b < st.nblocks; b++) {
       double d = fabs(stat_mean(&st, b) - stat_mean(&ref, b));
