@@ -59,8 +59,8 @@ void pc_render_settings_default(pc_render_settings *s) {
    * and connection cost as much as ever and almost never find anything (over 8 such iterations
    * at 128x128, 501162 connections added 0.53 in luminance; 8 iterations of ajar-door, 17627).
    * On slit-room the estimated beauty relMSE after 64 iterations is the same to 4 digits (seeds
-   * 1-3) and PCBPT's time per iteration over BDPT's goes from 1.12 to 1.04 (bench_alternate,
-   * 256x256, 2 threads); every other shipped scene has records that see something in every
+   * 1-3) and PCBPT's time per iteration over BDPT's from 1.11-1.14 to 1.09-1.10 (bench_alternate,
+   * 256x256, 2 threads, 48 iterations); every other shipped scene has records that see something in every
    * iteration and renders bit-identically. The same rule per eye vertex (its nearest records
    * see nothing) cost ajar-door 9% in beauty relMSE against a reference (docs/pmf-ceiling.md). */
   s->pcbpt_unseen_rate = 0.25f;
