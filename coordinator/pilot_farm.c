@@ -78,7 +78,7 @@ static int wait_candidate(pc_pilot_farm *fp, uint64_t job, const pc_pilot_candid
       return rc;
     }
     pcbpt__envelope__free_unpacked(in, NULL);
-    struct timespec ts = {0, 50000000};
+    struct timespec ts = {0, 10000000};
     nanosleep(&ts, NULL);
   }
 }

@@ -45,11 +45,12 @@ double pc_pilot_remaining(double seconds, double pilot_seconds) {
 uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
 
 /* count > 0: a PCBPT candidate whose inner strategies carry that count in the MIS weights
- * instead of the base settings' (stage 4) */
-static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k, float count) {
+ * instead of the base settings' (stage 4). `counts`: rendered whatever the data says (stages 1
+ * and 4), so its iterations may count in the image. */
+static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method m, int k, float count, bool counts) {
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
-  c->counts = m == PC_METHOD_BDPT || (k <= 2 && count == 0); /* stage 1 runs whatever the data says */
+  c->counts = counts;
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
@@ -325,9 +326,9 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
    * (PCBPT's connections draw from a stream of their own), so the noise of the strategies they
    * share cancels in the comparison: with a batch each of its own, slit-room's K = 1 met a
    * light path through the slit that K = 2's batch did not, and K = 2 looked 170x better */
-  add_candidate(p, base, PC_METHOD_BDPT, 0, 0.f);
-  add_candidate(p, base, PC_METHOD_PCBPT, 1, 0.f);
-  add_candidate(p, base, PC_METHOD_PCBPT, 2, 0.f);
+  add_candidate(p, base, PC_METHOD_BDPT, 0, 0.f, true);
+  add_candidate(p, base, PC_METHOD_PCBPT, 1, 0.f, true);
+  add_candidate(p, base, PC_METHOD_PCBPT, 2, 0.f, true);
   uint64_t second = 0;
   int rc = render_batch(p, 0, min_it, 0, render, user, e);
   if (!rc && slice > 0 && (second = second_batch(p, slice)) != 0)
@@ -338,21 +339,24 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
    * iterations miss (docs/auto.md) */
   for (int k = 4; !rc && k <= 8; k *= 2) {
     if (p->c[p->n - 1].efficiency <= PC_PILOT_K_MARGIN * p->c[p->n - 2].efficiency) break;
-    add_candidate(p, base, PC_METHOD_PCBPT, k, 0.f);
+    add_candidate(p, base, PC_METHOD_PCBPT, k, 0.f, false);
     rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
     if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
   }
-  /* stage 4: the chosen K with the inner strategies' MIS count raised to PC_PILOT_RAISED_COUNT
-   * (docs/pmf-ceiling.md: it pays on diffuse scenes and costs on glossy ones), on the same
-   * iterations: the same paths and connections, weighted otherwise, at the same cost. Only
-   * where stage 1 left room in the time budget for its second batch: a refinement of a few
-   * per cent is not worth a pilot past its share (glossy-floor at 60 s: 2 iterations of each
-   * candidate already take 4% of the budget) */
+  /* stage 4: K = 1 with the inner strategies' MIS count raised to PC_PILOT_RAISED_COUNT
+   * (docs/pmf-ceiling.md: it pays on diffuse scenes, where K = 1 is the best K, and costs on
+   * glossy ones), on the same iterations: the same paths and connections, weighted otherwise, at
+   * the same cost. Always K = 1, whichever K the doublings reached, so that it too is rendered
+   * whatever the data says and its iterations count in the image: when it tried the chosen K its
+   * time was lost to the image, a quarter of the pilot (on env-objects at 60 s, 0.36 of 2.4
+   * worker-seconds), and more where BDPT wins. Only where stage 1 left room in the time budget
+   * for its second batch: a refinement of a few per cent is not worth a pilot past its share
+   * (glossy-floor at 60 s: 2 iterations of each candidate already take 4% of the budget) */
   float count = fminf(PC_PILOT_RAISED_COUNT, (float)base->pcbpt_m);
   bool room = slice <= 0 || second > 0;
-  if (!rc && room && p->best_pcbpt >= 0 && count > pc_render_settings_inner_count(&p->c[p->best_pcbpt].set) &&
-      p->n < PC_PILOT_MAX) {
-    add_candidate(p, base, PC_METHOD_PCBPT, p->c[p->best_pcbpt].set.pcbpt_k, count);
+  int k1 = find(p, PC_METHOD_PCBPT, 1, false);
+  if (!rc && room && k1 >= 0 && count > pc_render_settings_inner_count(&p->c[k1].set) && p->n < PC_PILOT_MAX) {
+    add_candidate(p, base, PC_METHOD_PCBPT, 1, count, true);
     rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
     if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
   }

@@ -41,8 +41,9 @@
  * while the pilot's K ratio was noise: sd of its log 0.44-1.37 when the candidates rendered
  * iterations of their own, docs/auto.md.) */
 #define PC_PILOT_K_MARGIN 1.05
-/* Stage 4 tries the chosen PCBPT K with its inner strategies counting this much in the MIS
- * weights (the default is 2) and keeps it if its efficiency is higher by PC_PILOT_COUNT_MARGIN.
+/* Stage 4 tries PCBPT K = 1 with its inner strategies counting this much in the MIS weights
+ * (the default is 2), and where K = 1 is the chosen K keeps it if its efficiency is higher by
+ * PC_PILOT_COUNT_MARGIN.
  * The two candidates render the same paths and connections, only weighted otherwise, so their
  * ratio is far less noisy than K's; the margin guards against the heavier tails of a larger
  * count (glossy scenes), which a few iterations see less often than a long render. At 128x128
@@ -62,8 +63,8 @@ typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
   bool mis_raised;      /* PCBPT with the raised MIS count of stage 4 */
-  bool counts;          /* rendered whatever the data says (stage 1): its iterations may
-                           count in the image (docs/auto.md); K = 4 and 8 are not */
+  bool counts;          /* rendered whatever the data says (stages 1 and 4): its iterations
+                           may count in the image (docs/auto.md); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
   double seconds;       /* worker-seconds (wall) of the candidate's jobs: what the pilot spent */
   double cpu_seconds;   /* CPU seconds of the render threads over them (<= 0: unknown): the cost
@@ -118,7 +119,9 @@ uint64_t pc_pilot_seed(uint64_t job_seed);
  * min_iterations of them, then as many more as 5 slices (slice_seconds, in the unit of the
  * render's cost: worker-seconds on a farm; 0: none) buy at their cost; stages 2 and 3 render
  * K = 4 and 8 on those same iterations, each only while the last doubling paid by
- * PC_PILOT_K_MARGIN. Picks that PCBPT K, or BDPT unless the PCBPT candidate beats it by
+ * PC_PILOT_K_MARGIN; where stage 1 had room for its second batch, stage 4 renders K = 1 with the
+ * raised MIS count on them too. Picks that PCBPT K (K = 1 with the raised count where that is
+ * better by PC_PILOT_COUNT_MARGIN), or BDPT unless the PCBPT candidate beats it by
  * PC_PILOT_BDPT_MARGIN. Free with pc_pilot_free, also after a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
                  pc_pilot_render_fn render, void *user, pc_err *e);

@@ -248,14 +248,20 @@ static void test_grid(void **state) {
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
-  /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4, and
-   * K=4 with the raised count (better than K=4 by more than its margin) */
-  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[4] = 0.08}};
+  /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4. The
+   * raised count is tried at K=1 whatever K the doublings reached (so that its iterations count
+   * in the image: stages 1 and 4 count, K=4 and 8 do not), and K=1 with it is no match for K=4 */
+  script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[1] = 0.5, [4] = 0.08}};
   run_script(&b, 2.0, &p);
   assert_int_equal(b.calls, 12);
+  assert_int_equal(b.nbatch[9], 2);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
-  assert_true(p.c[p.best].mis_raised && p.c[p.best].set.mis_count == PC_PILOT_RAISED_COUNT);
+  assert_false(p.c[p.best].mis_raised);
+  for (int i = 0; i < p.n; i++) {
+    assert_true(!p.c[i].mis_raised || p.c[i].set.pcbpt_k == 1);
+    assert_int_equal(p.c[i].counts, p.c[i].set.method == PC_METHOD_BDPT || p.c[i].set.pcbpt_k <= 2);
+  }
   pc_pilot_free(&p);
   /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried; the raised count
    * better, but within its margin: not taken */
@@ -415,7 +421,7 @@ static void test_unbiased(void **state) {
       if (p.c[i].counts) a += (double)p.c[i].iterations;
     for (int i = 0; i < p.n; i++)
       if (p.c[i].counts) counted[nc++] = (pc_film_part){&l.films[i], (double)p.c[i].iterations / a};
-    assert_int_equal(nc, 3); /* BDPT, K = 1, K = 2 */
+    assert_int_equal(nc, 4); /* BDPT, K = 1, K = 2 and K = 1 with the raised count (no slice: room) */
     assert_int_equal(pc_film_mix(&pilot, counted, nc, &e), 0);
     pc_film_part parts[] = {{&pilot, a / (a + ITERATIONS)}, {&job, ITERATIONS / (a + ITERATIONS)}};
     assert_int_equal(pc_film_mix(&shown, parts, 2, &e), 0);
