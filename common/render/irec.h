@@ -111,6 +111,10 @@ typedef struct pc_irec_lookup {
 void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L);
 
+/* Starts loading the memoised neighbour set a lookup at p would read (the memo's entries are
+ * spread over more memory than stays in cache), so that it is there when the lookup comes. */
+void pc_irec_prefetch(const pc_irec_store *s, int thread, vec3 p);
+
 /* --pmf exact: evaluates fn over all V light vertices at z itself into `thread`'s scratch
  * (valid until that thread's next exact lookup) and sets L to that PMF. PC_ENUMERIC when fn
  * returns a negative or non-finite value. */
