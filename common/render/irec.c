@@ -397,12 +397,6 @@ static const int *search(const pc_irec_store *s, vec3 q, int knn, int *buf, int 
   return buf;
 }
 
-/* The knn nearest records of the centre of z's cell (of z itself when the build has no cell
- * size or z lies absurdly far out): a pure function of the position, so the lookup does not
- * depend on which thread asks or in what order. Returns their indices (in `buf`, or in the
- * memo) and count, and in *seen how many of them have a distribution. The cache_k-neighbour
- * sets are memoised per thread: neighbouring pixels mostly share a cell, and the kd-tree search
- * is the costliest part of a lookup. */
 /* The cell of p (its integer coordinates in *f) and its key; false when the build has no cell
  * size or p lies absurdly far out. */
 static inline bool cell_of(const pc_irec_store *s, vec3 p, vec3 *f, uint64_t *key) {
@@ -429,6 +423,12 @@ void pc_irec_prefetch(const pc_irec_store *s, int thread, vec3 p) {
   if (s->nseen > 0 && cell_of(s, p, &f, &key)) __builtin_prefetch(memo_entry(s, thread, key));
 }
 
+/* The knn nearest records of the centre of z's cell (of z itself when the build has no cell
+ * size or z lies absurdly far out): a pure function of the position, so the lookup does not
+ * depend on which thread asks or in what order. Returns their indices (in `buf`, or in the
+ * memo) and count, and in *seen how many of them have a distribution. The cache_k-neighbour
+ * sets are memoised per thread: neighbouring pixels mostly share a cell, and the kd-tree search
+ * is the costliest part of a lookup. */
 static const int *neighbours(pc_irec_store *s, int thread, vec3 p, int knn, int *buf, int *count, int *seen) {
   vec3 f;
   uint64_t key;

@@ -246,7 +246,7 @@ void pc_pilot_choose(pc_pilot *p) {
   int raised = pc >= 0 ? find(p, PC_METHOD_PCBPT, p->c[pc].set.pcbpt_k, true) : -1;
   if (raised >= 0 && p->c[raised].efficiency > PC_PILOT_COUNT_MARGIN * p->c[pc].efficiency) pc = raised;
   int bdpt = find(p, PC_METHOD_BDPT, 0, false);
-  p->best = p->best_pcbpt = pc;
+  p->best = pc;
   if (bdpt >= 0 && p->c[bdpt].efficiency > 0 &&
       (pc < 0 || p->c[pc].efficiency < PC_PILOT_BDPT_MARGIN * p->c[bdpt].efficiency))
     p->best = bdpt;
@@ -348,8 +348,8 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
    * glossy ones), on the same iterations: the same paths and connections, weighted otherwise, at
    * the same cost. Always K = 1, whichever K the doublings reached, so that it too is rendered
    * whatever the data says and its iterations count in the image: when it tried the chosen K its
-   * time was lost to the image, a quarter of the pilot (on env-objects at 60 s, 0.36 of 2.4
-   * worker-seconds), and more where BDPT wins. Only where stage 1 left room in the time budget
+   * time was lost to the image wherever BDPT won, a fifth of the pilot (on env-objects at 60 s,
+   * 0.36 of 1.62 worker-seconds). Only where stage 1 left room in the time budget
    * for its second batch: a refinement of a few per cent is not worth a pilot past its share
    * (glossy-floor at 60 s: 2 iterations of each candidate already take 4% of the budget) */
   float count = fminf(PC_PILOT_RAISED_COUNT, (float)base->pcbpt_m);

@@ -80,7 +80,6 @@ typedef struct pc_pilot_candidate {
 
 typedef struct pc_pilot {
   int n, best;
-  int best_pcbpt;       /* the PCBPT candidate chosen before the comparison with BDPT (-1: none) */
   pc_pilot_candidate c[PC_PILOT_MAX];
   double seconds;       /* wall time of the whole pilot (its cost) */
 } pc_pilot;

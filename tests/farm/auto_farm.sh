@@ -2,8 +2,9 @@
 # short jobs of their own that both workers render, the final job carries the winner's
 # settings (BDPT or PCBPT) and the pilot's report in `status --json` ("auto") and in the EXR
 # header (pcbpt.auto). The job's iteration count is its own, and its image mixes in the films
-# of the pilot's candidates rendered whatever the data says (BDPT, K = 1, K = 2, and K = 1 with the raised MIS count) with the
-# weight fixed at submission: a / (a + 64), a their iterations (coordinator/job_prior.c).
+# of the pilot's candidates rendered whatever the data says (BDPT, K = 1, K = 2, and K = 1
+# with the raised MIS count) with the weight fixed at submission: a / (a + 64), a their
+# iterations (coordinator/job_prior.c).
 # A second job's pilot films survive a SIGKILL of the coordinator (the saved prior).
 . "$(dirname "$0")/lib.inc"
 start_coord

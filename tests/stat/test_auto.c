@@ -250,7 +250,8 @@ static void test_grid(void **state) {
   pc_pilot_free(&p);
   /* efficiency rises to K=4 (each doubling by more than the margin) and drops at 8: K=4. The
    * raised count is tried at K=1 whatever K the doublings reached (so that its iterations count
-   * in the image: stages 1 and 4 count, K=4 and 8 do not), and K=1 with it is no match for K=4 */
+   * in the image: stages 1 and 4 count, K=4 and 8 do not), and K=1 with it is no match for K=4.
+   * K=4 with it would win, which shows that it is never tried */
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[1] = 0.5, [4] = 0.08}};
   run_script(&b, 2.0, &p);
   assert_int_equal(b.calls, 12);
