@@ -1,8 +1,8 @@
 /* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
- * (BDPT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid, then the chosen K
+ * (BDPT, PT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid, then K = 1
  * with a raised MIS count for its inner strategies) on the same
- * iterations (the same seeds, so they share their eye and light paths and the noise those
- * carry), measures its efficiency 1 / (estimated relMSE x render time) from the spread of its
+ * iterations (the same seeds, so the bidirectional ones share their eye and light paths and the
+ * noise those carry), measures its efficiency 1 / (estimated relMSE x render time) from the spread of its
  * iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
  * its own, and the job is rendered afterwards with the winner's fixed settings; the candidates
  * rendered whatever the data says may be mixed into the image with a weight fixed in advance
@@ -29,6 +29,13 @@
  * pilot's few iterations see heavy tails (PCBPT's fireflies) less often than a long render does,
  * so its estimate of a heavy-tailed method is more often low than high. */
 #define PC_PILOT_BDPT_MARGIN 1.05
+/* PT is chosen over the winner of BDPT and PCBPT only if its efficiency is higher by this
+ * factor, for the same reason: where PT fails, its few iterations miss the rare paths that carry
+ * the light (its relMSE also carries what its image disagrees with the others', pooled_relmse).
+ * On thin-glass (light through glass) a 2-iteration pilot at 128x128 put PT 1.04x ahead of BDPT
+ * where 20 s of each put it 1.24x behind; where PT wins it wins by 1.6-2.9x (env-constant,
+ * env-white-map, env-objects, glossy-floor, outdoor: docs/auto.md). */
+#define PC_PILOT_PT_MARGIN 1.2
 /* A doubled K replaces the smaller one only if its efficiency is higher by this factor. The
  * pilot measures the K = 2 / K = 1 efficiency ratio to about 5% (sd of its log): its relMSE
  * part from the ring (pooled_relmse) within 2% of a long render's, sd 0.004-0.044 over pilots
@@ -63,8 +70,9 @@ typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
   bool mis_raised;      /* PCBPT with the raised MIS count of stage 4 */
-  bool counts;          /* rendered whatever the data says (stages 1 and 4): its iterations
-                           may count in the image (docs/auto.md); K = 4 and 8 are not */
+  bool counts;          /* its iterations may count in the image (docs/auto.md): rendered
+                           whatever the data says (stages 1 and 4) and not PT (its fireflies
+                           where it fails); K = 4 and 8 are not */
   uint64_t iterations;  /* rendered by the pilot */
   double seconds;       /* worker-seconds (wall) of the candidate's jobs: what the pilot spent */
   double cpu_seconds;   /* CPU seconds of the render threads over them (<= 0: unknown): the cost
@@ -114,21 +122,23 @@ double pc_pilot_remaining(double seconds, double pilot_seconds);
 /* The pilot seed: never the job's, so no pilot iteration equals one of the image's. */
 uint64_t pc_pilot_seed(uint64_t job_seed);
 
-/* Runs the pilot: stage 1 renders BDPT and PCBPT K = 1 and 2 on the same iterations, first
+/* Runs the pilot: stage 1 renders BDPT, PT and PCBPT K = 1 and 2 on the same iterations, first
  * min_iterations of them, then as many more as 5 slices (slice_seconds, in the unit of the
  * render's cost: worker-seconds on a farm; 0: none) buy at their cost; stages 2 and 3 render
  * K = 4 and 8 on those same iterations, each only while the last doubling paid by
  * PC_PILOT_K_MARGIN; where stage 1 had room for its second batch, stage 4 renders K = 1 with the
  * raised MIS count on them too. Picks that PCBPT K (K = 1 with the raised count where that is
  * better by PC_PILOT_COUNT_MARGIN), or BDPT unless the PCBPT candidate beats it by
- * PC_PILOT_BDPT_MARGIN. Free with pc_pilot_free, also after a failure. */
+ * PC_PILOT_BDPT_MARGIN, then PT if it beats that winner by PC_PILOT_PT_MARGIN. Free with
+ * pc_pilot_free, also after a failure. */
 int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
                  pc_pilot_render_fn render, void *user, pc_err *e);
 
 /* Measures every candidate against the pooled mean of their images (candidates without an
  * image keep their own estimate) and picks p->best by pc_pilot_run's rule: the PCBPT K reached
- * from K = 1 by doublings each better by PC_PILOT_K_MARGIN, against BDPT (used by
- * pc_pilot_run; exposed for the tests). */
+ * from K = 1 by doublings each better by PC_PILOT_K_MARGIN, against BDPT, then PT against the
+ * winner; PT's relMSE also carries how far its image disagrees with the others' beyond their
+ * variances (used by pc_pilot_run; exposed for the tests). */
 void pc_pilot_choose(pc_pilot *p);
 
 /* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */

@@ -1,6 +1,6 @@
 #!/bin/sh
 # auto_study.sh (benchmark, not a test): issue 14's acceptance table as equal-time farm studies.
-# Per scene, one study renders BDPT, PCBPT with K = 1, 2, 4, 8 and auto (its pilot charged to
+# Per scene, one study renders BDPT, PT, PCBPT with K = 1, 2, 4, 8 and auto (its pilot charged to
 # its budget) interleaved on the same farm, RUNS seeds, SECONDS each, so the machine's other
 # load falls on every configuration alike. Prints per scene the median final beauty relMSE
 # of each configuration (scaled from its last snapshot's time to the budget: relMSE falls as
@@ -18,7 +18,7 @@ T=${1:?seconds}; S=${2:?size}; RUNS=${3:?runs}
 shift 3
 SCENES=${*:-"cornell-box furnace ajar-door slit-room open-room glossy-glass glossy-floor glass-lamp outdoor env-constant env-white-map env-objects thin-glass"}
 OUT=${OUT:-$(mktemp -d)}
-FIXED=${FIXED:-bdpt,pcbpt-k1,pcbpt-k2,pcbpt-k4,pcbpt-k8}
+FIXED=${FIXED:-bdpt,pt,pcbpt-k1,pcbpt-k2,pcbpt-k4,pcbpt-k8}
 mkdir -p "$OUT"
 far=""
 [ -n "${HOST:-}" ] && far="--host $HOST --token-file $TOKEN"
@@ -35,7 +35,7 @@ done
 python3 - "$OUT" $SCENES <<'PY'
 import json, os, re, statistics, sys
 out, scenes = sys.argv[1], sys.argv[2:]
-cfgs = ("bdpt", "pcbpt-k1", "pcbpt-k2", "pcbpt-k4", "pcbpt-k8", "auto")
+cfgs = ("bdpt", "pt", "pcbpt-k1", "pcbpt-k2", "pcbpt-k4", "pcbpt-k8", "auto")
 print("scene          " + "".join("%-11s" % c.replace("pcbpt-", "") for c in cfgs) +
       "auto/best auto/bdpt per-run auto/bdpt  errors     auto chose (pilot worker-s)")
 for sc in scenes:

@@ -157,7 +157,7 @@ assert abs(last["worker_seconds"] - b["snapshots"][-1]["worker_seconds"]) < 1.0,
 # slice of worker-seconds (Settings.min_iterations)
 its = [int(part.split(" it ")[1]) for part in a["auto"].split("; ")[1:]]
 assert len(its) >= 3 and min(its) >= 2, a["auto"]
-assert "; bdpt eff " in a["auto"] and "; pcbpt K=1 eff " in a["auto"], a["auto"]
+assert "; bdpt eff " in a["auto"] and "; pt eff " in a["auto"] and "; pcbpt K=1 eff " in a["auto"], a["auto"]
 PY
 fi
 [ $fail = 0 ] && echo "ok   study with auto"

@@ -1,9 +1,9 @@
 # auto_farm.sh: `submit --method auto` on a two-worker farm: the pilot's candidates run as
 # short jobs of their own that both workers render, the final job carries the winner's
-# settings (BDPT or PCBPT) and the pilot's report in `status --json` ("auto") and in the EXR
+# settings (BDPT, PT or PCBPT) and the pilot's report in `status --json` ("auto") and in the EXR
 # header (pcbpt.auto). The job's iteration count is its own, and its image mixes in the films
 # of the pilot's candidates rendered whatever the data says (BDPT, K = 1, K = 2, and K = 1
-# with the raised MIS count) with the weight fixed at submission: a / (a + 64), a their
+# with the raised MIS count; not PT's) with the weight fixed at submission: a / (a + 64), a their
 # iterations (coordinator/job_prior.c).
 # A second job's pilot films survive a SIGKILL of the coordinator (the saved prior).
 . "$(dirname "$0")/lib.inc"
@@ -18,7 +18,7 @@ python3 - "$T/st.json" <<'PY' || fail "status --json of the final job: $(cat "$T
 import json, sys
 j = json.load(open(sys.argv[1]))
 assert j["auto"] and j["auto"].startswith("chose "), j
-assert j["method"] in ("bdpt", "pcbpt"), j
+assert j["method"] in ("bdpt", "pt", "pcbpt"), j
 assert j["iterations"] == 64, j
 PY
 "$B/pcbpt-coord" list $H --json > "$T/list.json"
@@ -26,9 +26,10 @@ python3 - "$T/list.json" "$J" <<'PY' || fail "pilot jobs: $(cat "$T/list.json")"
 import json, sys
 jobs = json.load(open(sys.argv[1]))
 pilots = [j for j in jobs if "[auto pilot: " in j["name"]]
-assert len(pilots) >= 3, pilots            # bdpt, pcbpt K=1, K=2 at least
+assert len(pilots) >= 4, pilots            # bdpt, pt, pcbpt K=1, K=2 at least
 assert all(j["state"] == "done" and j["id" if "id" in j else "job"] < int(sys.argv[2]) for j in pilots), pilots
 assert any(j["name"].endswith("[auto pilot: bdpt]") for j in pilots), pilots
+assert any(j["name"].endswith("[auto pilot: pt]") for j in pilots), pilots
 PY
 for p in $(python3 -c "import json,sys; print(' '.join(str(j['job']) for j in json.load(open('$T/list.json')) if '[auto pilot' in j['name']))"); do
   grep -q "job $p: range .* -> w" "$T/coord.log" || fail "pilot job $p was not rendered by a worker"

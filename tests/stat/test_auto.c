@@ -11,6 +11,9 @@
  * - pooled own noise: that mean is taken around each pixel, not at it, so a candidate whose rare
  *   large contributions are also in the pool (shared paths, stage 4's twin) is not favoured
  *   (equal heavy-tailed estimators, tolerances from their spread over 40 seeds).
+ * - PT disagreement: PT, whose paths are its own, carries in its relMSE what its image disagrees
+ *   with the others' beyond both variances (an honest PT measures as BDPT does over 40 seeds; one
+ *   that missed a tenth of the image loses), and wins only past PC_PILOT_PT_MARGIN.
  * - picks the clear winner on a real scene: ajar-door, where PCBPT K=1's relMSE per iteration is
  *   about half BDPT's (48x48, 64 iterations, seeds 5-7, each image's own estimate: 0.427, 0.457,
  *   0.433 against 0.197, 0.220, 0.243) at a lower cost per iteration, so no timing noise of a
@@ -30,6 +33,7 @@
 #include "pilot.h"
 #include "rng.h"
 #include "stat_util.h"
+
 
 static void set_candidate(pc_pilot *p, pc_method m, int k, double relmse, double seconds) {
   pc_pilot_candidate *c = &p->c[p->n++];
@@ -177,17 +181,64 @@ static void test_pooled_own_noise(void **state) {
   pc_pilot_free(&p);
 }
 
+/* PT renders paths of its own, so its few iterations can miss light the others found (a caustic):
+ * its image is then darker there and quieter too. Its relMSE carries the excess of its
+ * disagreement with the others' mean over both images' variances. Here BDPT and PCBPT K = 1 are
+ * the same heavy-tailed image (shared paths) and PT an independent one of the same estimator:
+ * an honest PT must measure as BDPT does: over seeds s = 1..40 (images 3 s, and 3 s + 1 for PT)
+ * PT's relMSE over BDPT's has mean 1.0074 and sd 0.0308 (1.018 when the excess's positive part
+ * was added whatever its noise), so the mean over the 40 must be within 4 sd / sqrt(40) of 1.
+ * A PT that found nothing in the top tenth of the image (its mean and variance 0 there) must
+ * measure far worse (seed 1: 0.214 against 0.026), and lose although its own variance would
+ * otherwise make it about twice as efficient. */
+static void test_pt_disagreement(void **state) {
+  (void)state;
+  enum { W = 64, H = 64, N = 14, SEEDS = 40, DARK_ROWS = 6 };
+  const double q = 0.2, x = 2; /* relMSE of the mean 0.023, as a pilot's (docs/auto.md) */
+  static float mean[2][W * H * 3], var[2][W * H * 3];
+  const double sd_honest = 0.0308;
+  double sum = 0, sum2 = 0;
+  pc_err e = {0};
+  for (int seed = 1; seed <= SEEDS; seed++) {
+    pc_pilot p = {0};
+    set_candidate(&p, PC_METHOD_BDPT, 1, -1, 1.0);
+    set_candidate(&p, PC_METHOD_PT, 0, -1, 1.0);
+    set_candidate(&p, PC_METHOD_PCBPT, 1, -1, 1.0);
+    for (int i = 0; i < 3; i++) p.c[i].iterations = N;
+    heavy_tailed_image(3 * (uint64_t)seed, W, H, N, q, x, mean[0], var[0]);
+    heavy_tailed_image(3 * (uint64_t)seed + 1, W, H, N, q, x, mean[1], var[1]);
+    for (int i = 0; i < 3; i++) assert_int_equal(pc_pilot_keep_image(&p.c[i], W, H, mean[i == 1], var[i == 1], &e), 0);
+    pc_pilot_choose(&p);
+    double r = p.c[1].relmse / p.c[0].relmse;
+    sum += r;
+    sum2 += r * r;
+    if (seed == 1) {
+      /* the dark top rows: PT's cost halved, so that without the excess it would win 2x */
+      for (int k = 0; k < DARK_ROWS * W * 3; k++) p.c[1].mean[k] = p.c[1].var[k] = 0;
+      p.c[1].seconds = 0.5;
+      pc_pilot_choose(&p);
+      printf("PT dark in the top %d rows: relMSE %.4f against BDPT's %.4f\n", DARK_ROWS, p.c[1].relmse, p.c[0].relmse);
+      assert_true(p.c[1].relmse > 3 * p.c[0].relmse);
+      assert_int_not_equal(p.c[p.best].set.method, PC_METHOD_PT);
+    }
+    pc_pilot_free(&p);
+  }
+  double m = sum / SEEDS, sd = sqrt(fmax(sum2 / SEEDS - m * m, 0) * SEEDS / (SEEDS - 1));
+  printf("honest PT over BDPT: mean %.4f sd %.4f over %d seeds\n", m, sd, SEEDS);
+  assert_true(fabs(m - 1) < 4 * sd_honest / sqrt(SEEDS));
+}
+
 /* Scripted efficiencies: relMSE per iteration by K, and by K with the raised MIS count (0: as
  * with the base count) (cost 1 s per candidate). */
 typedef struct script {
-  double bdpt, k[9], raised[9];
+  double bdpt, pt, k[9], raised[9]; /* pt 0: PT cannot tell its error */
   int calls, raised_calls;
   uint64_t job_seed;
   bool seed_leaked;
-  /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count):
+  /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count, 10 PT):
    * iterations and salt */
-  int nbatch[10];
-  uint64_t batch_it[10][2], batch_salt[10][2];
+  int nbatch[11];
+  uint64_t batch_it[11][2], batch_salt[11][2];
 } script;
 
 static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
@@ -198,11 +249,13 @@ static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t ite
     const pc_render_settings *set = &c[i].set;
     s->calls++;
     if ((set->seed ^ salt) == s->job_seed) s->seed_leaked = true;
-    int key = set->method == PC_METHOD_BDPT ? 0 : c[i].mis_raised ? 9 : set->pcbpt_k, b = s->nbatch[key]++;
+    int key = set->method == PC_METHOD_BDPT ? 0 : set->method == PC_METHOD_PT ? 10 : c[i].mis_raised ? 9 : set->pcbpt_k;
+    int b = s->nbatch[key]++;
     if (b < 2) s->batch_it[key][b] = iterations, s->batch_salt[key][b] = salt;
     out[i].iterations = iterations;
     out[i].seconds = 0.5 * (double)iterations;
     out[i].own_relmse = set->method == PC_METHOD_BDPT ? s->bdpt : s->k[set->pcbpt_k];
+    if (set->method == PC_METHOD_PT) out[i].own_relmse = s->pt > 0 ? s->pt : -1;
     if (c[i].mis_raised) {
       s->raised_calls++;
       assert_true(set->mis_mode == PC_MIS_COUNT && set->mis_count == PC_PILOT_RAISED_COUNT);
@@ -228,12 +281,12 @@ static void run_script(script *s, double slice, pc_pilot *p) {
 static void test_grid(void **state) {
   (void)state;
   pc_pilot p;
-  /* stage 1 is BDPT, K = 1 and K = 2 (a slice too small for a second batch). K=2 worse than K=1:
+  /* stage 1 is BDPT, PT, K = 1 and K = 2 (a slice too small for a second batch). K=2 worse than K=1:
    * no K=4 or 8 (however good they would have been); the job's uniform mix is kept; no stage 4
    * either (however good the raised count would have been): stage 1 took the whole budget */
   script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}, .raised = {[1] = 0.01}};
   run_script(&a, 0.1, &p);
-  assert_int_equal(a.calls, 3);
+  assert_int_equal(a.calls, 4);
   assert_int_equal(a.raised_calls, 0);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
@@ -243,7 +296,7 @@ static void test_grid(void **state) {
    * tries K=1 with the raised count, which is no better, so the base count stays */
   script a2 = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
   run_script(&a2, 2.0, &p);
-  assert_int_equal(a2.calls, 8);
+  assert_int_equal(a2.calls, 10);
   assert_int_equal(a2.raised_calls, 2);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
@@ -254,14 +307,15 @@ static void test_grid(void **state) {
    * K=4 with it would win, which shows that it is never tried */
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[1] = 0.5, [4] = 0.08}};
   run_script(&b, 2.0, &p);
-  assert_int_equal(b.calls, 12);
+  assert_int_equal(b.calls, 14);
   assert_int_equal(b.nbatch[9], 2);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   assert_false(p.c[p.best].mis_raised);
   for (int i = 0; i < p.n; i++) {
     assert_true(!p.c[i].mis_raised || p.c[i].set.pcbpt_k == 1);
-    assert_int_equal(p.c[i].counts, p.c[i].set.method == PC_METHOD_BDPT || p.c[i].set.pcbpt_k <= 2);
+    assert_int_equal(p.c[i].counts, p.c[i].set.method == PC_METHOD_BDPT ||
+                                        (p.c[i].set.method == PC_METHOD_PCBPT && p.c[i].set.pcbpt_k <= 2));
   }
   pc_pilot_free(&p);
   /* K=2 better than K=1 but within the margin: K=1, and K=4 is not tried; the raised count
@@ -269,44 +323,58 @@ static void test_grid(void **state) {
   script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01},
               .raised = {[1] = 0.4 / (0.5 * (1 + PC_PILOT_COUNT_MARGIN))}};
   run_script(&d, 2.0, &p);
-  assert_int_equal(d.calls, 8);
+  assert_int_equal(d.calls, 10);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
   /* BDPT best, also against the raised count */
   script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}, .raised = {[1] = 0.2}};
   run_script(&c, 2.0, &p);
-  assert_int_equal(c.calls, 8);
+  assert_int_equal(c.calls, 10);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
   pc_pilot_free(&p);
   /* BDPT better than K=1 with the base count, but not than K=1 with the raised one */
   script f = {.bdpt = 0.2, .k = {[1] = 0.22, [2] = 0.5}, .raised = {[1] = 0.1}};
   run_script(&f, 2.0, &p);
-  assert_int_equal(f.calls, 8);
+  assert_int_equal(f.calls, 10);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_true(p.c[p.best].mis_raised);
+  pc_pilot_free(&p);
+  /* PT more efficient than the winner, but within PC_PILOT_PT_MARGIN: the winner stays; past it, PT */
+  script g = {.bdpt = 0.2, .pt = 0.2 / (0.5 * (1 + PC_PILOT_PT_MARGIN)), .k = {[1] = 0.4, [2] = 0.5}};
+  run_script(&g, 2.0, &p);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
+  pc_pilot_free(&p);
+  script h = {.bdpt = 0.2, .pt = 0.2 / (1.01 * PC_PILOT_PT_MARGIN), .k = {[1] = 0.4, [2] = 0.5}};
+  run_script(&h, 2.0, &p);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_PT);
+  pc_pilot_free(&p);
+  /* ... also past a PCBPT winner, which PT must beat rather than BDPT */
+  script i = {.bdpt = 0.4, .pt = 0.2, .k = {[1] = 0.1, [2] = 0.5}};
+  run_script(&i, 2.0, &p);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   pc_pilot_free(&p);
 }
 
 /* Every candidate renders the same iterations: the first batch's floor, then what the rest of
- * stage 1's 5 slices buys at the three candidates' cost (here (5 x 2 - 3 x 1) / (3 x 0.5) = 4
+ * stage 1's 5 slices buys at the four candidates' cost (here (5 x 2 - 4 x 1) / (4 x 0.5) = 3
  * iterations), and K = 4 and 8 and the raised count, tried later, the same two batches. */
 static void test_matched(void **state) {
   (void)state;
   pc_pilot p;
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
   run_script(&b, 2.0, &p);
-  assert_int_equal(b.calls, 12);
-  assert_int_equal(p.n, 6);
-  for (int key = 0; key <= 9; key = key == 8 ? 9 : key ? 2 * key : 1) {
+  assert_int_equal(b.calls, 14);
+  assert_int_equal(p.n, 7);
+  for (int key = 0; key <= 10; key = key == 8 ? 9 : key == 9 ? 10 : key ? 2 * key : 1) {
     assert_int_equal(b.nbatch[key], 2);
     assert_int_equal(b.batch_it[key][0], 2);
-    assert_int_equal(b.batch_it[key][1], 4);
+    assert_int_equal(b.batch_it[key][1], 3);
     assert_int_equal(b.batch_salt[key][0], b.batch_salt[0][0]);
     assert_int_equal(b.batch_salt[key][1], b.batch_salt[0][1]);
   }
   assert_true(b.batch_salt[0][0] != b.batch_salt[0][1]);
-  for (int i = 0; i < p.n; i++) assert_int_equal(p.c[i].iterations, 6);
+  for (int i = 0; i < p.n; i++) assert_int_equal(p.c[i].iterations, 5);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
   pc_pilot_free(&p);
 }
@@ -456,6 +524,7 @@ int main(void) {
       cmocka_unit_test(test_choose_raised),
       cmocka_unit_test(test_pooled),
       cmocka_unit_test(test_pooled_own_noise),
+      cmocka_unit_test(test_pt_disagreement),
       cmocka_unit_test(test_grid),
       cmocka_unit_test(test_matched),
       cmocka_unit_test(test_picks_winner),
