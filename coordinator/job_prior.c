@@ -5,7 +5,8 @@
  * the group's film (and, with a lasting store, saves a copy for a restart), and every image it
  * shows is the mix of that film and its own. The pilot's weight is a / (a + x): a is its
  * amount in the unit of the job's budget (iterations, worker-seconds or seconds, fixed by the
- * client at submission) and x the job's progress in that unit, at most the budget. So the
+ * client at submission: the counted candidates' sum over their number, since they share their
+ * paths, pc_pilot_counted_share) and x the job's progress in that unit, at most the budget. So the
  * final image's weight is fixed before the pilot's values are seen: whichever method they
  * chose, the image is a fixed mix of two unbiased estimates, hence unbiased. (A weight from
  * the job's iterations or worker-seconds at its end would not be: a time budget buys as many

@@ -147,9 +147,10 @@ int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report
     req->set.seed = seed;
     pc_pilot_report(&pilot, report, size);
     *pilot_seconds = pilot.seconds;
-    /* in the unit of the job's budget (coordinator/job_prior.c) */
-    if (fp->pilot_group && req->spp > 0) *prior_amount = (double)fp->counted_iterations;
-    else if (fp->pilot_group && fp->farm_size > 0) *prior_amount = fp->counted_worker_seconds / fp->farm_size;
+    /* in the unit of the job's budget (coordinator/job_prior.c), what the mix is worth */
+    double share = pc_pilot_counted_share(&pilot);
+    if (fp->pilot_group && req->spp > 0) *prior_amount = share * (double)fp->counted_iterations;
+    else if (fp->pilot_group && fp->farm_size > 0) *prior_amount = share * fp->counted_worker_seconds / fp->farm_size;
     if (req->seconds > 0) req->seconds = pc_pilot_remaining(req->seconds, pilot.seconds);
   }
   pc_pilot_free(&pilot);

@@ -93,7 +93,8 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   ac->set.seed = g->seed;
   ac->pilot_worker_seconds = fp.worker_seconds;
   ac->pilot_group = fp.pilot_group;
-  ac->prior_amount = fp.counted_worker_seconds; /* auto's budget is worker-seconds */
+  /* auto's budget is worker-seconds; what the mix is worth */
+  ac->prior_amount = pc_pilot_counted_share(&pilot) * fp.counted_worker_seconds;
   pilot.seconds = fp.worker_seconds; /* the report gives the cost charged to the budget */
   pc_pilot_report(&pilot, ac->report, sizeof ac->report);
   pc_pilot_free(&pilot);

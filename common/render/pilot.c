@@ -407,6 +407,12 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   return PC_OK;
 }
 
+double pc_pilot_counted_share(const pc_pilot *p) {
+  int n = 0;
+  for (int i = 0; i < p->n; i++) n += p->c[i].counts && p->c[i].iterations > 0;
+  return n ? 1.0 / n : 0.0;
+}
+
 void pc_pilot_report(const pc_pilot *p, char *buf, size_t size) {
   bool cpu = cpu_known(p);
   size_t n = (size_t)snprintf(buf, size, "chose %s (pilot %.2f s), cost in %s", p->c[p->best].label, p->seconds,

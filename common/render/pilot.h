@@ -141,6 +141,15 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_secon
  * variances (used by pc_pilot_run; exposed for the tests). */
 void pc_pilot_choose(pc_pilot *p);
 
+/* The share of the counted candidates' summed work (iterations or worker-seconds) that their
+ * mixed film is worth as the job's prior (coordinator/job_prior.c): 1 / their number. They
+ * render the same iterations with the same seeds, so they share their paths and their images
+ * are strongly correlated (open-room, BDPT and PCBPT K = 1 of one seed at 128x128: 0.82; stage
+ * 4's twin renders the very same connections), and their mean is worth about one of them, not
+ * all. Weighted by their sum, the mix cost the job more than it added (docs/auto.md). 0 when
+ * none counts. Fixed by which candidates count, which the budget alone decides. */
+double pc_pilot_counted_share(const pc_pilot *p);
+
 /* One line: "chose pcbpt K=2 (pilot 2.1 s); bdpt eff 10.2 relMSE 0.031 ms/it 41.0 it 12; ..." */
 void pc_pilot_report(const pc_pilot *p, char *buf, size_t size);
 

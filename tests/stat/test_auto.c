@@ -473,7 +473,8 @@ static void test_unbiased(void **state) {
     pc_render_settings chosen = p.c[p.best].set;
     chosen.seed = base.seed;
     /* the job's film, then the mix: the counted candidates by iterations (as the coordinator
-     * folds a pilot group), and that with weight a / (a + N), a their iterations, N the spp */
+     * folds a pilot group), and that with weight a / (a + N), a their iterations times
+     * pc_pilot_counted_share, N the spp */
     pc_film job, pilot, shown;
     assert_int_equal(pc_film_init(&job, RES, RES, 0, &e), 0);
     assert_int_equal(pc_film_init(&pilot, RES, RES, 0, &e), 0);
@@ -492,6 +493,8 @@ static void test_unbiased(void **state) {
       if (p.c[i].counts) counted[nc++] = (pc_film_part){&l.films[i], (double)p.c[i].iterations / a};
     assert_int_equal(nc, 4); /* BDPT, K = 1, K = 2 and K = 1 with the raised count (no slice: room) */
     assert_int_equal(pc_film_mix(&pilot, counted, nc, &e), 0);
+    assert_true(pc_pilot_counted_share(&p) == 0.25);
+    a *= pc_pilot_counted_share(&p);
     pc_film_part parts[] = {{&pilot, a / (a + ITERATIONS)}, {&job, ITERATIONS / (a + ITERATIONS)}};
     assert_int_equal(pc_film_mix(&shown, parts, 2, &e), 0);
     size_t nv = (size_t)RES * RES * 3;
