@@ -292,6 +292,8 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.pilot_weight", .type = PC_ATTR_DOUBLE, .d = pilot_weight},
     {.name = "pcbpt.pilot_iterations", .type = PC_ATTR_DOUBLE,
      .d = j->prior_ready ? (double)j->prior.layers[PC_LAYER_PT].count : 0.0},
+    /* what the weight is made of: the pilot's amount a, in the unit of the job's budget */
+    {.name = "pcbpt.pilot_amount", .type = PC_ATTR_DOUBLE, .d = j->prior_ready ? j->prior_amount : 0.0},
     {.name = "software", .type = PC_ATTR_STRING, .s = version},
     {.name = "pcbpt.pcbpt_flags", .type = PC_ATTR_STRING, .s = pcbpt_flags}, /* only when set */
     {.name = "pcbpt.auto", .type = PC_ATTR_STRING, .s = j->auto_report},     /* only when set */

@@ -39,12 +39,12 @@ done
 grep -aq "pcbpt.auto" "$T/out.exr" || fail "no pcbpt.auto in the image header"
 grep -q "job $J: --method auto chose " "$T/coord.log" || fail "the coordinator's log does not say what auto chose"
 grep -q "job $J: its image includes its pilot's" "$T/coord.log" || fail "the job did not take its pilot's films"
-# the pilot's weight: its counted iterations over their number, a (pcbpt.pilot_iterations),
-# against the 64 of the job
+# the pilot's weight: its amount a (pcbpt.pilot_amount), its counted iterations (3 or 4 candidates
+# of at least 2 each, pcbpt.pilot_iterations) over their number, against the 64 of the job
 check_weight() { # exr spp
-  read -r _ w a it < <("$B/tests/farm_tool" exr "$1" pcbpt.pilot_weight pcbpt.pilot_iterations pcbpt.iterations)
-  python3 -c "import sys; w, a, n, spp = map(float, sys.argv[1:]); sys.exit(not (a >= 2 and n == spp and abs(w - a / (a + spp)) < 1e-9))" \
-    "$w" "$a" "$it" "$2" || fail "$1: pilot weight $w with $a pilot iterations and $it of the job's (want a/(a+$2))"
+  read -r _ w a pi it < <("$B/tests/farm_tool" exr "$1" pcbpt.pilot_weight pcbpt.pilot_amount pcbpt.pilot_iterations pcbpt.iterations)
+  python3 -c "import sys; w, a, pi, n, spp = map(float, sys.argv[1:]); sys.exit(not (a >= 2 and pi in (3 * a, 4 * a) and n == spp and abs(w - a / (a + spp)) < 1e-9))" \
+    "$w" "$a" "$pi" "$it" "$2" || fail "$1: pilot weight $w with amount $a, $pi pilot iterations and $it of the job's (want a/(a+$2), a = its iterations over 3 or 4)"
 }
 check_weight "$T/out.exr" 64
 # a long job's pilot films are saved with it, so a restarted coordinator still mixes them in
