@@ -170,7 +170,8 @@ void pc_pcbpt_pixel(pc_tctx *c, int x, int y) {
   /* The lookups' memo entries start loading now, so their misses overlap this pixel's NEE rays
    * (ajar-door with 3 candidates: 1-1.5% of an iteration in three alternated pairs) */
   if (c->pcbpt->store && set->pmf_mode != PC_PMF_EXACT)
-    for (int t = 2; t <= ne && t <= c->max_segments; t++) pc_irec_prefetch(c->pcbpt->store, c->thread, c->eye_path[t - 1].p);
+    for (int t = 2; t <= ne && t <= c->max_segments; t++)
+      pc_irec_prefetch(c->pcbpt->store, c->thread, c->eye_path[t - 1].p);
   for (int t = 2; t <= ne && t <= c->max_segments; t++) {
     const pc_path_vertex *ev = &c->eye_path[t - 1];
     if (ev->delta) continue;

@@ -362,8 +362,9 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   /* stage 1: BDPT, PT, K = 1 and K = 2, whatever the data says, so the iterations of BDPT and
    * PCBPT may count in the image; all of them on the same iterations, where the bidirectional
    * ones share their eye and light paths (PCBPT's connections draw from a stream of their own),
-   * so the noise of the strategies they share cancels in the comparison: with a batch each of its own, slit-room's K = 1 met a
-   * light path through the slit that K = 2's batch did not, and K = 2 looked 170x better */
+   * so the noise of the strategies they share cancels in the comparison: with a batch each of
+   * its own, slit-room's K = 1 met a light path through the slit that K = 2's batch did not, and
+   * K = 2 looked 170x better */
   add_candidate(p, base, PC_METHOD_BDPT, 0, 0.f, true);
   /* PT is rendered whatever the data says too, but does not count: where it fails (caustics),
    * the rare paths that find the light are fireflies its few pilot iterations would put into

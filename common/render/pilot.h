@@ -2,8 +2,8 @@
  * (BDPT, PT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid, then K = 1
  * with a raised MIS count for its inner strategies) on the same
  * iterations (the same seeds, so the bidirectional ones share their eye and light paths and the
- * noise those carry), measures its efficiency 1 / (estimated relMSE x render time) from the spread of its
- * iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
+ * noise those carry), measures its efficiency 1 / (estimated relMSE x render time) from the
+ * spread of its iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
  * its own, and the job is rendered afterwards with the winner's fixed settings; the candidates
  * rendered whatever the data says may be mixed into the image with a weight fixed in advance
  * (coordinator/job_prior.c). How a batch of candidates is rendered is the caller's (short farm

@@ -34,7 +34,6 @@
 #include "rng.h"
 #include "stat_util.h"
 
-
 static void set_candidate(pc_pilot *p, pc_method m, int k, double relmse, double seconds) {
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
