@@ -164,6 +164,11 @@ bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shadi
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out);
 /* True if every lobe is a Dirac delta (such vertices are never connection endpoints). */
 bool pc_bsdf_is_delta(const pc_material *m);
+/* True if some lobe of materials[i] is a Dirac delta (a smooth conductor, dielectric or plastic
+ * coat, a coating, a mask's pass-through, or a wrapped or mixed material with one). Reads the
+ * nested indices, so it holds before pc_scene_build too; an index out of [0, n) counts as
+ * none. */
+bool pc_material_has_delta(const pc_material *materials, int n, int i);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
  * point (not on depth or directions) so a reverse pdf can include it. */
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);

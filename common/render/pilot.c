@@ -355,8 +355,8 @@ static uint64_t second_batch(const pc_pilot *p, double slice) {
   return per_it > 0 && left >= 2 * per_it ? (uint64_t)(left / per_it) : 0;
 }
 
-int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint64_t min_it, pc_pilot_render_fn render,
-                 void *user, pc_err *e) {
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, double slice, uint64_t min_it,
+                 pc_pilot_render_fn render, void *user, pc_err *e) {
   memset(p, 0, sizeof *p);
   double t0 = now_s();
   /* stage 1: BDPT, PT, K = 1 and K = 2, whatever the data says, so the iterations of BDPT and
@@ -369,7 +369,7 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice, uint
   /* PT is rendered whatever the data says too, but does not count: where it fails (caustics),
    * the rare paths that find the light are fireflies its few pilot iterations would put into
    * the chosen method's image. PT renders its own paths, not the bidirectional ones. */
-  add_candidate(p, base, PC_METHOD_PT, 0, 0.f, false);
+  if (with_pt) add_candidate(p, base, PC_METHOD_PT, 0, 0.f, false);
   add_candidate(p, base, PC_METHOD_PCBPT, 1, 0.f, true);
   add_candidate(p, base, PC_METHOD_PCBPT, 2, 0.f, true);
   uint64_t second = 0;

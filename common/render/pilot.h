@@ -129,10 +129,12 @@ uint64_t pc_pilot_seed(uint64_t job_seed);
  * PC_PILOT_K_MARGIN; where stage 1 had room for its second batch, stage 4 renders K = 1 with the
  * raised MIS count on them too. Picks that PCBPT K (K = 1 with the raised count where that is
  * better by PC_PILOT_COUNT_MARGIN), or BDPT unless the PCBPT candidate beats it by
- * PC_PILOT_BDPT_MARGIN, then PT if it beats that winner by PC_PILOT_PT_MARGIN. Free with
+ * PC_PILOT_BDPT_MARGIN, then PT if it beats that winner by PC_PILOT_PT_MARGIN. PT is a
+ * candidate only `with_pt`: where it cannot sample every path of the scene
+ * (pc_scene_pt_complete), its image lacks light however long it runs. Free with
  * pc_pilot_free, also after a failure. */
-int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, double slice_seconds, uint64_t min_iterations,
-                 pc_pilot_render_fn render, void *user, pc_err *e);
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, double slice_seconds,
+                 uint64_t min_iterations, pc_pilot_render_fn render, void *user, pc_err *e);
 
 /* Measures every candidate against the pooled mean of their images (candidates without an
  * image keep their own estimate) and picks p->best by pc_pilot_run's rule: the PCBPT K reached

@@ -22,6 +22,9 @@ typedef struct pc_render_request {
   /* --method auto, or no --method on a scene whose integrator is pcbpt: a pilot chooses the
    * method and PCBPT parameters (pilot.h); set.method stays pcbpt until it has. */
   bool method_auto;
+  /* The scene lets PT sample every path (pc_scene_pt_complete), so auto may choose it: set by
+   * pc_render_request_apply_scene, false until then. */
+  bool pt_complete;
 } pc_render_request;
 
 void pc_render_request_default(pc_render_request *r);

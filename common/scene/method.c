@@ -1,4 +1,5 @@
-/* method.c: names of the rendering methods, for the CLI, the integrator element and headers. */
+/* method.c: names of the rendering methods, for the CLI, the integrator element and headers,
+ * and which scenes a method cannot render in full. */
 #include <string.h>
 
 #include "scene.h"
@@ -28,4 +29,13 @@ int pc_method_parse(const char *name, pc_method *out) {
       return 0;
     }
   return PC_EINVAL;
+}
+
+bool pc_scene_pt_complete(const pc_scene *s) {
+  bool delta_light = false;
+  for (int i = 0; i < s->nlights && !delta_light; i++) delta_light = pc_light_is_delta_pos(&s->lights[i]);
+  if (!delta_light) return true;
+  for (int i = 0; i < s->nshapes; i++)
+    if (pc_material_has_delta(s->materials, s->nmaterials, s->shapes[i].material)) return false;
+  return true;
 }

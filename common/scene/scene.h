@@ -37,7 +37,7 @@ typedef struct pc_motion {
   pc_shape object;
 } pc_motion;
 
-/* PC_METHOD_AUTO is a choice, not an estimator: a pilot resolves it to bdpt or pcbpt with
+/* PC_METHOD_AUTO is a choice, not an estimator: a pilot resolves it to pt, bdpt or pcbpt with
  * parameters (common/render/pilot.h) before anything renders; the renderer refuses it. */
 typedef enum { PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_METHOD_PCBPT, PC_METHOD_AUTO } pc_method;
 
@@ -123,6 +123,14 @@ void pc_scene_free(pc_scene *s);
 
 const char *pc_method_name(pc_method m);
 int pc_method_parse(const char *name, pc_method *out); /* "pt" or "path", "lt", "bdpt", ... */
+/* Whether path tracing (eye paths with next-event estimation) can sample every path of the
+ * scene. It cannot when a point or spot light shines on a surface through a delta lobe (a
+ * caustic of a glass or mirror, light through a thin pane or a mask's holes): such a path
+ * reaches the light only by a connection from its last surface vertex, which a delta lobe does
+ * not make, and an eye path never hits a light that sits at one point. Its image then lacks that
+ * light, however long it runs, while the bidirectional methods' light sub-paths find it. Judged
+ * from the shapes' materials and the lights, before or after pc_scene_build. */
+bool pc_scene_pt_complete(const pc_scene *s);
 
 /* Motion blur (scene_motion.c). True if the scene changes during the shutter. */
 bool pc_scene_moves(const pc_scene *s);

@@ -234,6 +234,7 @@ typedef struct script {
   int calls, raised_calls;
   uint64_t job_seed;
   bool seed_leaked;
+  bool no_pt; /* the scene has paths PT cannot sample: pc_pilot_run without PT */
   /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count, 10 PT):
    * iterations and salt */
   int nbatch[11];
@@ -270,7 +271,7 @@ static void run_script(script *s, double slice, pc_pilot *p) {
   base.method = PC_METHOD_PCBPT;
   base.seed = s->job_seed = 77;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(p, &base, slice, 2, scripted, s, &e), 0);
+  assert_int_equal(pc_pilot_run(p, &base, !s->no_pt, slice, 2, scripted, s, &e), 0);
   assert_false(s->seed_leaked);
   char line[1024];
   pc_pilot_report(p, line, sizeof line);
@@ -347,6 +348,13 @@ static void test_grid(void **state) {
   script h = {.bdpt = 0.2, .pt = 0.2 / (1.01 * PC_PILOT_PT_MARGIN), .k = {[1] = 0.4, [2] = 0.5}};
   run_script(&h, 2.0, &p);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PT);
+  pc_pilot_free(&p);
+  /* the same where the scene has paths PT cannot sample: PT is not rendered, BDPT wins */
+  script h2 = {.bdpt = 0.2, .pt = 0.2 / (1.01 * PC_PILOT_PT_MARGIN), .k = {[1] = 0.4, [2] = 0.5}, .no_pt = true};
+  run_script(&h2, 2.0, &p);
+  assert_int_equal(h2.nbatch[10], 0);
+  for (int j = 0; j < p.n; j++) assert_int_not_equal(p.c[j].set.method, PC_METHOD_PT);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
   pc_pilot_free(&p);
   /* ... also past a PCBPT winner, which PT must beat rather than BDPT */
   script i = {.bdpt = 0.4, .pt = 0.2, .k = {[1] = 0.1, [2] = 0.5}};
@@ -439,7 +447,7 @@ static void test_picks_winner(void **state) {
   local l = {.scene = &scene};
   pc_pilot p;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(&p, &req.set, 0, 4, local_render, &l, &e), 0);
+  assert_int_equal(pc_pilot_run(&p, &req.set, req.pt_complete, 0, 4, local_render, &l, &e), 0);
   local_free(&l);
   char line[1024];
   pc_pilot_report(&p, line, sizeof line);
@@ -468,7 +476,7 @@ static void test_unbiased(void **state) {
     local l = {.scene = &scene};
     pc_pilot p;
     pc_err e = {0};
-    assert_int_equal(pc_pilot_run(&p, &base, 0, 2, local_render, &l, &e), 0);
+    assert_int_equal(pc_pilot_run(&p, &base, req.pt_complete, 0, 2, local_render, &l, &e), 0);
     pc_render_settings chosen = p.c[p.best].set;
     chosen.seed = base.seed;
     /* the job's film, then the mix: the counted candidates by iterations (as the coordinator

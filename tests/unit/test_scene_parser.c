@@ -617,6 +617,65 @@ static void test_warnings(void **state) {
   assert_int_equal(failures, 0);
 }
 
+/* PT cannot sample a path from a point or spot light through a delta lobe: with such a light,
+ * any shape with a delta lobe (also wrapped or mixed in) makes the scene incomplete for it; an
+ * area light, or only rough and diffuse materials, leave it complete. */
+static void test_pt_complete(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+#define POINT "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"2\" z=\"0\"/></emitter>"
+#define SPOT "<emitter type=\"spot\"/>"
+#define AREA "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>"
+  static const struct {
+    const char *light, *bsdf;
+    bool complete;
+  } cases[] = {
+      {POINT, "<bsdf type=\"diffuse\"/>", true},
+      {POINT, "<bsdf type=\"roughconductor\"/>", true},
+      {POINT, "<bsdf type=\"roughdielectric\"/>", true},
+      {POINT, "<bsdf type=\"dielectric\"/>", false},
+      {POINT, "<bsdf type=\"thindielectric\"/>", false},
+      {SPOT, "<bsdf type=\"conductor\"/>", false},
+      {POINT, "<bsdf type=\"plastic\"/>", false},
+      {POINT, "<bsdf type=\"roughplastic\"/>", true},
+      {POINT, "<bsdf type=\"bumpmap\"><bsdf type=\"conductor\"/><texture type=\"checkerboard\"/></bsdf>", false},
+      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"diffuse\"/></bsdf>", true},
+      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"conductor\"/></bsdf>", false},
+      {POINT, "<bsdf type=\"coating\"><bsdf type=\"diffuse\"/></bsdf>", false},
+      {POINT, "<bsdf type=\"mask\"><bsdf type=\"diffuse\"/><float name=\"opacity\" value=\"0.5\"/></bsdf>", false},
+      {POINT, "<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5, 0.5\"/><bsdf type=\"diffuse\"/>"
+              "<bsdf type=\"roughconductor\"/></bsdf>", true},
+      {POINT, "<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5, 0.5\"/><bsdf type=\"diffuse\"/>"
+              "<bsdf type=\"conductor\"/></bsdf>", false},
+      {AREA, "<bsdf type=\"dielectric\"/>", true},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char body[1024];
+    snprintf(body, sizeof body, SENSOR "%s<shape type=\"sphere\">%s</shape>", cases[i].light, cases[i].bsdf);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    if (pc_scene_pt_complete(&s) != cases[i].complete) print_error("case %zu: %s\n", i, cases[i].bsdf);
+    assert_true(pc_scene_pt_complete(&s) == cases[i].complete);
+    pc_scene_free(&s);
+  }
+  /* a delta material no shape uses does not count */
+  pc_scene s;
+  pc_err e = {0};
+  char body[1024];
+  snprintf(body, sizeof body, SENSOR "%s<bsdf type=\"conductor\" id=\"unused\"/><shape type=\"sphere\"/>", POINT);
+  assert_int_equal(load_body(&t, body, &s, &e), 0);
+  assert_true(pc_scene_pt_complete(&s));
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+#undef POINT
+#undef SPOT
+#undef AREA
+}
+
 /* maxSmoothAngle reaches the mesh: a cube's 90-degree edges split its 8 corners into 24 vertices */
 static void test_smooth_angle_param(void **state) {
   (void)state;
@@ -1487,7 +1546,7 @@ int main(void) {
       cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
-      cmocka_unit_test(test_thinlens_params),
+      cmocka_unit_test(test_thinlens_params),  cmocka_unit_test(test_pt_complete),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
