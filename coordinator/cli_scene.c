@@ -22,6 +22,15 @@ int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path
   return 0;
 }
 
+void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const pc_render_request *req) {
+  if (m == PC_METHOD_PT && !req->pt_complete)
+    fprintf(stderr,
+            "pcbpt-coord %s: warning: %s: pt never samples the light a point or spot light sends through a delta"
+            " material (glass, a mirror, a smooth plastic coat, a mask's holes), so its image lacks it; bdpt and"
+            " pcbpt render it\n",
+            verb, path);
+}
+
 int pc_cli_scene_bundle(const pc_scene *s, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {
   return pc_bundle_create((const char *const *)s->files, (const char *const *)s->file_names, s->nfiles, blob, n, hash, e);
 }

@@ -11,6 +11,9 @@
 /* Loads path with req's loader options (warnings to stderr as "pcbpt-coord VERB: ..."), then
  * lets the scene fill what the flags left open (64 iterations if neither it nor they say). */
 int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path, pc_scene *s, pc_err *e);
+/* Warns on stderr ("pcbpt-coord VERB: warning: PATH: ...") when method m is PT and the scene
+ * has light PT never samples (pc_render_request.pt_complete): the image would lack it. */
+void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const pc_render_request *req);
 /* The bundle of a loaded scene: every file it read, below its root folder. */
 int pc_cli_scene_bundle(const pc_scene *s, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
 

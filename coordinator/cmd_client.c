@@ -82,6 +82,7 @@ int pc_cmd_submit(int argc, char **argv) {
   /* the scene supplies what the flags left open, so every worker gets complete settings */
   pc_scene scene = {0};
   if (pc_cli_load_scene("submit", &req, scene_path, &scene, &e) != 0) { fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg); return 1; }
+  pc_cli_warn_method("submit", scene_path, req.set.method, &req);
   if (pc_render_settings_check(&req.set, &e) != 0) {
     pc_scene_free(&scene);
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);

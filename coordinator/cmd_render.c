@@ -274,6 +274,7 @@ int pc_cmd_render(int argc, char **argv) {
   char *out_owned = NULL, *png = NULL;
   /* the scene is checked here so a bad one is one clear line, before any farm starts */
   if (pc_cli_load_scene("render", &req, scene_path, &scene, &err) != PC_OK) goto fail;
+  pc_cli_warn_method("render", scene_path, req.set.method, &req);
   if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
   if (pc_scene_build(&scene, &err) != PC_OK) goto fail;

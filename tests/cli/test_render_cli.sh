@@ -84,4 +84,20 @@ if [ $st -ne 1 ] || ! grep -q "no iteration finished" "$tmp/int.err" || [ -e "$t
 else
   echo "ok   interrupt-early"
 fi
+
+# PT on a scene whose point light shines through glass: the image lacks that light, and render
+# says so on stderr; BDPT, which renders it, gets no warning
+cat >"$tmp/point_glass.xml" <<'XML'
+<scene version="0.6.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="toWorld"><lookat origin="0, 1, 4" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>
+  <emitter type="point"><point name="position" x="0" y="2" z="0"/></emitter>
+  <shape type="sphere"><float name="radius" value="0.5"/><bsdf type="dielectric"/></shape>
+  <shape type="rectangle"><transform name="toWorld"><rotate x="1" angle="-90"/><translate y="-0.5"/></transform></shape>
+</scene>
+XML
+check pt-incomplete 0 "pt never samples the light a point or spot light sends through a delta" -- \
+  "$bin" render "$tmp/point_glass.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
+check bdpt-complete 0 "" -- "$bin" render "$tmp/point_glass.xml" --method bdpt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
+if grep -q "pt never samples" "$tmp/err"; then echo "FAIL bdpt-complete: warned"; fail=1; fi
 exit $fail
