@@ -368,7 +368,8 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, doub
   add_candidate(p, base, PC_METHOD_BDPT, 0, 0.f, true);
   /* PT is rendered whatever the data says too, but does not count: where it fails (caustics),
    * the rare paths that find the light are fireflies its few pilot iterations would put into
-   * the chosen method's image. PT renders its own paths, not the bidirectional ones. */
+   * the chosen method's image. PT renders its own paths, not the bidirectional ones. Not at all
+   * where it cannot sample every path (with_pt false): no margin can make up for missing light. */
   if (with_pt) add_candidate(p, base, PC_METHOD_PT, 0, 0.f, false);
   add_candidate(p, base, PC_METHOD_PCBPT, 1, 0.f, true);
   add_candidate(p, base, PC_METHOD_PCBPT, 2, 0.f, true);
