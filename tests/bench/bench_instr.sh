@@ -5,7 +5,8 @@
 # cannot (there the same binary alternated with itself varied 1.70-2.41 s per run); memory
 # stalls are not in them, so a change that moves data needs timing too. Two runs of one build
 # differ by ~0.1% (the embedded farm's keys and temporary names). Needs valgrind
-# (Debian: apt-get install valgrind). Usage:
+# and python3 (Debian: apt-get install valgrind python3); neither is installed by
+# deploy/install-deps.sh, since no build or test needs them. Usage:
 #   tests/bench/bench_instr.sh BIN_A BIN_B SCENE.xml [render flags...]
 # e.g. tests/bench/bench_instr.sh /tmp/old/pcbpt-coord build/pcbpt-coord scenes/ajar-door/scene.xml \
 #        --method pcbpt --spp 4 --width 128 --height 128 --pcbpt-candidates 3
@@ -17,6 +18,7 @@ scene=${3:?scene}
 shift 3
 command -v valgrind >/dev/null || { echo "bench_instr.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 2; }
 command -v callgrind_annotate >/dev/null || { echo "bench_instr.sh: callgrind_annotate is not installed" >&2; exit 2; }
+command -v python3 >/dev/null || { echo "bench_instr.sh: python3 is not installed (apt-get install python3)" >&2; exit 2; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 i=0
