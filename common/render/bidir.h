@@ -59,12 +59,11 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
                            bool weighted, pc_connection *out);
 bool pc_connect_visible(pc_tctx *c, const pc_path_vertex *lv, const pc_path_vertex *ev);
 
-/* Adds to the layer of the strategy class and, with --strategy-layers, to layer s%dt%d. */
 /* Strategy s=1 at eye vertex ev (its t): a fresh light sample from rng, connected and added to
  * the nee layer of pixel (x,y). */
 void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_path_vertex *ev, int x, int y);
 
-void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
+/* A light splat into layer `layer` and, with --strategy-layers, into layer s%dt%d. */
 void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
 
 /* Light tracing: connects light vertices v[0..nl-1] of light path `index` to the camera (a thin

@@ -1,6 +1,6 @@
 /* connect.c: the one connection routine of the bidirectional methods (any light vertex with any
  * eye vertex, the camera included: s=1, t=1 and inner strategies alike), the s=0 weight of an
- * eye sub-path that hits an emitter, and the strategy-layer film helper. The MIS weight uses the
+ * eye sub-path that hits an emitter, and the strategy-layer splat helper. The MIS weight uses the
  * per-vertex quantities of path_vertex.h: O(1) per connection. */
 #include <time.h>
 
@@ -10,14 +10,6 @@ double pc_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-void pc_film_add_strategy(pc_film *f, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v) {
-  pc_film_add_sample(f, layer, x, y, v);
-  if (strategy_layers > 0 && s + t - 1 <= strategy_layers) {
-    int l = pc_film_strategy_layer(f, s, t);
-    if (l >= 0) pc_film_add_sample(f, l, x, y, v);
-  }
 }
 
 void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v) {
@@ -42,7 +34,7 @@ void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_pa
   float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng), u3 = pc_rng_f(rng);
   pc_light_vertex_sample(c->scene, n, u0, u1, u2, u3, &lv);
   if (pc_connect(c, n, &lv, ev, c->weighted, &k))
-    pc_film_add_strategy(c->film, c->set->strategy_layers, PC_LAYER_NEE, 1, ev->depth, x, y, v3_scale(k.f, k.weight));
+    pc_tctx_add(c, PC_LAYER_NEE, 1, ev->depth, x, y, v3_scale(k.f, k.weight));
 }
 
 float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path_vertex *v, int light) {

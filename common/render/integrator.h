@@ -1,7 +1,8 @@
 /* integrator.h: what every integrator's per-sample routine sees: the scene, the settings, the
  * iteration being rendered, and the films it adds to. Eye-side routines own their pixel for
- * the iteration and add to `film` directly; light-side splats go to the thread's own
- * `splat` film, merged after the iteration. */
+ * the iteration and add to it through pc_tctx_add (the caller moves the pixel's sums into
+ * `film` with pc_tctx_flush_pixel); light-side splats go to the thread's own `splat` film,
+ * merged after the iteration. */
 #ifndef PC_INTEGRATOR_H
 #define PC_INTEGRATOR_H
 
@@ -26,6 +27,7 @@ typedef struct pc_tctx {
   pc_mis_counts counts; /* MIS sample counts of the method */
   bool weighted;        /* false: every strategy weight 1 (debug, per-strategy tests) */
   pc_film *film;        /* the iteration's eye-side film (shared; pixels are disjoint) */
+  double pixel_sum[PC_LAYER_STD_COUNT][3]; /* the current pixel's pt, nee and inner sums so far */
   pc_film_queue *splat; /* queue into this thread's light-splat film (flushed after each work item) */
   uint64_t rays;
   pc_path_vertex *light_path, *eye_path; /* sub-path buffers, PC_MAX_SEGMENTS + 2 vertices each */
@@ -33,6 +35,40 @@ typedef struct pc_tctx {
   int thread;                            /* this context's pool thread */
   struct pc_pcbpt *pcbpt;                /* CBDPT/PCBPT: the iteration's stored light vertices and records */
 } pc_tctx;
+
+/* Adds v to the current pixel (x,y) in eye layer `layer` (pt, nee or inner) and, with
+ * --strategy-layers, in layer s%dt%d of the film. A BDPT sample makes a dozen such adds; the
+ * standard layers' ones are summed here and reach the film once per pixel. The film's sums of
+ * an iteration start at zero and take the same additions in the same order, so they are
+ * bit-identical to adding into the film each time. */
+static inline void pc_tctx_add(pc_tctx *c, int layer, int s, int t, int x, int y, vec3 v) {
+  if (v3_is_finite(v)) {
+    double *a = c->pixel_sum[layer];
+    a[0] += v.x;
+    a[1] += v.y;
+    a[2] += v.z;
+  } else {
+    c->film->dropped_nonfinite++;
+  }
+  int layers = c->set->strategy_layers;
+  if (layers > 0 && s + t - 1 <= layers) {
+    int l = pc_film_strategy_layer(c->film, s, t);
+    if (l >= 0) pc_film_add_sample(c->film, l, x, y, v);
+  }
+}
+
+/* Moves the pixel's sums into the film and zeroes them, after each pixel routine. */
+static inline void pc_tctx_flush_pixel(pc_tctx *c, int x, int y) {
+  static const int eye_layers[] = {PC_LAYER_PT, PC_LAYER_NEE, PC_LAYER_INNER};
+  size_t k = 3 * ((size_t)y * c->film->w + (size_t)x);
+  for (int i = 0; i < 3; i++) {
+    double *a = c->pixel_sum[eye_layers[i]], *p = c->film->layers[eye_layers[i]].sum + k;
+    p[0] += a[0];
+    p[1] += a[1];
+    p[2] += a[2];
+    a[0] = a[1] = a[2] = 0.0;
+  }
+}
 
 /* MIS weight of a strategy with pdf a against the others' summed (already heuristic-mapped)
  * terms; the heuristic maps a pdf (times its sample count) to its weight term. */

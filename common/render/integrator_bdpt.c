@@ -28,7 +28,7 @@ void pc_bdpt_pixel(pc_tctx *c, int x, int y) {
     pc_connection k;
     for (int s = 2; s <= nl && s + t - 1 <= maxs; s++)
       if (pc_connect(c, n, &c->light_path[s - 1], ev, c->weighted, &k))
-        pc_film_add_strategy(c->film, set->strategy_layers, PC_LAYER_INNER, s, t, x, y, v3_scale(k.f, k.weight));
+        pc_tctx_add(c, PC_LAYER_INNER, s, t, x, y, v3_scale(k.f, k.weight));
   }
   if (timed) {
     c->t_paths += PC_TIMED_EVERY * ((t1 - t0) + (t3 - t2));

@@ -4,14 +4,6 @@
  * integrators, so their s=0/s=1 weights agree with this one. */
 #include "integrator.h"
 
-static void add(pc_tctx *c, int layer, int s, int t, int x, int y, vec3 v) {
-  pc_film_add_sample(c->film, layer, x, y, v);
-  if (c->set->strategy_layers > 0) {
-    int l = pc_film_strategy_layer(c->film, s, t);
-    if (l >= 0) pc_film_add_sample(c->film, l, x, y, v);
-  }
-}
-
 /* Solid-angle pdf, as seen from `from`, with which next-event estimation picks the emitter
  * point p (normal n) of light `li`. */
 static float nee_pdf(const pc_scene *s, int li, vec3 from, vec3 p, vec3 n) {
@@ -101,7 +93,7 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
           float a = pc_mis_term(set, prev_pdf), b = pc_mis_term(set, pc_light_choose_pdf(s, s->env_light) * pc_env_pdf(l, dn));
           w = a / (a + b);
         }
-        if (!v3_is_zero(le)) add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
+        if (!v3_is_zero(le)) pc_tctx_add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
       }
       break;
     }
@@ -116,7 +108,7 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
           float a = pc_mis_term(set, prev_pdf), b = pc_mis_term(set, pl);
           w = a / (a + b);
         }
-        add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
+        pc_tctx_add(c, PC_LAYER_PT, 0, depth + 1, x, y, v3_scale(v3_mul(beta, le), w));
       }
     }
     if (depth >= c->max_segments) break;
@@ -127,7 +119,7 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
 
     if (!pc_bsdf_is_delta(m)) {
       vec3 v = nee(c, &rng, m, &sh, &h, wo, q);
-      if (!v3_is_zero(v)) add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_mul(beta, v));
+      if (!v3_is_zero(v)) pc_tctx_add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_mul(beta, v));
     }
 
     if (!(q > 0.f) || pc_rng_f(&rng) >= q) break;

@@ -334,7 +334,10 @@ static void eye_tile(void *arg, int thread, int item) {
                                        : r->set.method == PC_METHOD_PT   ? pc_pt_pixel
                                                                          : pc_pcbpt_pixel;
   for (int y = ty * TILE; y < y1; y++)
-    for (int x = tx * TILE; x < x1; x++) pixel(c, x, y);
+    for (int x = tx * TILE; x < x1; x++) {
+      pixel(c, x, y);
+      pc_tctx_flush_pixel(c, x, y);
+    }
   pc_film_queue_flush(c->splat);
   atomic_fetch_add_explicit(&r->items_done, 1, memory_order_relaxed);
 }
