@@ -28,6 +28,7 @@ typedef struct pc_tctx {
   bool weighted;        /* false: every strategy weight 1 (debug, per-strategy tests) */
   pc_film *film;        /* the iteration's eye-side film (shared; pixels are disjoint) */
   double pixel_sum[PC_LAYER_STD_COUNT][3]; /* the current pixel's pt, nee and inner sums so far */
+  uint64_t dropped;     /* non-finite eye-side samples this iteration: `film` is shared, this is not */
   pc_film_queue *splat; /* queue into this thread's light-splat film (flushed after each work item) */
   uint64_t rays;
   pc_path_vertex *light_path, *eye_path; /* sub-path buffers, PC_MAX_SEGMENTS + 2 vertices each */
@@ -42,19 +43,17 @@ typedef struct pc_tctx {
  * an iteration start at zero and take the same additions in the same order, so they are
  * bit-identical to adding into the film each time. */
 static inline void pc_tctx_add(pc_tctx *c, int layer, int s, int t, int x, int y, vec3 v) {
-  if (v3_is_finite(v)) {
-    double *a = c->pixel_sum[layer];
-    a[0] += v.x;
-    a[1] += v.y;
-    a[2] += v.z;
-  } else {
-    c->film->dropped_nonfinite++;
-  }
   int layers = c->set->strategy_layers;
-  if (layers > 0 && s + t - 1 <= layers) {
-    int l = pc_film_strategy_layer(c->film, s, t);
-    if (l >= 0) pc_film_add_sample(c->film, l, x, y, v);
+  int l = layers > 0 && s + t - 1 <= layers ? pc_film_strategy_layer(c->film, s, t) : -1;
+  if (!v3_is_finite(v)) {
+    c->dropped += l >= 0 ? 2 : 1; /* one per layer it would have gone to */
+    return;
   }
+  double *a = c->pixel_sum[layer];
+  a[0] += v.x;
+  a[1] += v.y;
+  a[2] += v.z;
+  if (l >= 0) pc_film_add_sample(c->film, l, x, y, v);
 }
 
 /* Moves the pixel's sums into the film and zeroes them, after each pixel routine. */

@@ -492,8 +492,9 @@ static void fold_iteration(pc_renderer *r, pc_film *film, bool light, uint64_t i
   film->dropped_nonfinite += r->scratch.dropped_nonfinite + atomic_load(&j.dropped);
   r->scratch.dropped_nonfinite = 0;
   for (int t = 0; t < pc_pool_size(r->pool); t++) {
-    film->dropped_nonfinite += r->splat[t].dropped_nonfinite;
+    film->dropped_nonfinite += r->splat[t].dropped_nonfinite + r->tctx[t].dropped;
     r->splat[t].dropped_nonfinite = 0;
+    r->tctx[t].dropped = 0;
   }
 }
 
@@ -531,7 +532,10 @@ static int render_one(pc_renderer *r, uint64_t it, pc_film *film, pc_render_stat
   if (n_chunks) pc_pool_run(r->pool, n_chunks, light_chunk, r);
   if (cancelled(r)) {
     pc_film_clear(&r->scratch);
-    for (int i = 0; i < nthreads; i++) pc_film_clear(&r->splat[i]);
+    for (int i = 0; i < nthreads; i++) {
+      pc_film_clear(&r->splat[i]);
+      r->tctx[i].dropped = 0;
+    }
     return pc_errf(e, PC_ECANCELED, "render cancelled");
   }
   double t1 = now_seconds();
