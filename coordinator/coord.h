@@ -36,6 +36,8 @@ typedef struct pc_range {
   double measured_at;   /* when it was assigned or its owner's last upload came */
   bool stop_asked;      /* overdue: its owner was asked to upload what it has and stop */
   bool revoked;         /* taken back from an owner that ignored that: never re-attached */
+  unsigned refused;     /* its films the merge refused in a row for the same reason (job.c: the job fails at a few) */
+  uint64_t refused_why; /* that reason's hash */
   struct pc_range *next;
 } pc_range;
 

@@ -26,6 +26,7 @@
 typedef struct range_snap { uint64_t id, merged, split_id; bool final; } range_snap;
 
 #define STORAGE_RETRY 2.0 /* seconds between checkpoint attempts while the data dir fails */
+#define RANGE_MAX_REFUSALS 3 /* a range's films refused in a row for one reason before the job fails */
 
 struct pc_op {
   uv_work_t work;
@@ -436,6 +437,13 @@ void pc_job_storage_trouble(pc_coord *c, pc_job *j, pc_op *op, const char *why) 
   (void)c;
 }
 
+/* FNV-1a of a refusal's reason, to tell a deterministic refusal repeating from other ones. */
+static uint64_t reason_hash(const char *s) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 0x100000001b3ull;
+  return h;
+}
+
 static void op_after(uv_work_t *w, int status) {
   pc_op *op = w->data;
   pc_coord *c = op->c;
@@ -453,8 +461,21 @@ static void op_after(uv_work_t *w, int status) {
                   op->peer->conn.peer, (unsigned long long)op->range_id, (unsigned long long)op->first,
                   (unsigned long long)op->count, op->err.msg);
       if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, op->err.msg);
-      /* the worker drops the range; hand it to someone else at once */
-      if (r && r->owner == op->peer) {
+      /* A range's iterations render the same film on any worker (the seed fixes them), so a
+       * film refused for what it holds (e.g. sums beyond any radiance, from a scene's absurd
+       * emitter) is refused again, for the same reason, however often the range is re-run:
+       * without a limit the job would never end. Bad uploads of other kinds (a broken or
+       * hostile worker's) differ in their reasons and only send the range to another worker. */
+      uint64_t why_hash = reason_hash(op->err.msg);
+      if (r) r->refused = r->refused > 0 && r->refused_why == why_hash ? r->refused + 1 : 1;
+      if (r) r->refused_why = why_hash;
+      if (r && r->refused >= RANGE_MAX_REFUSALS && job_live(j)) {
+        char why[sizeof j->error];
+        snprintf(why, sizeof why, "the film of iterations [%llu,+%llu) was refused %u times in a row: %.180s",
+                 (unsigned long long)op->first, (unsigned long long)op->count, r->refused, op->err.msg);
+        pc_job_fail(c, j, why);
+      } else if (r && r->owner == op->peer) {
+        /* the worker drops the range; hand it to someone else at once */
         r->owner = NULL;
         r->orphan_since = 1;
         pc_sched_nudge(c);
