@@ -47,8 +47,7 @@ void pc_lt_light_path(pc_tctx *c, uint64_t index) {
 void pc_emitter_hit(pc_tctx *c, void *user, const pc_path_vertex *v, int light, vec3 le) {
   const pc_pixel_target *h = user;
   float w = c->weighted ? pc_mis_weight_hit(c->scene, &c->counts, v, light) : 1.f;
-  pc_tctx_add(c, PC_LAYER_PT, 0, v->depth, h->x, h->y,
-                       v3_scale(v3_mul(v->beta, le), w));
+  pc_tctx_add(c, PC_LAYER_PT, 0, v->depth, h->x, h->y, v3_scale(v3_mul(v->beta, le), w));
 }
 
 void pc_lt_pixel(pc_tctx *c, int x, int y) {

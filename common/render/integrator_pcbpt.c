@@ -19,8 +19,7 @@ static void add_inner(pc_tctx *c, int x, int y, const pc_path_vertex *lv, const 
   pc_connection k;
   if (lv->depth + ev->depth - 1 > c->max_segments) return;
   if (pc_connect(c, &c->counts, lv, ev, c->weighted, &k))
-    pc_tctx_add(c, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
-                         v3_scale(k.f, k.weight * scale));
+    pc_tctx_add(c, PC_LAYER_INNER, lv->depth, ev->depth, x, y, v3_scale(k.f, k.weight * scale));
 }
 
 /* A resampling candidate's unoccluded connection, and its visibility when the target traced
@@ -99,8 +98,7 @@ static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_pat
     int visible = cs.visible[slot[k]];
     if (visible == 0 || (visible < 0 && !pc_connect_visible(c, lv, ev))) continue;
     float scale = (float)(factor[k] / ((double)n * m_eff));
-    pc_tctx_add(c, PC_LAYER_INNER, lv->depth, ev->depth, x, y,
-                         v3_scale(con->f, con->weight * scale));
+    pc_tctx_add(c, PC_LAYER_INNER, lv->depth, ev->depth, x, y, v3_scale(con->f, con->weight * scale));
   }
 }
 
