@@ -36,7 +36,7 @@ typedef struct pc_range {
   double measured_at;   /* when it was assigned or its owner's last upload came */
   bool stop_asked;      /* overdue: its owner was asked to upload what it has and stop */
   bool revoked;         /* taken back from an owner that ignored that: never re-attached */
-  unsigned refused;     /* its films the merge refused in a row for the same reason (job.c: the job fails at a few) */
+  unsigned refused;     /* its films the merge refused in a row for one reason (job.c) */
   uint64_t refused_why; /* that reason's hash */
   struct pc_range *next;
 } pc_range;
@@ -226,6 +226,9 @@ bool pc_prior_relmse_estimate(const pc_job *j, double weight, double *out);
 void pc_prior_free_all(pc_coord *c);
 int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e);
 void pc_job_fail(pc_coord *c, pc_job *j, const char *why);
+/* Range r of j could not be rendered on `worker`: it goes to another worker at once, counts in
+ * j->failures (stored), and the job fails at the third such range. */
+void pc_job_range_failed(pc_coord *c, pc_job *j, pc_range *r, const char *worker, const char *why);
 /* The data dir could not be written for j (a checkpoint, with op, or a range): j pauses and
  * retries instead of failing (job.c says how). */
 void pc_job_storage_trouble(pc_coord *c, pc_job *j, pc_op *op, const char *why);

@@ -26,7 +26,7 @@
 typedef struct range_snap { uint64_t id, merged, split_id; bool final; } range_snap;
 
 #define STORAGE_RETRY 2.0 /* seconds between checkpoint attempts while the data dir fails */
-#define RANGE_MAX_REFUSALS 3 /* a range's films refused in a row for one reason before the job fails */
+#define MAX_RANGE_FAILURES 3 /* ranges that could not be rendered before their job fails */
 
 struct pc_op {
   uv_work_t work;
@@ -463,22 +463,27 @@ static void op_after(uv_work_t *w, int status) {
       if (!op->peer->closed) pc_peer_send_ack(op->peer, op->range_id, 0, op->err.msg);
       /* A range's iterations render the same film on any worker (the seed fixes them), so a
        * film refused for what it holds (e.g. sums beyond any radiance, from a scene's absurd
-       * emitter) is refused again, for the same reason, however often the range is re-run:
-       * without a limit the job would never end. Bad uploads of other kinds (a broken or
-       * hostile worker's) differ in their reasons and only send the range to another worker. */
-      uint64_t why_hash = reason_hash(op->err.msg);
-      if (r) r->refused = r->refused > 0 && r->refused_why == why_hash ? r->refused + 1 : 1;
-      if (r) r->refused_why = why_hash;
-      if (r && r->refused >= RANGE_MAX_REFUSALS && job_live(j)) {
-        char why[sizeof j->error];
-        snprintf(why, sizeof why, "the film of iterations [%llu,+%llu) was refused %u times in a row: %.180s",
-                 (unsigned long long)op->first, (unsigned long long)op->count, r->refused, op->err.msg);
-        pc_job_fail(c, j, why);
-      } else if (r && r->owner == op->peer) {
-        /* the worker drops the range; hand it to someone else at once */
-        r->owner = NULL;
-        r->orphan_since = 1;
-        pc_sched_nudge(c);
+       * emitter) is refused again, for the same reason, however often the range is re-run.
+       * From its second time in a row the range counts as one that could not be rendered, or
+       * the job would never end; bad uploads of other kinds (a broken or hostile worker's)
+       * differ in their reasons and only send the range to another worker. */
+      if (r) {
+        uint64_t why_hash = reason_hash(op->err.msg);
+        r->refused = r->refused > 0 && r->refused_why == why_hash ? r->refused + 1 : 1;
+        r->refused_why = why_hash;
+      }
+      if (r && r->owner == op->peer) {
+        if (r->refused >= 2) {
+          char why[300];
+          snprintf(why, sizeof why, "its film of iterations [%llu,+%llu) was refused %u times in a row: %.200s",
+                   (unsigned long long)op->first, (unsigned long long)op->count, r->refused, op->err.msg);
+          pc_job_range_failed(c, j, r, op->peer->name, why);
+        } else {
+          /* the worker drops the range; hand it to someone else at once */
+          r->owner = NULL;
+          r->orphan_since = 1;
+          pc_sched_nudge(c);
+        }
       }
     } else if (r && !job_live(j)) {
       /* merged into a film nobody will write: the job ended while it ran */
@@ -732,6 +737,21 @@ void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+}
+
+void pc_job_range_failed(pc_coord *c, pc_job *j, pc_range *r, const char *worker, const char *why) {
+  r->owner = NULL;
+  r->orphan_since = 1; /* to another worker at once */
+  pc_sched_nudge(c);
+  pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, worker, why);
+  j->failures++;
+  pc_err e;
+  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+  if (j->failures >= MAX_RANGE_FAILURES && job_live(j)) {
+    char msg[400];
+    snprintf(msg, sizeof msg, "render failed on worker %s: %s", worker, why);
+    pc_job_fail(c, j, msg);
+  }
 }
 
 void pc_job_cancel(pc_coord *c, pc_job *j) {

@@ -203,8 +203,6 @@ static void on_heartbeat(pc_peer *p, const Pcbpt__Heartbeat *h) {
   pc_peer_send_cancel(p, h->job_id, h->range_id, false);
 }
 
-#define MAX_RANGE_FAILURES 3
-
 static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
   pc_coord *c = p->coord;
   pc_job *j = pc_coord_job(c, f->job_id);
@@ -214,18 +212,7 @@ static void on_range_failed(pc_peer *p, const Pcbpt__RangeFailed *f) {
   snprintf(why, sizeof why, "%s", f->reason ? f->reason : "");
   for (char *s = why; *s; s++)
     if ((unsigned char)*s < 0x20 || *s == 0x7f) *s = '?';
-  r->owner = NULL;
-  r->orphan_since = 1; /* to another worker at once */
-  pc_sched_nudge(c);
-  pc_wire_log("job %llu: range %llu failed on %s: %s", (unsigned long long)j->id, (unsigned long long)r->id, p->name, why);
-  j->failures++;
-  pc_err e;
-  if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
-  if (j->failures >= MAX_RANGE_FAILURES && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING)) {
-    char msg[400];
-    snprintf(msg, sizeof msg, "render failed on worker %s: %s", p->name, why);
-    pc_job_fail(c, j, msg);
-  }
+  pc_job_range_failed(c, j, r, p->name, why);
 }
 
 static void stream_next(pc_peer *p) {
