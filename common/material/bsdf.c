@@ -220,12 +220,28 @@ static const pc_material *unwrap(const pc_material *m, const pc_shading *sh, vec
   return m->inner;
 }
 
-void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_shading *sh, vec3 wo) {
+void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo) {
   o->m = unwrap(m, sh, wo);
   o->bump = o->m && o->m != m;
   o->delta = o->m && pc_bsdf_is_delta(o->m);
   o->local = frame_to_local(&sh->sh, wo);
   o->g = v3_dot(wo, sh->ng);
+  o->albedo = o->m && o->m->type == PC_MAT_DIFFUSE ? pc_slot_eval(&o->m->reflectance, texs, sh->uv) : v3s(0.f);
+}
+
+/* lobe_eval for o's material: a diffuse one from o's albedo, as pc_diffuse_eval computes it. */
+static inline vec3 out_lobe_eval(const pc_bsdf_out *o, const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
+  if (o->m->type != PC_MAT_DIFFUSE) return lobe_eval(c, wo, wi);
+  return wo.z > 0.f && wi.z > 0.f ? v3_scale(o->albedo, PC_INV_PI) : v3s(0.f);
+}
+
+/* eval_local for o's material. */
+static inline vec3 out_eval_local(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
+                                  float gi, pc_transport mode) {
+  if (o->m->type != PC_MAT_DIFFUSE) return eval_local(o->m, texs, sh, wo, wi, o->g, gi, mode);
+  vec3 f = out_lobe_eval(o, NULL, wo, wi);
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(wo.z, wi.z, o->g, gi));
+  return v3_is_finite(f) ? f : v3s(0.f);
 }
 
 /* wi in the shading frame (li) and its geometric cosine (gi), with o's wo not yet turned over;
@@ -243,19 +259,19 @@ static inline bool out_local(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi, pc_transport mode) {
   pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, sh, wo);
+  pc_bsdf_out_make(&o, m, texs, sh, wo);
   vec3 li;
   float gi;
   if (!out_local(&o, sh, wi, &li, &gi)) return v3s(0.f);
   vec3 lo = o.local;
   orient(o.m, &lo, &li);
-  return eval_local(o.m, texs, sh, lo, li, o.g, gi, mode);
+  return out_eval_local(&o, texs, sh, lo, li, gi, mode);
 }
 
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi) {
   pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, sh, wo);
+  pc_bsdf_out_make(&o, m, texs, sh, wo);
   vec3 li;
   float gi;
   if (!out_local(&o, sh, wi, &li, &gi)) return 0.f;
@@ -304,27 +320,27 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
    * as the full query would find; PCBPT's connections to its stored vertices end here often. */
   if (o->m->type == PC_MAT_DIFFUSE && !(qo.z > 0.f && qi.z > 0.f)) return v3s(0.f);
   pdfs_local(o, texs, sh, li, qo, qi, pdf, pdf_rev);
-  return eval_local(o->m, texs, sh, qo, qi, o->g, gi, mode);
+  return out_eval_local(o, texs, sh, qo, qi, gi, mode);
 }
 
 void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
                   float *pdf, float *pdf_rev) {
   pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, sh, wo);
+  pc_bsdf_out_make(&o, m, texs, sh, wo);
   pc_bsdf_pdfs_out(&o, texs, sh, wi, pdf, pdf_rev);
 }
 
 vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                        vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
   pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, sh, wo);
+  pc_bsdf_out_make(&o, m, texs, sh, wo);
   return pc_bsdf_eval_pdfs_out(&o, texs, sh, wi, mode, pdf, pdf_rev);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
   pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, sh, wo);
+  pc_bsdf_out_make(&o, m, texs, sh, wo);
   return pc_bsdf_sample_out(&o, texs, sh, u0, u1, u2, mode, out);
 }
 
@@ -351,7 +367,7 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
   } else {
-    f = lobe_eval(&c, lo, s.wi);
+    f = out_lobe_eval(o, &c, lo, s.wi);
     s.pdf = lobe_pdf(&c, lo, s.wi);
     s.pdf_rev = lobe_pdf(&c, s.wi, lo);
   }
@@ -420,5 +436,12 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
     break;
   case PC_MAT_BUMPMAP: break;
   }
+  return (q > 0.f) ? fminf(q, 1.f) : 0.f;
+}
+
+float pc_bsdf_out_continuation(const pc_bsdf_out *o, const pc_material *m, const pc_texture *texs,
+                               const pc_shading *sh) {
+  if (o->m != m || m->type != PC_MAT_DIFFUSE) return pc_bsdf_continuation(m, texs, sh);
+  float q = v3_maxc(o->albedo);
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;
 }

@@ -149,10 +149,11 @@ typedef struct pc_bsdf_out {
   bool delta;           /* m is all delta lobes: only sampling answers */
   vec3 local;           /* wo in the shading frame (not turned over by twosided) */
   float g;              /* wo . ng */
+  vec3 albedo;          /* a diffuse m's reflectance at the point: its texture read once, not per query */
 } pc_bsdf_out;
 /* Fills *o in place: a struct returned by value was copied with loads wider than the stores
  * that formed it, which cannot forward (pc_shading_make likewise). */
-void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_shading *sh, vec3 wo);
+void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo);
 vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
                            pc_transport mode, float *pdf, float *pdf_rev);
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
@@ -172,6 +173,9 @@ bool pc_material_has_delta(const pc_material *materials, int n, int i);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
  * point (not on depth or directions) so a reverse pdf can include it. */
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);
+/* The same for the material o was made from (m), reading what o already holds. */
+float pc_bsdf_out_continuation(const pc_bsdf_out *o, const pc_material *m, const pc_texture *texs,
+                               const pc_shading *sh);
 
 /* RGB complex IOR of a named conductor (Mitsuba's `material` names: Ag, Al, Au, Cu, Cr, ...,
  * and "none" for a perfect mirror). Returns false if unknown. */

@@ -83,12 +83,12 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->eps = h.eps;
     pc_shading_from_hit(&cur->sh, s, &h, v3_neg(da));
     cur->wo = v3_neg(da);
-    pc_bsdf_out_make(&cur->out, m, &cur->sh, cur->wo);
+    pc_bsdf_out_make(&cur->out, m, s->textures, &cur->sh, cur->wo);
     cur->beta = beta;
     cur->material = shape->material;
     cur->light = shape->light;
     cur->depth = nv + 1;
-    cur->q = pc_bsdf_continuation(m, s->textures, &cur->sh);
+    cur->q = pc_bsdf_out_continuation(&cur->out, m, s->textures, &cur->sh);
     cur->delta = pc_bsdf_is_delta(m);
     pc_mis_extend(mc, prev, light_side, cur, pdf_fwd, pdf_rev, delta, cos_out, cos_in, d2);
     nv++;

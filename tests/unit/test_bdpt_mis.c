@@ -197,7 +197,7 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
   v->kind = fp->x[ito].kind == PC_VTX_CAMERA ? PC_VTX_CAMERA : (to_env ? PC_VTX_ENV : PC_VTX_SURFACE);
   v->wo = from_env ? v3_neg(a->wo) : unit(v->p, a->p);
   if (to_env) v->wo = fp->x[ito].wo;
-  if (v->kind == PC_VTX_SURFACE && v->material >= 0) pc_bsdf_out_make(&v->out, &f->scene.materials[v->material], &v->sh, v->wo);
+  if (v->kind == PC_VTX_SURFACE && v->material >= 0) pc_bsdf_out_make(&v->out, &f->scene.materials[v->material], f->scene.textures, &v->sh, v->wo);
   v->depth = u + 1;
   v->beta = v3s(1.f);
   vec3 dir = from_env ? a->wo : unit(a->p, v->p);

@@ -1032,6 +1032,28 @@ static void test_bitmap(void **state) {
   vec3 f = pc_bsdf_eval(&m, &t, &sh, sh.sh.n, dir_local(&sh, 0.5f, 1.f), PC_RADIANCE);
   assert_true(close3(f, v3_scale(v3(9.f, 10.f, 11.f), PC_INV_PI), 1e-5f, 0));
   assert_true(pc_bsdf_continuation(&m, &t, &sh) == 1.f);
+  /* A path vertex reads the texel once (pc_bsdf_out's albedo); its queries answer what the
+   * texture gives at that point, bit for bit, in both transport modes and when sampling. */
+  vec3 wo = dir_local(&sh, 0.3f, 0.7f), wi = dir_local(&sh, 0.6f, 0.2f);
+  pc_bsdf_out o;
+  pc_bsdf_out_make(&o, &m, &t, &sh, wo);
+  for (int mode = 0; mode < 2; mode++) {
+    pc_transport tm = mode ? PC_IMPORTANCE : PC_RADIANCE;
+    float pdf, pdf_rev;
+    vec3 g = pc_bsdf_eval_pdfs_out(&o, &t, &sh, wi, tm, &pdf, &pdf_rev);
+    assert_true(close3(g, pc_bsdf_eval(&m, &t, &sh, wo, wi, tm), 0, 0));
+    if (tm == PC_RADIANCE) assert_true(close3(g, v3_scale(pc_texture_eval(&t, sh.uv), PC_INV_PI), 0, 0));
+    assert_true(g.x > 0.f && g.x < g.y && g.y < g.z);
+    pc_bsdf_sampled bs;
+    assert_true(pc_bsdf_sample_out(&o, &t, &sh, 0.4f, 0.3f, 0.8f, tm, &bs));
+    assert_true(close3(bs.f, pc_bsdf_eval(&m, &t, &sh, wo, bs.wi, tm), 0, 0));
+  }
+  assert_true(pc_bsdf_out_continuation(&o, &m, &t, &sh) == 1.f);
+  m.reflectance.tex = -1;
+  m.reflectance.value = v3(0.2f, 0.7f, 0.4f);
+  pc_bsdf_out_make(&o, &m, &t, &sh, wo);
+  assert_true(pc_bsdf_out_continuation(&o, &m, &t, &sh) == pc_bsdf_continuation(&m, &t, &sh));
+  assert_true(pc_bsdf_out_continuation(&o, &m, &t, &sh) == 0.7f);
 }
 
 /* ---- wrappers: bumpmap and coatings ---- */
