@@ -368,8 +368,9 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
   } else {
     f = out_lobe_eval(o, &c, lo, s.wi);
-    s.pdf = lobe_pdf(&c, lo, s.wi);
-    s.pdf_rev = lobe_pdf(&c, s.wi, lo);
+    bool diffuse = m->type == PC_MAT_DIFFUSE; /* pdfs as pdfs_local takes them */
+    s.pdf = diffuse ? pc_diffuse_pdf(NULL, lo, s.wi) : lobe_pdf(&c, lo, s.wi);
+    s.pdf_rev = diffuse ? pc_diffuse_pdf(NULL, s.wi, lo) : lobe_pdf(&c, s.wi, lo);
   }
   if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(lo.z, s.wi.z, go, gi));
   if (!v3_is_finite(f) || v3_is_zero(f) || !(s.pdf > 0.f) || !isfinite(s.pdf) ||
