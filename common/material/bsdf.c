@@ -323,20 +323,6 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   return out_eval_local(o, texs, sh, qo, qi, gi, mode);
 }
 
-void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
-                  float *pdf, float *pdf_rev) {
-  pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, texs, sh, wo);
-  pc_bsdf_pdfs_out(&o, texs, sh, wi, pdf, pdf_rev);
-}
-
-vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                       vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev) {
-  pc_bsdf_out o;
-  pc_bsdf_out_make(&o, m, texs, sh, wo);
-  return pc_bsdf_eval_pdfs_out(&o, texs, sh, wi, mode, pdf, pdf_rev);
-}
-
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                     vec3 wo, float u0, float u1, float u2, pc_transport mode, pc_bsdf_sampled *out) {
   pc_bsdf_out o;
@@ -438,6 +424,10 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
   case PC_MAT_BUMPMAP: break;
   }
   return (q > 0.f) ? fminf(q, 1.f) : 0.f;
+}
+
+bool pc_bsdf_out_is_delta(const pc_bsdf_out *o, const pc_material *m) {
+  return o->m ? o->delta : pc_bsdf_is_delta(m); /* a bumpmap's is its wrapped material's */
 }
 
 float pc_bsdf_out_continuation(const pc_bsdf_out *o, const pc_material *m, const pc_texture *texs,

@@ -132,17 +132,11 @@ vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading
 /* Solid-angle pdf that pc_bsdf_sample(wo) produces wi (0 for delta lobes). */
 float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
                   vec3 wo, vec3 wi);
-/* pc_bsdf_eval(wo, wi), with pc_bsdf_pdf(wo, wi) in *pdf and pc_bsdf_pdf(wi, wo) in *pdf_rev
- * (bit for bit the same values), the pair brought into the shading frame once. */
-vec3 pc_bsdf_eval_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
-                       vec3 wo, vec3 wi, pc_transport mode, float *pdf, float *pdf_rev);
-/* pc_bsdf_pdf(wo, wi) in *pdf and pc_bsdf_pdf(wi, wo) in *pdf_rev. */
-void pc_bsdf_pdfs(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi,
-                  float *pdf, float *pdf_rev);
-
 /* The wo side of the queries above, brought into the shading frame once: a path vertex answers
  * many queries with the same wo (each connection, and the pdfs of the edge it extends along).
- * The *_out queries return bit for bit what the plain ones return for that wo. */
+ * The *_out queries return bit for bit what the plain ones return for that wo;
+ * pc_bsdf_eval_pdfs_out gives pc_bsdf_eval(wo, wi), pc_bsdf_pdf(wo, wi) in *pdf and
+ * pc_bsdf_pdf(wi, wo) in *pdf_rev, pc_bsdf_pdfs_out the two pdfs alone. */
 typedef struct pc_bsdf_out {
   const pc_material *m; /* what the queries evaluate (a bumpmap's wrapped material); NULL: all zero */
   bool bump;            /* a bumpmap's: wi must be on the same side of both frames too */
@@ -173,7 +167,9 @@ bool pc_material_has_delta(const pc_material *materials, int n, int i);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
  * point (not on depth or directions) so a reverse pdf can include it. */
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);
-/* The same for the material o was made from (m), reading what o already holds. */
+/* pc_bsdf_is_delta(m) and pc_bsdf_continuation for the material o was made from (m), from what
+ * o already holds. */
+bool pc_bsdf_out_is_delta(const pc_bsdf_out *o, const pc_material *m);
 float pc_bsdf_out_continuation(const pc_bsdf_out *o, const pc_material *m, const pc_texture *texs,
                                const pc_shading *sh);
 

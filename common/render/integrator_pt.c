@@ -18,7 +18,7 @@ static float nee_pdf(const pc_scene *s, int li, vec3 from, vec3 p, vec3 n) {
 /* Next-event estimation at hit h (s=1): one light sample, MIS-weighted against BSDF sampling
  * (whose pdf includes the continuation q); the weighted contribution before the path's
  * throughput, zero when there is none. */
-static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading *sh, const pc_hit *h, vec3 wo, float q) {
+static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_bsdf_out *o, const pc_shading *sh, const pc_hit *h, float q) {
   const pc_scene *s = c->scene;
   const pc_render_settings *set = c->set;
   float pick;
@@ -27,6 +27,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
   float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
   vec3 wi, le, f;
   float pl; /* solid-angle pdf of wi; 0 for a point or spot light (delta) */
+  float pb, pb_rev; /* BSDF sampling's pdf of wi (without q), and of the reverse (unused) */
   float geo = 1.f; /* point or spot light: 1 / d^2 */
   bool visible;
   if (l->type == PC_LIGHT_ENV) {
@@ -34,7 +35,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
     pl *= pick;
     if (!(pl > 0.f)) return v3s(0.f);
     le = pc_env_le(l, wi);
-    f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
+    f = pc_bsdf_eval_pdfs_out(o, s->textures, sh, wi, PC_RADIANCE, &pb, &pb_rev);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
     c->rays++;
     visible = pc_scene_escapes(s, h->p, h->ng, h->eps, wi);
@@ -53,7 +54,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
       float cosl = v3_absdot(lp.n, wi);
       pl = pick * lp.pdf_area * d2 / cosl;
     }
-    f = pc_bsdf_eval(m, s->textures, sh, wo, wi, PC_RADIANCE);
+    f = pc_bsdf_eval_pdfs_out(o, s->textures, sh, wi, PC_RADIANCE, &pb, &pb_rev);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
     c->rays++;
     visible = pc_scene_visible(s, h->p, h->ng, h->eps, lp.p, lp.n, lp.eps);
@@ -61,8 +62,7 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_material *m, const pc_shading 
   if (!visible) return v3s(0.f);
   float cosi = v3_absdot(wi, sh->sh.n), w = 1.f;
   if (pl > 0.f) {
-    float pb = pc_bsdf_pdf(m, s->textures, sh, wo, wi) * q;
-    float a = pc_mis_term(set, pl), b = pc_mis_term(set, pb);
+    float a = pc_mis_term(set, pl), b = pc_mis_term(set, pb * q);
     w = a / (a + b);
     geo = 1.f / pl;
   }
@@ -115,17 +115,20 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
     const pc_material *m = &s->materials[shape->material];
     pc_shading sh;
     pc_shading_from_hit(&sh, s, &h, wo);
-    float q = pc_bsdf_continuation(m, s->textures, &sh);
+    /* wo in the shading frame, once for the vertex's queries */
+    pc_bsdf_out bo;
+    pc_bsdf_out_make(&bo, m, s->textures, &sh, wo);
+    float q = pc_bsdf_out_continuation(&bo, m, s->textures, &sh);
 
-    if (!pc_bsdf_is_delta(m)) {
-      vec3 v = nee(c, &rng, m, &sh, &h, wo, q);
+    if (!pc_bsdf_out_is_delta(&bo, m)) {
+      vec3 v = nee(c, &rng, &bo, &sh, &h, q);
       if (!v3_is_zero(v)) pc_tctx_add(c, PC_LAYER_NEE, 1, depth + 1, x, y, v3_mul(beta, v));
     }
 
     if (!(q > 0.f) || pc_rng_f(&rng) >= q) break;
     pc_bsdf_sampled bs;
     float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), u2 = pc_rng_f(&rng);
-    if (!pc_bsdf_sample(m, s->textures, &sh, wo, u0, u1, u2, PC_RADIANCE, &bs)) break;
+    if (!pc_bsdf_sample_out(&bo, s->textures, &sh, u0, u1, u2, PC_RADIANCE, &bs)) break;
     if (!(bs.pdf > 0.f) || v3_is_zero(bs.f)) break;
     beta = v3_mul(beta, v3_scale(bs.f, v3_absdot(bs.wi, sh.sh.n) / (bs.pdf * q)));
     if (!v3_is_finite(beta)) break;

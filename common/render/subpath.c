@@ -89,7 +89,7 @@ static int walk(pc_tctx *c, const pc_mis_counts *mc, pc_rng *rng, pc_path_vertex
     cur->light = shape->light;
     cur->depth = nv + 1;
     cur->q = pc_bsdf_out_continuation(&cur->out, m, s->textures, &cur->sh);
-    cur->delta = cur->out.m ? cur->out.delta : pc_bsdf_is_delta(m); /* a bumpmap's is its wrapped one's */
+    cur->delta = pc_bsdf_out_is_delta(&cur->out, m);
     pc_mis_extend(mc, prev, light_side, cur, pdf_fwd, pdf_rev, delta, cos_out, cos_in, d2);
     nv++;
     if (hit && cur->light >= 0) {
