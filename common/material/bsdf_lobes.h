@@ -66,6 +66,9 @@ bool pc_diffuse_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float 
 bool pc_conductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 vec3 pc_roughconductor_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+/* _eval(wo, wi) with _pdf(wo, wi) in *pdf and _pdf(wi, wo) in *pdf_rev, bit for bit, sharing the
+ * half vector and the microfacet terms between the three (likewise for roughplastic). */
+vec3 pc_roughconductor_eval_pdfs(const pc_lobe_ctx *c, vec3 wo, vec3 wi, float *pdf, float *pdf_rev);
 bool pc_roughconductor_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 
 vec3 pc_plastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
@@ -73,6 +76,7 @@ float pc_plastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 bool pc_plastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
 float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi);
+vec3 pc_roughplastic_eval_pdfs(const pc_lobe_ctx *c, vec3 wo, vec3 wi, float *pdf, float *pdf_rev);
 bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s);
 void pc_plastic_prepare(pc_material *m);
 

@@ -66,31 +66,55 @@ float pc_rough_trans_in(const pc_material *m, float cos_theta) {
   return (1.f - t) * m->rough_trans_in[i] + t * m->rough_trans_in[i + 1];
 }
 
+/* The value for the half vector h of (wo, wi), from D(h), the masking g (read only where D > 0)
+ * and the transmittances t_o, t_i into the base along wo and wi. */
+static vec3 rough_value(const pc_lobe_ctx *c, vec3 wo, vec3 wi, vec3 h, float d, float g, float t_o, float t_i) {
+  const pc_material *m = c->m;
+  float eta = pc_rel_eta(m), spec = 0.f;
+  if (d > 0.f) spec = pc_fresnel_dielectric(v3_dot(wo, h), eta, NULL) * d * g / (4.f * wo.z * wi.z);
+  float diff = t_o * t_i * PC_INV_PI / (eta * eta);
+  vec3 base = base_albedo(c, 1.f - m->rough_trans_avg_int);
+  return v3_add(v3_scale(pc_tex(c, &m->specular), spec), v3_scale(base, diff));
+}
+
+/* The pdf of sampling wi from wo (coating or base, by the coating's reflectance 1 - t_o), from
+ * D(h) and G1(wo, h). */
+static float rough_pdf(const pc_material *m, const pc_microfacet *mf, vec3 wo, vec3 wi, vec3 h, float d, float g1,
+                       float t_o) {
+  float ps = pc_spec_prob(m, 1.f - t_o);
+  float dot = v3_dot(wo, h), spec = 0.f;
+  if (dot > 0.f) spec = pc_mf_pdf_of(mf, wo, h, d, g1) / (4.f * dot);
+  return ps * spec + (1.f - ps) * wi.z * PC_INV_PI;
+}
+
 vec3 pc_roughplastic_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
   const pc_material *m = c->m;
-  float eta = pc_rel_eta(m);
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
   vec3 h = v3_norm(v3_add(wo, wi));
-  float spec = 0.f, d = pc_mf_d(&mf, h);
-  if (d > 0.f) {
-    float g = pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h);
-    spec = pc_fresnel_dielectric(v3_dot(wo, h), eta, NULL) * d * g / (4.f * wo.z * wi.z);
-  }
-  float diff = pc_rough_trans_in(m, wo.z) * pc_rough_trans_in(m, wi.z) * PC_INV_PI / (eta * eta);
-  vec3 base = base_albedo(c, 1.f - m->rough_trans_avg_int);
-  return v3_add(v3_scale(pc_tex(c, &m->specular), spec), v3_scale(base, diff));
+  float d = pc_mf_d(&mf, h), g = d > 0.f ? pc_mf_g1(&mf, wo, h) * pc_mf_g1(&mf, wi, h) : 0.f;
+  return rough_value(c, wo, wi, h, d, g, pc_rough_trans_in(m, wo.z), pc_rough_trans_in(m, wi.z));
 }
 
 float pc_roughplastic_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
   const pc_material *m = c->m;
-  float ps = pc_spec_prob(m, 1.f - pc_rough_trans_in(m, wo.z));
-  vec3 h = v3_norm(v3_add(wo, wi));
-  float dot = v3_dot(wo, h), spec = 0.f;
   pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
-  if (dot > 0.f) spec = pc_mf_pdf(&mf, wo, h) / (4.f * dot);
-  return ps * spec + (1.f - ps) * wi.z * PC_INV_PI;
+  vec3 h = v3_norm(v3_add(wo, wi));
+  return rough_pdf(m, &mf, wo, wi, h, pc_mf_d(&mf, h), pc_mf_g1(&mf, wo, h), pc_rough_trans_in(m, wo.z));
+}
+
+vec3 pc_roughplastic_eval_pdfs(const pc_lobe_ctx *c, vec3 wo, vec3 wi, float *pdf, float *pdf_rev) {
+  *pdf = *pdf_rev = 0.f;
+  if (!(wo.z > 0.f && wi.z > 0.f)) return v3s(0.f);
+  const pc_material *m = c->m;
+  pc_microfacet mf = pc_mf_make(m->distribution, m->alpha);
+  vec3 h = v3_norm(v3_add(wo, wi)); /* (wi, wo)'s too: the sum is the same either way round */
+  float d = pc_mf_d(&mf, h), go = pc_mf_g1(&mf, wo, h), gi = pc_mf_g1(&mf, wi, h);
+  float t_o = pc_rough_trans_in(m, wo.z), t_i = pc_rough_trans_in(m, wi.z);
+  *pdf = rough_pdf(m, &mf, wo, wi, h, d, go, t_o);
+  *pdf_rev = rough_pdf(m, &mf, wi, wo, h, d, gi, t_i);
+  return rough_value(c, wo, wi, h, d, go * gi, t_o, t_i);
 }
 
 bool pc_roughplastic_sample(const pc_lobe_ctx *c, vec3 wo, float u0, float u1, float u2, pc_lobe_sample *s) {

@@ -99,14 +99,24 @@ vec3 pc_mf_sample(const pc_microfacet *d, vec3 v, float u1, float u2) {
   return v3(s * cosf(phi), s * sinf(phi), c);
 }
 
-float pc_mf_visible(const pc_microfacet *d, vec3 v, vec3 m) {
+static float visible_of(vec3 v, vec3 m, float dm, float g1) {
   if (!(v.z > 0.f)) return 0.f;
   float dot = v3_dot(v, m);
   if (!(dot > 0.f)) return 0.f;
-  return pc_mf_g1(d, v, m) * dot * pc_mf_d(d, m) / v.z;
+  return g1 * dot * dm / v.z;
+}
+
+float pc_mf_visible(const pc_microfacet *d, vec3 v, vec3 m) {
+  if (!(v.z > 0.f && v3_dot(v, m) > 0.f)) return 0.f; /* D and G1 only where they count */
+  return visible_of(v, m, pc_mf_d(d, m), pc_mf_g1(d, v, m));
 }
 
 float pc_mf_pdf(const pc_microfacet *d, vec3 v, vec3 m) {
   if (d->type == PC_MF_GGX) return pc_mf_visible(d, v, m);
   return pc_mf_d(d, m) * fmaxf(m.z, 0.f);
+}
+
+float pc_mf_pdf_of(const pc_microfacet *d, vec3 v, vec3 m, float dm, float g1) {
+  if (d->type == PC_MF_GGX) return visible_of(v, m, dm, g1);
+  return dm * fmaxf(m.z, 0.f);
 }

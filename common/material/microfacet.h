@@ -41,5 +41,8 @@ vec3 pc_mf_sample(const pc_microfacet *d, vec3 v, float u1, float u2);
 float pc_mf_pdf(const pc_microfacet *d, vec3 v, vec3 m);
 /* The distribution of normals visible from v: G1(v, m) max(0, v.m) D(m) / v.z. */
 float pc_mf_visible(const pc_microfacet *d, vec3 v, vec3 m);
+/* pc_mf_pdf(d, v, m) from dm = pc_mf_d(d, m) and g1 = pc_mf_g1(d, v, m) already computed, bit for
+ * bit: a query that needs both directions' pdfs and the value takes D and G1 once each. */
+float pc_mf_pdf_of(const pc_microfacet *d, vec3 v, vec3 m, float dm, float g1);
 
 #endif

@@ -424,6 +424,59 @@ static void test_finite(void **state) {
 
 /* ---- 2. reciprocity and the adjoint of importance transport ---- */
 
+static bool same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+static bool same_bits3(vec3 a, vec3 b) { return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z); }
+
+/* A path vertex's queries (pc_bsdf_out: its value and both pdfs from one call, its sampled
+ * value and pdfs) answer bit for bit what the plain queries answer for the same directions, on
+ * every case: they take shortcuts (a diffuse albedo read once, the microfacet terms shared
+ * between value and pdfs) that must not change a bit of any image. */
+static void test_out_queries(void **state) {
+  (void)state;
+  tcase cases[MAX_CASES];
+  int n = all_cases(cases);
+  pc_rng r = pc_rng_make(5, 0, PC_STREAM_MISC, 5);
+  for (int c = 0; c < n; c++) {
+    const pc_material *m = &cases[c].m;
+    const pc_shading *sh = &cases[c].sh;
+    int nonzero = 0, sampled = 0;
+    for (int i = 0; i < 4000; i++) {
+      vec3 wo = uniform_sphere(&r), wi = uniform_sphere(&r);
+      pc_bsdf_out o;
+      pc_bsdf_out_make(&o, m, NULL, sh, wo);
+      float p_plain = pc_bsdf_pdf(m, NULL, sh, wo, wi), p_rev_plain = pc_bsdf_pdf(m, NULL, sh, wi, wo);
+      for (int mode = 0; mode < 2; mode++) {
+        pc_transport tm = mode ? PC_IMPORTANCE : PC_RADIANCE;
+        float p, p_rev;
+        vec3 f = pc_bsdf_eval_pdfs_out(&o, NULL, sh, wi, tm, &p, &p_rev);
+        vec3 f_plain = pc_bsdf_eval(m, NULL, sh, wo, wi, tm);
+        if (!same_bits3(f, f_plain) || !same_bits(p, p_plain) || !same_bits(p_rev, p_rev_plain)) {
+          printf("%s: eval_pdfs_out (%g %g %g) %g %g, plain (%g %g %g) %g %g\n", cases[c].name, f.x, f.y, f.z, p, p_rev,
+                 f_plain.x, f_plain.y, f_plain.z, p_plain, p_rev_plain);
+          fail();
+        }
+        nonzero += !v3_is_zero(f);
+        pc_bsdf_sampled bs;
+        float u0 = pc_rng_f(&r), u1 = pc_rng_f(&r), u2 = pc_rng_f(&r);
+        if (!pc_bsdf_sample_out(&o, NULL, sh, u0, u1, u2, tm, &bs) || bs.is_delta) continue;
+        sampled++;
+        vec3 fs = pc_bsdf_eval(m, NULL, sh, wo, bs.wi, tm);
+        float ps = pc_bsdf_pdf(m, NULL, sh, wo, bs.wi);
+        if (!same_bits3(bs.f, fs) || !same_bits(bs.pdf, ps)) {
+          printf("%s: sample_out (%g %g %g) %g, plain (%g %g %g) %g\n", cases[c].name, bs.f.x, bs.f.y, bs.f.z, bs.pdf,
+                 fs.x, fs.y, fs.z, ps);
+          fail();
+        }
+      }
+      float p2, p2_rev;
+      pc_bsdf_pdfs_out(&o, NULL, sh, wi, &p2, &p2_rev);
+      assert_true(same_bits(p2, p_plain) && same_bits(p2_rev, p_rev_plain));
+    }
+    bool empty = m->type == PC_MAT_MASK && v3_is_zero(m->weight.value);
+    assert_true(pc_bsdf_is_delta(m) || empty || (nonzero > 200 && sampled > 200));
+  }
+}
+
 static void test_reciprocity_adjoint(void **state) {
   (void)state;
   tcase cases[MAX_CASES];
@@ -1347,6 +1400,7 @@ int main(void) {
       cmocka_unit_test(test_mix_reductions),
       cmocka_unit_test(test_finite),
       cmocka_unit_test(test_reciprocity_adjoint),
+      cmocka_unit_test(test_out_queries),
       cmocka_unit_test(test_delta_adjoint),
       cmocka_unit_test(test_energy),
       cmocka_unit_test(test_chi2),
