@@ -187,15 +187,17 @@ static inline void orient(const pc_material *m, vec3 *wo, vec3 *wi) {
   }
 }
 
-/* A query's local directions and geometric cosines (go, gi: sign irrelevant, only products used)
- * travel as separate values, never bundled in a struct: GCC kept such a bundle in memory and
- * read it back with loads wider or narrower than the stores that had just formed it, which
- * cannot forward (a stall of a dozen cycles per query). */
+/* What every evaluation ends with: the adjoint correction of importance transport, and no NaN
+ * or Inf out. */
 static inline vec3 finish_eval(vec3 f, vec3 wo, vec3 wi, float go, float gi, pc_transport mode) {
   if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(wo.z, wi.z, go, gi));
   return v3_is_finite(f) ? f : v3s(0.f);
 }
 
+/* A query's local directions and geometric cosines (go, gi: sign irrelevant, only products used)
+ * travel as separate values, never bundled in a struct: GCC kept such a bundle in memory and
+ * read it back with loads wider or narrower than the stores that had just formed it, which
+ * cannot forward (a stall of a dozen cycles per query). */
 static vec3 eval_local(const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo, vec3 wi, float go,
                        float gi, pc_transport mode) {
   pc_lobe_ctx c = {m, texs, sh->uv, mode};
@@ -266,7 +268,6 @@ static vec3 lobe_eval_pdfs(const pc_lobe_ctx *c, vec3 wo, vec3 wi, float *pdf, f
   }
 }
 
-
 /* wi in the shading frame (li) and its geometric cosine (gi), with o's wo not yet turned over;
  * false where every query of the pair, either way round, is zero (a bumpmap's wi on different
  * sides of its two frames, or the sides of the shading and geometric normals disagree). The
@@ -303,15 +304,20 @@ float pc_bsdf_pdf(const pc_material *m, const pc_texture *texs, const pc_shading
   return pdf_local(o.m, texs, sh, lo, li);
 }
 
-/* Both pdfs of the pair (o's wo, li), qo and qi the pair turned over as the lobes see it. A
- * diffuse pair, the commonest query, skips the lobe dispatch: pc_diffuse_pdf both ways (a pair
- * on one side turns over as a whole, so the swapped pair's orientation is the pair's; a pair on
- * two sides has pdfs 0 either way). */
+/* A diffuse pair's pdfs both ways, without the lobe dispatch (a pair on one side turns over as
+ * a whole, so the swapped pair's orientation is the pair's; a pair on two sides has pdfs 0
+ * either way). */
+static inline void diffuse_pdfs(vec3 wo, vec3 wi, float *pdf, float *pdf_rev) {
+  *pdf = pc_diffuse_pdf(NULL, wo, wi);
+  *pdf_rev = pc_diffuse_pdf(NULL, wi, wo);
+}
+
+/* Both pdfs of the pair (o's wo, li), qo and qi the pair turned over as the lobes see it; a
+ * diffuse pair, the commonest query, by diffuse_pdfs. */
 static inline void pdfs_local(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 li, vec3 qo,
                               vec3 qi, float *pdf, float *pdf_rev) {
   if (o->m->type == PC_MAT_DIFFUSE) {
-    *pdf = pc_diffuse_pdf(NULL, qo, qi);
-    *pdf_rev = pc_diffuse_pdf(NULL, qi, qo);
+    diffuse_pdfs(qo, qi, pdf, pdf_rev);
   } else {
     *pdf = pdf_local(o->m, texs, sh, qo, qi);
     vec3 ro = li, ri = o->local;
@@ -333,8 +339,9 @@ void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_sha
 
 /* pc_bsdf_eval_pdfs_out for a microfacet_reflection material, kept out of line: inlined, its
  * set-up was hoisted above the diffuse path (cornell-box's eval_pdfs_out +11% instructions). */
-__attribute__((noinline)) static vec3 eval_pdfs_microfacet(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
-                                 pc_transport mode, float *pdf, float *pdf_rev) {
+__attribute__((noinline)) static vec3 eval_pdfs_microfacet(const pc_bsdf_out *o, const pc_texture *texs,
+                                                           const pc_shading *sh, vec3 wi, pc_transport mode,
+                                                           float *pdf, float *pdf_rev) {
   vec3 li;
   float gi, p, p_rev;
   *pdf = *pdf_rev = 0.f;
@@ -357,16 +364,11 @@ vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const p
   if (!out_local(o, sh, wi, &li, &gi)) return v3s(0.f);
   vec3 qo = o->local, qi = li;
   orient(o->m, &qo, &qi);
-  if (o->m->type == PC_MAT_DIFFUSE) {
-    /* A pair through the surface: value and both pdfs are 0 (pc_diffuse_eval and _pdf), as the
-     * full query would find; PCBPT's connections to its stored vertices end here often. */
-    if (!(qo.z > 0.f && qi.z > 0.f)) return v3s(0.f);
-    *pdf = pc_diffuse_pdf(NULL, qo, qi);
-    *pdf_rev = pc_diffuse_pdf(NULL, qi, qo);
-    return finish_eval(v3_scale(o->albedo, PC_INV_PI), qo, qi, o->g, gi, mode);
-  }
+  /* A diffuse pair through the surface: value and both pdfs are 0 (pc_diffuse_eval and _pdf),
+   * as the full query would find; PCBPT's connections to its stored vertices end here often. */
+  if (o->m->type == PC_MAT_DIFFUSE && !(qo.z > 0.f && qi.z > 0.f)) return v3s(0.f);
   pdfs_local(o, texs, sh, li, qo, qi, pdf, pdf_rev);
-  return eval_local(o->m, texs, sh, qo, qi, o->g, gi, mode);
+  return out_eval_local(o, texs, sh, qo, qi, gi, mode);
 }
 
 bool pc_bsdf_sample(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
@@ -399,9 +401,8 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
   } else {
-    if (m->type == PC_MAT_DIFFUSE) { /* pdfs as pdfs_local takes them */
-      s.pdf = pc_diffuse_pdf(NULL, lo, s.wi);
-      s.pdf_rev = pc_diffuse_pdf(NULL, s.wi, lo);
+    if (m->type == PC_MAT_DIFFUSE) {
+      diffuse_pdfs(lo, s.wi, &s.pdf, &s.pdf_rev);
       f = out_lobe_eval(o, &c, lo, s.wi);
     } else {
       f = lobe_eval_pdfs(&c, lo, s.wi, &s.pdf, &s.pdf_rev);
@@ -418,6 +419,9 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
   out->is_delta = s.is_delta;
   return true;
 }
+
+/* A continuation probability from the largest reflectance-like value q. */
+static float continuation_of(float q) { return (q > 0.f) ? fminf(q, 1.f) : 0.f; }
 
 /* Russian roulette: the largest channel of the material's reflectance-like parameters at uv,
  * capped at 1. It bounds what one bounce can return (Fresnel and the plastic base never exceed
@@ -472,7 +476,7 @@ float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const p
     break;
   case PC_MAT_BUMPMAP: break;
   }
-  return (q > 0.f) ? fminf(q, 1.f) : 0.f;
+  return continuation_of(q);
 }
 
 bool pc_bsdf_out_is_delta(const pc_bsdf_out *o, const pc_material *m) {
@@ -482,6 +486,5 @@ bool pc_bsdf_out_is_delta(const pc_bsdf_out *o, const pc_material *m) {
 float pc_bsdf_out_continuation(const pc_bsdf_out *o, const pc_material *m, const pc_texture *texs,
                                const pc_shading *sh) {
   if (o->m != m || m->type != PC_MAT_DIFFUSE) return pc_bsdf_continuation(m, texs, sh);
-  float q = v3_maxc(o->albedo);
-  return (q > 0.f) ? fminf(q, 1.f) : 0.f;
+  return continuation_of(v3_maxc(o->albedo));
 }

@@ -48,7 +48,7 @@ float pc_roughconductor_pdf(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
   if (!(wo.z > 0.f && wi.z > 0.f)) return 0.f;
   pc_microfacet mf = pc_mf_make_aniso(c->m->distribution, c->m->alpha, c->m->alpha_v);
   vec3 h = v3_norm(v3_add(wo, wi));
-  if (!(v3_dot(wo, h) > 0.f)) return 0.f;
+  if (!(v3_dot(wo, h) > 0.f)) return 0.f; /* (pdf_of's own test, before D and G1 are taken) */
   return pdf_of(&mf, wo, h, pc_mf_d(&mf, h), pc_mf_g1(&mf, wo, h));
 }
 
