@@ -461,10 +461,10 @@ static void test_out_queries(void **state) {
         if (!pc_bsdf_sample_out(&o, NULL, sh, u0, u1, u2, tm, &bs) || bs.is_delta) continue;
         sampled++;
         vec3 fs = pc_bsdf_eval(m, NULL, sh, wo, bs.wi, tm);
-        float ps = pc_bsdf_pdf(m, NULL, sh, wo, bs.wi);
-        if (!same_bits3(bs.f, fs) || !same_bits(bs.pdf, ps)) {
-          printf("%s: sample_out (%g %g %g) %g, plain (%g %g %g) %g\n", cases[c].name, bs.f.x, bs.f.y, bs.f.z, bs.pdf,
-                 fs.x, fs.y, fs.z, ps);
+        float ps = pc_bsdf_pdf(m, NULL, sh, wo, bs.wi), ps_rev = pc_bsdf_pdf(m, NULL, sh, bs.wi, wo);
+        if (!same_bits3(bs.f, fs) || !same_bits(bs.pdf, ps) || !same_bits(bs.pdf_rev, ps_rev)) {
+          printf("%s: sample_out (%g %g %g) %g %g, plain (%g %g %g) %g %g\n", cases[c].name, bs.f.x, bs.f.y, bs.f.z,
+                 bs.pdf, bs.pdf_rev, fs.x, fs.y, fs.z, ps, ps_rev);
           fail();
         }
       }
