@@ -233,6 +233,8 @@ void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_texture *te
   o->local = frame_to_local(&sh->sh, wo);
   o->g = v3_dot(wo, sh->ng);
   o->albedo = o->m && o->m->type == PC_MAT_DIFFUSE ? pc_slot_eval(&o->m->reflectance, texs, sh->uv) : v3s(0.f);
+  o->diffuse = o->m && o->m->type == PC_MAT_DIFFUSE && !o->bump;
+  o->flip = o->m && flips(o->m, o->local.z);
 }
 
 /* lobe_eval for o's material: a diffuse one from o's albedo, as pc_diffuse_eval computes it. */
@@ -355,8 +357,8 @@ __attribute__((noinline)) static vec3 eval_pdfs_microfacet(const pc_bsdf_out *o,
   return finish_eval(f, qo, qi, o->g, gi, mode);
 }
 
-vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
-                           pc_transport mode, float *pdf, float *pdf_rev) {
+vec3 pc_bsdf_eval_pdfs_out_general(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
+                                   pc_transport mode, float *pdf, float *pdf_rev) {
   if (o->m && microfacet_reflection(o->m)) return eval_pdfs_microfacet(o, texs, sh, wi, mode, pdf, pdf_rev);
   vec3 li;
   float gi;

@@ -144,12 +144,33 @@ typedef struct pc_bsdf_out {
   vec3 local;           /* wo in the shading frame (not turned over by twosided) */
   float g;              /* wo . ng */
   vec3 albedo;          /* a diffuse m's reflectance at the point: its texture read once, not per query */
+  bool diffuse;         /* m is diffuse and not bumped: pc_bsdf_eval_pdfs_out answers inline */
+  bool flip;            /* twosided turns the pair over (wo is behind the frame) */
 } pc_bsdf_out;
 /* Fills *o in place: a struct returned by value was copied with loads wider than the stores
  * that formed it, which cannot forward (pc_shading_make likewise). */
 void pc_bsdf_out_make(pc_bsdf_out *o, const pc_material *m, const pc_texture *texs, const pc_shading *sh, vec3 wo);
-vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
-                           pc_transport mode, float *pdf, float *pdf_rev);
+vec3 pc_bsdf_eval_pdfs_out_general(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
+                                   pc_transport mode, float *pdf, float *pdf_rev);
+/* The diffuse pair inline, where every connection and NEE query asks it: it needs only wi's
+ * cosines with the shading and geometric normals, and as a call it also paid for the frame's
+ * other two axes and the dispatch over lobe types (bsdf.c has the general path; test_bsdf's
+ * test_out_queries holds the two to the plain queries bit for bit). */
+static inline vec3 pc_bsdf_eval_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi,
+                                         pc_transport mode, float *pdf, float *pdf_rev) {
+  if (!o->diffuse) return pc_bsdf_eval_pdfs_out_general(o, texs, sh, wi, mode, pdf, pdf_rev);
+  float si = v3_dot(wi, sh->sh.n), gi = v3_dot(wi, sh->ng);
+  float s = o->local.z * si, g = o->g * gi;
+  *pdf = *pdf_rev = 0.f;
+  if (!((s > 0.f && g > 0.f) || (s < 0.f && g < 0.f))) return v3s(0.f); /* the sides disagree */
+  float qo = o->flip ? -o->local.z : o->local.z, qi = o->flip ? -si : si;
+  if (!(qo > 0.f && qi > 0.f)) return v3s(0.f);
+  *pdf = qi * PC_INV_PI;
+  *pdf_rev = qo * PC_INV_PI;
+  vec3 f = v3_scale(o->albedo, PC_INV_PI);
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, (fabsf(qo) * fabsf(gi)) / (fabsf(o->g) * fabsf(qi)));
+  return v3_is_finite(f) ? f : v3s(0.f);
+}
 void pc_bsdf_pdfs_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, vec3 wi, float *pdf,
                       float *pdf_rev);
 bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_shading *sh, float u0, float u1,
