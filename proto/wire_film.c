@@ -17,6 +17,8 @@
 #include <string.h>
 #include <zstd.h>
 
+#include "big_alloc.h"
+
 #define MAGIC_V1 "PCFILM01"
 #define MAGIC_V2 "PCFILM02"
 #define MAGIC_V3 "PCFILM03"
@@ -491,7 +493,12 @@ static int grow_sink(void *user, const uint8_t *p, size_t n, pc_err *e) {
 }
 
 int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn, pc_err *e) {
+  /* Room for the worst case at once: grown by doubling, the buffer was copied at every step
+   * and each new one faulted in page by page (a tenth of a 16-spp render's page faults).
+   * Pages the output does not reach are never touched. */
   grow_buf b = {0};
+  size_t bound = ZSTD_compressBound(pc_wire_film_size(f));
+  if (!ZSTD_isError(bound) && (b.p = pc_big_alloc(bound)) != NULL) b.cap = bound;
   int rc = pc_wire_film_compress(f, threads, grow_sink, &b, NULL, e);
   if (rc) {
     free(b.p);

@@ -3,6 +3,8 @@
  * in beauty_max (docs/variance.md), and mixes of films with fixed weights (docs/auto.md). */
 #include "film.h"
 
+#include "big_alloc.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,17 +13,9 @@
 /* Zeroed sums whose pages are already written. A fresh calloc is mapped lazily, and the
  * film's first use is a read-modify-write (sum += x): the read maps the shared zero page,
  * then the write takes a second fault that copies it and flushes the TLB of every core the
- * process runs on (an IPI per 4 KiB page). Writing each page first takes one plain fault.
- * The writes go through a volatile pointer because a compiler may drop a memset of zeros
- * after calloc. */
-static double *alloc_sums(size_t n) {
-  double *p = calloc(n, sizeof *p);
-  if (p) {
-    volatile unsigned char *b = (volatile unsigned char *)p;
-    for (size_t o = 0; o < n * sizeof *p; o += 4096) b[o] = 0;
-  }
-  return p;
-}
+ * process runs on (an IPI per 4 KiB page). pc_big_zalloc writes every page first, in huge
+ * pages where it can. */
+static double *alloc_sums(size_t n) { return pc_big_zalloc(n * sizeof(double)); }
 
 /* A layer whose norm is not in `stored` (PC_FILM_NORM bits) has no storage. */
 static int add_layer(pc_film *f, const char *name, pc_norm norm, unsigned stored, pc_err *e) {

@@ -8,12 +8,13 @@
 #include <string.h>
 #include <stdlib.h>
 
+#include "big_alloc.h"
 #include "film.h"
 
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e) {
   size_t n = (size_t)f->w * f->h * 3;
   int nl = f->nlayers + 1; /* the beauty, every layer but beauty_sq, and the variance */
-  float *pix = malloc(sizeof(float) * n * (size_t)nl);
+  float *pix = pc_big_alloc(sizeof(float) * n * (size_t)nl); /* a 512x512 film's layers: 14k faults in 4 KiB pages */
   pc_exr_layer *layers = calloc((size_t)nl, sizeof *layers);
   enum { ITER_ATTRS = 9 };
   pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 2 + ITER_ATTRS + nextra), sizeof *attrs);

@@ -1,0 +1,33 @@
+/* big_alloc.c: see big_alloc.h. */
+#define _DEFAULT_SOURCE
+#include "big_alloc.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+
+#define HUGE_PAGE ((size_t)2 << 20)
+
+void *pc_big_alloc(size_t n) {
+  if (n == 0) return NULL;
+  if (n < HUGE_PAGE) return malloc(n);
+  if (n > SIZE_MAX - HUGE_PAGE) return NULL;
+  size_t whole = (n + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+  void *p = aligned_alloc(HUGE_PAGE, whole);
+  if (!p) return NULL;
+#ifdef MADV_HUGEPAGE
+  /* Advice only: where the kernel has no huge pages for us (THP off, or not Linux), the buffer
+   * is the same, in small pages. */
+  if (madvise(p, whole, MADV_HUGEPAGE) != 0) {
+    /* nothing to undo */
+  }
+#endif
+  return p;
+}
+
+void *pc_big_zalloc(size_t n) {
+  void *p = pc_big_alloc(n);
+  if (p) memset(p, 0, n);
+  return p;
+}
