@@ -49,8 +49,9 @@ workers() { "$B/pcbpt-coord" workers $H --json | python3 -c 'import json,sys; pr
 for _ in $(seq 300); do [ "$(workers 2>/dev/null || echo 0)" = 2 ] && break; sleep 0.2; done
 [ "$(workers)" = 2 ] || fail "two workers did not connect"
 # Long enough (seconds) that the scancel, which Slurm may deliver a second or two late on a busy
-# machine, lands while the worker still holds a range.
-SPP=960
+# machine, lands while the worker still holds a range: 960 iterations were done in 2.5 s on a
+# faster machine, before the status polls below had seen the job start.
+SPP=3840
 J=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method pt --spp $SPP --width 64 --height 64 $H | tail -1) \
   || fail "submit"
 field() { "$B/pcbpt-coord" status "$J" $H --json | python3 -c "import json,sys; print(json.load(sys.stdin)['$1'])"; }
