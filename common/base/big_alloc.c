@@ -17,10 +17,9 @@ void *pc_big_alloc(size_t n) {
   void *p = aligned_alloc(HUGE_PAGE, whole);
   if (!p) return NULL;
 #ifdef MADV_HUGEPAGE
-  /* Advice only: where the kernel has no huge pages for us (THP off, or not Linux), the buffer
-   * is the same, in small pages. */
   if (madvise(p, whole, MADV_HUGEPAGE) != 0) {
-    /* nothing to undo */
+    /* Advice only: where the kernel has no huge pages to give (THP off, or another kernel), the
+     * buffer is the same in small pages, so a refusal changes nothing here. */
   }
 #endif
   return p;

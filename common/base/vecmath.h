@@ -47,9 +47,9 @@ static inline float v3_luminance(vec3 c) { return 0.212671f * c.x + 0.715160f * 
  * (the film's trace of single iterations, a study's tails and strategy shares). */
 static inline double pc_luminance709(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 /* The two tests below read the bits: written with && over float compares they were three
- * compare-and-branch pairs each (with the branches for NaN's parity flag), 5% of a cornell-box
- * BDPT eye pass's instructions. A float is +-0 iff its bits shifted out of the sign are 0, and
- * finite iff its exponent bits are not all set. */
+ * compare-and-branch pairs each (with the branches for NaN's parity flag); this way a
+ * cornell-box BDPT eye pass executes 0.8% fewer instructions. A float is +-0 iff its bits
+ * shifted out of the sign are 0, and finite iff its exponent bits are not all set. */
 static inline uint32_t pc_float_bits(float f) {
   uint32_t u;
   memcpy(&u, &f, sizeof u);

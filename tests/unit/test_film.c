@@ -3,7 +3,8 @@
  * and counts (beauty_max: their max, in any order); non-finite samples are dropped and counted;
  * the EXR carries layers and counts; a mix of films (the pilot's and the job's) has the weighted
  * images and the weighted variance; the trace of single iterations concatenates, refuses an
- * iteration twice, and gives the per-iteration errors of a hand-made case exactly. */
+ * iteration twice, and gives the per-iteration errors of a hand-made case exactly; the layers'
+ * big buffers (pc_big_alloc) come zeroed and 2 MiB-aligned. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -15,6 +16,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "big_alloc.h"
 #include "film.h"
 #include "image.h"
 
@@ -411,6 +413,34 @@ static void test_stored_norms(void **state) {
   pc_film_free(&all);
 }
 
+/* The films' big buffers: zeroed, whole, 2 MiB-aligned from 2 MiB on, and refused for sizes
+ * that cannot be rounded up to a whole huge page. */
+static void test_big_alloc(void **state) {
+  (void)state;
+  const size_t sizes[] = {1, 4095, ((size_t)2 << 20) - 1, (size_t)2 << 20, ((size_t)5 << 20) + 3};
+  for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+    size_t n = sizes[i];
+    unsigned char *p = pc_big_zalloc(n);
+    assert_non_null(p);
+    if (n >= ((size_t)2 << 20)) assert_int_equal((uintptr_t)p % ((uintptr_t)2 << 20), 0);
+    for (size_t k = 0; k < n; k += 4093) assert_int_equal(p[k], 0);
+    assert_int_equal(p[n - 1], 0);
+    p[n - 1] = 7; /* the whole of it is ours */
+    free(p);
+  }
+  assert_null(pc_big_alloc(0));
+  assert_null(pc_big_alloc(SIZE_MAX));
+  assert_null(pc_big_alloc(SIZE_MAX - ((size_t)1 << 20)));
+  pc_film f;
+  pc_err e = {0};
+  assert_int_equal(pc_film_init(&f, 512, 512, 0, &e), 0);
+  for (int l = 0; l < f.nlayers; l++) {
+    assert_int_equal((uintptr_t)f.layers[l].sum % ((uintptr_t)2 << 20), 0);
+    assert_true(f.layers[l].sum[0] == 0.0 && f.layers[l].sum[512 * 512 * 3 - 1] == 0.0);
+  }
+  pc_film_free(&f);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_layers_and_normalization),
@@ -420,6 +450,7 @@ int main(void) {
       cmocka_unit_test(test_trace),
       cmocka_unit_test(test_bad_sizes),
       cmocka_unit_test(test_stored_norms),
+      cmocka_unit_test(test_big_alloc),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
