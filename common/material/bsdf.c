@@ -56,23 +56,10 @@ static bool is_dielectric(const pc_material *m) {
   return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
 }
 
-/* Both the geometric and the shading normal must agree on reflection vs transmission, else
- * light would leak through the surface (Veach 1997, 5.3). NaN directions fail here too. */
-static bool sides_agree(float so, float si, float go, float gi) {
-  float s = so * si, g = go * gi;
-  return (s > 0.f && g > 0.f) || (s < 0.f && g < 0.f);
-}
-
 /* Mitsuba's twosided wrapper turns the frame over when wo is behind it; the dielectrics have
  * their own notion of both sides. */
 static bool flips(const pc_material *m, float so) {
   return m->twosided && !is_dielectric(m) && so < 0.f;
-}
-
-/* |wo.ns||wi.ng| / (|wo.ng||wi.ns|): makes importance transport the adjoint of radiance
- * transport with shading normals. sides_agree has already excluded zero denominators. */
-static float adjoint_correction(float so, float si, float go, float gi) {
-  return (fabsf(so) * fabsf(gi)) / (fabsf(go) * fabsf(si));
 }
 
 static vec3 lobe_eval(const pc_lobe_ctx *c, vec3 wo, vec3 wi) {
@@ -190,7 +177,7 @@ static inline void orient(const pc_material *m, vec3 *wo, vec3 *wi) {
 /* What every evaluation ends with: the adjoint correction of importance transport, and no NaN
  * or Inf out. */
 static inline vec3 finish_eval(vec3 f, vec3 wo, vec3 wi, float go, float gi, pc_transport mode) {
-  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(wo.z, wi.z, go, gi));
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, pc_adjoint_correction(wo.z, wi.z, go, gi));
   return v3_is_finite(f) ? f : v3s(0.f);
 }
 
@@ -279,7 +266,7 @@ static inline bool out_local(const pc_bsdf_out *o, const pc_shading *sh, vec3 wi
   if (!o->m || o->delta || (o->bump && !bump_side(sh, wi))) return false;
   *li = frame_to_local(&sh->sh, wi);
   *gi = v3_dot(wi, sh->ng);
-  return sides_agree(o->local.z, li->z, o->g, *gi);
+  return pc_sides_agree(o->local.z, li->z, o->g, *gi);
 }
 
 vec3 pc_bsdf_eval(const pc_material *m, const pc_texture *texs, const pc_shading *sh,
@@ -398,7 +385,7 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
    * last bit. */
   s.wi = frame_to_local(&sh->sh, wi);
   s.wi.z *= zsign;
-  if (!sides_agree(lo.z, s.wi.z, go, gi) || (o->bump && !bump_side(sh, wi))) return false;
+  if (!pc_sides_agree(lo.z, s.wi.z, go, gi) || (o->bump && !bump_side(sh, wi))) return false;
   vec3 f;
   if (s.is_delta) {
     f = v3_scale(s.f_cos, 1.f / fabsf(s.wi.z));
@@ -410,7 +397,7 @@ bool pc_bsdf_sample_out(const pc_bsdf_out *o, const pc_texture *texs, const pc_s
       f = lobe_eval_pdfs(&c, lo, s.wi, &s.pdf, &s.pdf_rev);
     }
   }
-  if (mode == PC_IMPORTANCE) f = v3_scale(f, adjoint_correction(lo.z, s.wi.z, go, gi));
+  if (mode == PC_IMPORTANCE) f = v3_scale(f, pc_adjoint_correction(lo.z, s.wi.z, go, gi));
   if (!v3_is_finite(f) || v3_is_zero(f) || !(s.pdf > 0.f) || !isfinite(s.pdf) ||
       !isfinite(s.pdf_rev) || !v3_is_finite(wi))
     return false;
