@@ -351,7 +351,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     /* The first chunk sizes the buffer for the whole upload as announced (within the limit),
      * so it is neither copied as it grows nor faulted in 4 KiB page by page. */
     size_t whole = (size_t)u->nchunks * PC_WIRE_CHUNK;
-    size_t cap = p->up_cap ? p->up_cap * 2 : (whole < limit ? whole : limit);
+    size_t cap = p->up_cap ? p->up_cap : (whole < limit ? whole : limit);
     while (cap < p->up_len + u->data.len) cap *= 2;
     uint8_t *nb = p->up_buf ? realloc(p->up_buf, cap) : pc_big_alloc(cap);
     if (!nb) { drop(p, "out of memory for an upload"); return; }
