@@ -14,6 +14,7 @@
 #include <zstd.h>
 
 #include "pcbpt.pb-c.h"
+#include "big_alloc.h"
 #include "file_read.h"
 #include "wire_film.h"
 
@@ -29,7 +30,7 @@ static int read_file(const char *path, uint8_t **out, size_t *n, pc_err *e) {
     close(fd);
     return pc_errf(e, PC_ELIMIT, "%s: %lld bytes exceeds the bundle limit", path, (long long)st.st_size);
   }
-  uint8_t *b = malloc((size_t)st.st_size + 1);
+  uint8_t *b = pc_big_alloc((size_t)st.st_size + 1);
   if (!b) { close(fd); return pc_errf(e, PC_ENOMEM, "%s: out of memory", path); }
   size_t got = 0;
   while (got < (size_t)st.st_size) {
@@ -113,7 +114,7 @@ int pc_bundle_create(const char *const *files, const char *const *names, int nfi
     b.n_files = (size_t)nfiles;
     b.files = fp;
     size_t len = pcbpt__bundle__get_packed_size(&b);
-    uint8_t *raw = malloc(len ? len : 1);
+    uint8_t *raw = pc_big_alloc(len ? len : 1);
     if (!raw) rc = pc_errf(e, PC_ENOMEM, "bundle: out of memory for %zu bytes", len);
     else {
       pcbpt__bundle__pack(&b, raw);
@@ -166,6 +167,10 @@ int pc_bundle_lookup(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], 
   return (size_t)snprintf(scene_out, scene_out_size, "%s/%s/%s", cache_dir, hex, rel) < scene_out_size;
 }
 
+/* protobuf-c copies each file's bytes out of the message: in huge pages when large. */
+static void *big_pb_alloc(void *data, size_t n) { (void)data; return pc_big_alloc(n ? n : 1); }
+static void big_pb_free(void *data, void *p) { (void)data; free(p); }
+
 int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE_HASH], const char *cache_dir,
                      char *scene_out, size_t scene_out_size, pc_err *e) {
   uint8_t got[PC_BUNDLE_HASH];
@@ -181,7 +186,8 @@ int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE
   if (cs > PC_BUNDLE_MAX) return pc_errf(e, PC_ELIMIT, "bundle %.16s...: bad or oversized content size", hex);
   uint8_t *raw = NULL;
   if ((rc = pc_wire_decompress(blob, n, (size_t)cs, PC_BUNDLE_MAX, &raw, e)) != 0) return rc;
-  Pcbpt__Bundle *b = pcbpt__bundle__unpack(NULL, (size_t)cs, raw);
+  ProtobufCAllocator big_pb = {big_pb_alloc, big_pb_free, NULL};
+  Pcbpt__Bundle *b = pcbpt__bundle__unpack(&big_pb, (size_t)cs, raw);
   free(raw);
   if (!b) return pc_errf(e, PC_EPARSE, "bundle %.16s...: malformed contents", hex);
   int has_scene = 0;
@@ -227,6 +233,6 @@ int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE
   }
   if (!rc && (size_t)snprintf(scene_out, scene_out_size, "%s/%s", final, b->scene) >= scene_out_size)
     rc = pc_errf(e, PC_ELIMIT, "bundle: scene path too long");
-  pcbpt__bundle__free_unpacked(b, NULL);
+  pcbpt__bundle__free_unpacked(b, &big_pb);
   return rc;
 }

@@ -1,6 +1,8 @@
 /* file_read.c: whole-file reads with a size bound (scene and mesh parsers) and complete writes. */
 #include "file_read.h"
 
+#include "big_alloc.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -37,7 +39,7 @@ int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err 
     return pc_errf(e, PC_ELIMIT, "%s: file is larger than the limit of %zu bytes", path, max);
   }
   size_t n = (size_t)st.st_size;
-  char *buf = malloc(n + 1);
+  char *buf = pc_big_alloc(n + 1);
   if (!buf) {
     fclose(f);
     return pc_errf(e, PC_ENOMEM, "%s: out of memory reading %zu bytes", path, n);

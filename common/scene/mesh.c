@@ -3,6 +3,8 @@
  * built-in rectangle, cube and disk shapes. */
 #include "mesh.h"
 
+#include "big_alloc.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,8 +22,10 @@ int pc_mesh_copy(const pc_mesh *src, pc_mesh *dst) {
   dst->nverts = src->nverts;
   dst->ntris = src->ntris;
   size_t nv = src->nverts, ni = 3 * (size_t)src->ntris;
-  bool ok = (dst->p = malloc(nv * sizeof *dst->p)) && (dst->idx = malloc(ni * sizeof *dst->idx)) &&
-            (!src->n || (dst->n = malloc(nv * sizeof *dst->n))) && (!src->uv || (dst->uv = malloc(nv * sizeof *dst->uv)));
+  /* (an empty mesh copies as one: pc_big_alloc refuses 0 bytes) */
+  size_t av = nv ? nv : 1, ai = ni ? ni : 1;
+  bool ok = (dst->p = pc_big_alloc(av * sizeof *dst->p)) && (dst->idx = pc_big_alloc(ai * sizeof *dst->idx)) &&
+            (!src->n || (dst->n = pc_big_alloc(av * sizeof *dst->n))) && (!src->uv || (dst->uv = pc_big_alloc(av * sizeof *dst->uv)));
   if (!ok) {
     pc_mesh_free(dst);
     return -1;
@@ -133,9 +137,9 @@ int pc_mesh_validate(const pc_mesh *m, const char *where, pc_err *e) {
 
 static int mesh_alloc(pc_mesh *m, uint32_t nverts, uint32_t ntris, bool uv) {
   memset(m, 0, sizeof *m);
-  m->p = malloc(nverts * sizeof *m->p);
-  m->uv = uv ? malloc(nverts * sizeof *m->uv) : NULL;
-  m->idx = malloc(3 * (size_t)ntris * sizeof *m->idx);
+  m->p = pc_big_alloc(nverts * sizeof *m->p);
+  m->uv = uv ? pc_big_alloc(nverts * sizeof *m->uv) : NULL;
+  m->idx = pc_big_alloc(3 * (size_t)ntris * sizeof *m->idx);
   if (!m->p || !m->idx || (uv && !m->uv)) {
     pc_mesh_free(m);
     return PC_ENOMEM;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "big_alloc.h"
 #include "file_read.h"
 #include "mesh.h"
 
@@ -287,11 +288,11 @@ int pc_mesh_load_ply(const char *path, pc_mesh *out, pc_err *e) {
   uint32_t cap_tris = 0;
   if (!rc) {
     m.nverts = (uint32_t)nv;
-    m.p = malloc(nv * sizeof *m.p);
-    m.n = has[R_NX] ? malloc(nv * sizeof *m.n) : NULL;
-    m.uv = has[R_U] ? malloc(nv * sizeof *m.uv) : NULL;
+    m.p = pc_big_alloc(nv * sizeof *m.p);
+    m.n = has[R_NX] ? pc_big_alloc(nv * sizeof *m.n) : NULL;
+    m.uv = has[R_U] ? pc_big_alloc(nv * sizeof *m.uv) : NULL;
     cap_tris = (uint32_t)nf;
-    m.idx = malloc(3 * (size_t)cap_tris * sizeof *m.idx);
+    m.idx = pc_big_alloc(3 * (size_t)cap_tris * sizeof *m.idx);
     if (!m.p || !m.idx || (has[R_NX] && !m.n) || (has[R_U] && !m.uv)) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   }
   ply_reader r = {.path = path, .binary = binary, .s = (const unsigned char *)buf + off,

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <zlib.h>
 
+#include "big_alloc.h"
 #include "file_read.h"
 #include "mesh.h"
 
@@ -98,10 +99,10 @@ static int load(const char *path, const unsigned char *buf, size_t n, int index,
   if (!rc) {
     m->nverts = (uint32_t)nv;
     m->ntris = (uint32_t)nt;
-    m->p = malloc(nv * sizeof *m->p);
-    m->idx = malloc(nt * 3 * sizeof *m->idx);
-    if (flags & HAS_NORMALS) m->n = malloc(nv * sizeof *m->n);
-    if (flags & HAS_TEXCOORDS) m->uv = malloc(nv * sizeof *m->uv);
+    m->p = pc_big_alloc(nv * sizeof *m->p);
+    m->idx = pc_big_alloc(nt * 3 * sizeof *m->idx);
+    if (flags & HAS_NORMALS) m->n = pc_big_alloc(nv * sizeof *m->n);
+    if (flags & HAS_TEXCOORDS) m->uv = pc_big_alloc(nv * sizeof *m->uv);
     if (!m->p || !m->idx || ((flags & HAS_NORMALS) && !m->n) || ((flags & HAS_TEXCOORDS) && !m->uv))
       rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for %llu vertices", path, (unsigned long long)nv);
   }
