@@ -475,7 +475,7 @@ static void on_bundle_chunk(pc_peer *p, const Pcbpt__BundleChunk *b) {
   int fd = p->bun_fd;
   p->bun_fd = -1;
   p->bun_off = 0;
-  uint8_t *blob = pc_big_alloc(p->bun_total ? p->bun_total : 1);
+  uint8_t *blob = pc_big_alloc(p->bun_total);
   int ok = blob && fsync(fd) == 0 && pread(fd, blob, p->bun_total, 0) == (ssize_t)p->bun_total;
   close(fd);
   uint8_t got[PC_BUNDLE_HASH];

@@ -114,7 +114,7 @@ int pc_bundle_create(const char *const *files, const char *const *names, int nfi
     b.n_files = (size_t)nfiles;
     b.files = fp;
     size_t len = pcbpt__bundle__get_packed_size(&b);
-    uint8_t *raw = pc_big_alloc(len ? len : 1);
+    uint8_t *raw = pc_big_alloc(len);
     if (!raw) rc = pc_errf(e, PC_ENOMEM, "bundle: out of memory for %zu bytes", len);
     else {
       pcbpt__bundle__pack(&b, raw);
@@ -168,7 +168,7 @@ int pc_bundle_lookup(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], 
 }
 
 /* protobuf-c copies each file's bytes out of the message: in huge pages when large. */
-static void *big_pb_alloc(void *data, size_t n) { (void)data; return pc_big_alloc(n ? n : 1); }
+static void *big_pb_alloc(void *data, size_t n) { (void)data; return pc_big_alloc(n); }
 static void big_pb_free(void *data, void *p) { (void)data; free(p); }
 
 int pc_bundle_unpack(const uint8_t *blob, size_t n, const uint8_t hash[PC_BUNDLE_HASH], const char *cache_dir,

@@ -511,7 +511,7 @@ int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn,
 
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e) {
   size_t cap = ZSTD_compressBound(n);
-  uint8_t *b = pc_big_alloc(cap ? cap : 1);
+  uint8_t *b = pc_big_alloc(cap);
   if (!b) return pc_errf(e, PC_ENOMEM, "zstd: out of memory for %zu bytes", cap);
   size_t r = ZSTD_compress(b, cap, in, n, ZSTD_LEVEL);
   if (ZSTD_isError(r)) {
@@ -536,7 +536,7 @@ static int decompress_to(const uint8_t *in, size_t n, uint8_t *out, size_t expec
 
 int pc_wire_decompress(const uint8_t *in, size_t n, size_t expect, size_t limit, uint8_t **out, pc_err *e) {
   if (expect > limit) return pc_errf(e, PC_EINVAL, "zstd: content size %zu over the limit %zu", expect, limit);
-  uint8_t *b = pc_big_alloc(expect ? expect : 1);
+  uint8_t *b = pc_big_alloc(expect);
   if (!b) return pc_errf(e, PC_ENOMEM, "zstd: out of memory for %zu bytes", expect);
   int rc = decompress_to(in, n, b, expect, e);
   if (rc) {

@@ -10,7 +10,8 @@
 #include <stddef.h>
 
 /* n bytes (uninitialized), 2 MiB-aligned and advised as huge pages when n is at least 2 MiB;
- * otherwise plain malloc. NULL when out of memory (or n == 0). Free with free(). */
+ * otherwise plain malloc (n == 0 included: a pointer to free like any other). NULL only when
+ * out of memory. Free with free(). */
 void *pc_big_alloc(size_t n);
 /* pc_big_alloc, zeroed, with every page already mapped (so that the first writes do not fault
  * page by page). */

@@ -22,10 +22,8 @@ int pc_mesh_copy(const pc_mesh *src, pc_mesh *dst) {
   dst->nverts = src->nverts;
   dst->ntris = src->ntris;
   size_t nv = src->nverts, ni = 3 * (size_t)src->ntris;
-  /* (an empty mesh copies as one: pc_big_alloc refuses 0 bytes) */
-  size_t av = nv ? nv : 1, ai = ni ? ni : 1;
-  bool ok = (dst->p = pc_big_alloc(av * sizeof *dst->p)) && (dst->idx = pc_big_alloc(ai * sizeof *dst->idx)) &&
-            (!src->n || (dst->n = pc_big_alloc(av * sizeof *dst->n))) && (!src->uv || (dst->uv = pc_big_alloc(av * sizeof *dst->uv)));
+  bool ok = (dst->p = pc_big_alloc(nv * sizeof *dst->p)) && (dst->idx = pc_big_alloc(ni * sizeof *dst->idx)) &&
+            (!src->n || (dst->n = pc_big_alloc(nv * sizeof *dst->n))) && (!src->uv || (dst->uv = pc_big_alloc(nv * sizeof *dst->uv)));
   if (!ok) {
     pc_mesh_free(dst);
     return -1;

@@ -260,9 +260,9 @@ static int count_pass(obj_state *st, const char *buf, size_t n) {
   st->tv = (uint32_t)tv;
   st->tvt = (uint32_t)tvt;
   st->tvn = (uint32_t)tvn;
-  st->v = pc_big_alloc((tv ? tv : 1) * sizeof *st->v);
-  st->vt = pc_big_alloc((tvt ? tvt : 1) * sizeof *st->vt);
-  st->vn = pc_big_alloc((tvn ? tvn : 1) * sizeof *st->vn);
+  st->v = pc_big_alloc(tv * sizeof *st->v);
+  st->vt = pc_big_alloc(tvt * sizeof *st->vt);
+  st->vn = pc_big_alloc(tvn * sizeof *st->vn);
   if (!st->v || !st->vt || !st->vn) return pc_errf(st->e, PC_ENOMEM, "%s: out of memory", st->path);
   return 0;
 }
