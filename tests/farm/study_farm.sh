@@ -56,14 +56,17 @@ for r in runs:
     assert r["workers"] <= ws[-1] < r["workers"] * (1 + 2.5), (r["workers"], ws[-1])
     assert all(p["layers"]["beauty"]["relmse"] is not None for p in s)
 # on 1 worker the group never had two workers at once: its wall time covers both jobs' work
-# (on 2 workers it does not: the check can tell)
+# (within 10%); on 2 workers the same line rejects it, so the check can tell. (The 2-worker
+# groups' wall is 0.55-0.62 of their worker-seconds on an idle machine and was 0.805 under CI's
+# load, where an earlier line at 0.8 failed: the group's wall includes its start, the polls'
+# quarter-seconds and the last uploads, which a 1 s budget does not amortise.)
 for w in (1, 2):
     for k in (1, 2):
         one = [r for r in runs if r["workers"] == w and r["run"] == k]
         total = sum(r["snapshots"][-1]["worker_seconds"] for r in one)
         wall = one[0]["group_wall_seconds"]
         print("%d worker(s), run %d: %.2f worker-seconds in %.2f s" % (w, k, total, wall))
-        assert (wall >= 0.9 * total) if w == 1 else (wall < 0.8 * total), (w, k, total, wall)
+        assert (wall >= 0.9 * total) if w == 1 else (wall < 0.9 * total), (w, k, total, wall)
 # interleaving: per group, the ranges handed out alternate between its jobs, and with 2
 # workers each worker renders both methods
 log = open(sys.argv[2]).read()
