@@ -146,8 +146,10 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
-    printf(", \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"cpu_seconds\": %.6g, \"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
-           j->halt_noise, j->worker_seconds, j->cpu_seconds, j->snapshots, j->ranges_rerun);
+    printf(", \"iterations_rendered\": %llu, \"halt_noise\": %.6g, \"worker_seconds\": %.6g, \"cpu_seconds\": %.6g, "
+           "\"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
+           (unsigned long long)j->iterations_rendered, j->halt_noise, j->worker_seconds, j->cpu_seconds, j->snapshots,
+           j->ranges_rerun);
     if (*j->auto_report) json_str(j->auto_report);
     else printf("null");
     printf("}");

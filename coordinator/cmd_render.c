@@ -182,7 +182,8 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
       pcbpt__envelope__free_unpacked(env, NULL);
       break;
     }
-    draw_progress(prog, farm->term_fd, st->iterations_done, st->relmse_estimate);
+    draw_progress(prog, farm->term_fd, st->iterations_rendered > st->iterations_done ? st->iterations_rendered : st->iterations_done,
+                  st->relmse_estimate);
     pcbpt__envelope__free_unpacked(env, NULL);
     if (atomic_load(&g_interrupts) && !halted) {
       halted = true;

@@ -30,6 +30,7 @@ typedef struct pc_range {
   pc_peer *owner;
   double orphan_since;  /* when the owner went away; 0 while owned */
   bool merging;         /* an upload for it is being merged */
+  uint64_t in_merge;    /* that upload's iterations (while merging): the status's progress */
   bool final;           /* the owner sent its last upload: close at merged on commit */
   double progress_at;   /* its progress deadline runs from here: when it was assigned, its
                            owner's last upload came or was acknowledged (0: not owned) */

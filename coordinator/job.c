@@ -455,7 +455,7 @@ static void op_after(uv_work_t *w, int status) {
     else if (op->snap_k > j->snaps_taken) j->snaps_taken = op->snap_k;
   } else if (op->is_merge) {
     pc_range *r = pc_sched_find_range(j, op->range_id);
-    if (r) r->merging = false;
+    if (r) r->merging = false, r->in_merge = 0;
     if (op->rc) {
       pc_wire_log("job %llu: refused upload from %s for range %llu [%llu,+%llu): %s", (unsigned long long)j->id,
                   op->peer->conn.peer, (unsigned long long)op->range_id, (unsigned long long)op->first,
@@ -595,6 +595,7 @@ void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf,
   op->raw = raw;
   op->wall = j->elapsed;
   r->merging = true;
+  r->in_merge = count;
   queue_op(j, op);
 }
 

@@ -4,7 +4,11 @@
 #include "wire_upload.h"
 
 uint64_t pc_range_size(const pc_range_size_in *in) {
-  if (!(in->rate > 0)) return 1;
+  if (!(in->rate > 0)) {
+    if (in->alone && in->bounded && !in->interleaved && in->unassigned > 0)
+      return in->unassigned < 1000000 ? in->unassigned : 1000000;
+    return 1;
+  }
   double pay = pc_wire_upload_spacing(in->upload_seconds, PC_WIRE_UPLOAD_SHARE);
   double n = in->rate * (in->range_seconds > pay ? in->range_seconds : pay);
   if (in->bounded) {

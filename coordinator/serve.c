@@ -595,7 +595,14 @@ static void send_status(pc_peer *p, uint64_t only) {
     s->snapshots = j->snaps_taken;
     s->ranges_rerun = j->ranges_rerun;
     s->elapsed = j->elapsed;
+    s->iterations_rendered = j->done;
     for (pc_range *r = j->ranges; r && (j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING); r = r->next) {
+      /* done counts what is committed (acked); past that, what is merged or merging, or what
+       * the owner's heartbeats report (they stop with its last upload) */
+      uint64_t got = r->merged + r->in_merge;
+      if (r->owner && r->owner->hb_range == r->id && r->owner->hb_done > got) got = r->owner->hb_done;
+      if (got > r->count) got = r->count;
+      if (got > r->acked) s->iterations_rendered += got - r->acked;
       /* a worker may own two ranges for a moment (the next one starts before the last is acked) */
       bool seen = false;
       for (pc_range *q = j->ranges; q != r && !seen; q = q->next) seen = q->owner == r->owner;

@@ -17,6 +17,11 @@
  * render time. Small films compress in milliseconds and keep PC_WIRE_UPLOAD_INTERVAL. */
 #define PC_WIRE_UPLOAD_SHARE 0.05
 
+/* What compressing an upload costs per byte of film before the worker has measured one: a
+ * first upload pays for its buffers' first touch too (a 512x512 BDPT film of 37.5 MB took
+ * 116 ms the first time on 2 threads, 50 ms the second; a 1280x720 one of 132 MB, ~0.4 s). */
+#define PC_WIRE_ZIP_SECONDS_PER_BYTE 3e-9
+
 /* The seconds of work over which an upload compressed in zip_seconds takes `share` of the
  * time, up to PC_WIRE_UPLOAD_MAX_INTERVAL (0 when either is unknown): how far apart the worker
  * spaces its uploads, and how long the coordinator makes the ranges that end in one. */

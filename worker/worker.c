@@ -167,8 +167,14 @@ static void finish_range(worker *w) {
   request_work(w);
 }
 
-/* Seconds between uploads within a range (pc_worker_opts.upload_share). */
-static double upload_interval(const worker *w, double zip_seconds) {
+/* Seconds between uploads within a range (pc_worker_opts.upload_share), by what the last
+ * upload took to compress or, before the first, by the film's size: a one-worker farm's
+ * first range is its whole job (range_size.h), and its first upload would otherwise come
+ * after PC_WIRE_UPLOAD_INTERVAL, at the cost of the probe it replaced. */
+static double upload_interval(const worker *w, double zip_seconds, const pc_render_settings *set) {
+  if (!(zip_seconds > 0))
+    zip_seconds = PC_WIRE_ZIP_SECONDS_PER_BYTE * (double)set->width * (double)set->height * 3 * sizeof(double) *
+                  (double)pc_film_layer_count(set->strategy_layers);
   double t = pc_wire_upload_spacing(zip_seconds, w->upload_share);
   return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t;
 }
@@ -184,7 +190,7 @@ static void pump(worker *w) {
   }
   bool done = w->r.range_done, failed = w->r.failed;
   uint64_t pend = w->r.pend_count, rendered = w->r.rendered;
-  double rate = w->r.rate, interval = upload_interval(w, w->r.zip_seconds);
+  double rate = w->r.rate, interval = upload_interval(w, w->r.zip_seconds, &w->r.set);
   uv_mutex_unlock(&w->r.mu);
   if (!w->busy) return;
   if (done && failed) {

@@ -3,7 +3,8 @@
 # with one stops instead of retrying forever; `fetch` of a running job needs --partial; `fetch`
 # of a cancelled job says it was cancelled; a second `cancel` fails with a message; `status`
 # of a finished job lists no workers and no rate; a scene with a 2 GB mesh is refused by
-# `submit` before anything reads it (peak memory under 200 MB).
+# `submit` before anything reads it (peak memory under 200 MB); `status` shows iterations
+# rendered and not yet merged.
 . "$(dirname "$0")/lib.inc"
 start_coord
 echo "some-other-token-entirely" >"$T/bad"; chmod 600 "$T/bad"
@@ -17,6 +18,16 @@ start_worker w1
 SC="$S/scenes/furnace/scene.xml"
 J=$("$B/pcbpt-coord" submit "$SC" --method pt --spp 100000 --width 16 --height 16 $H | tail -1)
 for _ in $(seq 50); do [ "$(job_field "$J" iterations)" -gt 0 ] && break; sleep 0.1; done
+# `status` shows progress between uploads (2 s apart here): the worker's heartbeats put
+# iterations_rendered ahead of the merged iterations, never behind them
+ahead=0
+for _ in $(seq 30); do
+  read -r it rd < <("$B/pcbpt-coord" status "$J" $H --json | python3 -c "import json,sys; d=json.load(sys.stdin); print(d['iterations'], d['iterations_rendered'])")
+  [ "$rd" -ge "$it" ] || fail "status: iterations_rendered $rd behind iterations $it"
+  [ "$rd" -gt "$it" ] && ahead=$((ahead + 1))
+  sleep 0.1
+done
+[ "$ahead" -gt 0 ] || fail "status: iterations_rendered never ahead of the merged iterations"
 "$B/pcbpt-coord" fetch "$J" --out "$T/run.exr" $H 2>"$T/fetch.err" && fail "fetch of a running job without --partial"
 grep -q "is running" "$T/fetch.err" || fail "fetch message: $(cat "$T/fetch.err")"
 [ -e "$T/run.exr" ] && fail "a partial image was written"

@@ -65,6 +65,12 @@ static void single_requests(void **st) {
   assert_int_equal(pc_range_size(&in), 40); /* nobody else will come: all that is left */
   in.unassigned = 100;
   assert_int_equal(pc_range_size(&in), 60); /* still the cap */
+  in.rate = 0;
+  assert_int_equal(pc_range_size(&in), 100); /* alone and unmeasured: no probe, the whole job */
+  in.bounded = false;
+  assert_int_equal(pc_range_size(&in), 1); /* but a time-bounded job is probed */
+  in.bounded = true;
+  in.rate = 20;
   /* a job of a study group bound at 100 iterations takes turns with the others of its group:
      ranges of at most 100 / PC_RANGE_INTERLEAVE, rounded up; not below 1, never past what is
      left, and a probe stays a probe */
