@@ -10,8 +10,9 @@
 #define HUGE_PAGE ((size_t)2 << 20)
 
 void *pc_big_alloc(size_t n) {
-  if (n < HUGE_PAGE) return malloc(n ? n : 1); /* 0 bytes too: NULL means out of memory only */
-  if (n > SIZE_MAX - HUGE_PAGE) return NULL;
+  if (n > SIZE_MAX - HUGE_PAGE - PC_BIG_ALLOC_SLACK) return NULL;
+  n += PC_BIG_ALLOC_SLACK;
+  if (n < HUGE_PAGE) return malloc(n);
   size_t whole = (n + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
   void *p = aligned_alloc(HUGE_PAGE, whole);
   if (!p) return NULL;

@@ -9,9 +9,14 @@
 
 #include <stddef.h>
 
-/* n bytes (uninitialized), 2 MiB-aligned and advised as huge pages when n is at least 2 MiB;
- * otherwise plain malloc (n == 0 included: a pointer to free like any other). NULL only when
- * out of memory. Free with free(). */
+/* Bytes past the n asked that a buffer from pc_big_alloc may be read through (not written):
+ * Embree reads a shared buffer's last element with a 16-byte load, so a mesh's 12-byte
+ * vertices and index triples can be handed to it without a copy (scene_build.c). */
+#define PC_BIG_ALLOC_SLACK 16
+
+/* n bytes (uninitialized, PC_BIG_ALLOC_SLACK more readable), 2 MiB-aligned and advised as
+ * huge pages when that is at least 2 MiB; otherwise plain malloc (n == 0 included: a pointer
+ * to free like any other). NULL only when out of memory. Free with free(). */
 void *pc_big_alloc(size_t n);
 /* pc_big_alloc, zeroed, with every page already mapped (so that the first writes do not fault
  * page by page). */

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <embree3/rtcore.h>
 #include <sys/stat.h>
 
 #include "fresnel.h"
@@ -1108,6 +1109,33 @@ static void test_obj_materials(void **state) {
 
 /* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
  * instance's toWorld after their own; the group itself is not rendered. */
+/* Embree traces the meshes' own arrays (rtcSetSharedGeometryBuffer) where they have the
+ * slack its 16-byte loads need (pc_big_alloc's): a rectangle, a cube and an instance's copy
+ * are not copied again. */
+static void test_embree_shares_meshes(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  const char *body = SENSOR "\n<shape type=\"rectangle\"/>\n<shape type=\"cube\"/>\n"
+                            "<shape type=\"shapeGroup\" id=\"g\"><shape type=\"rectangle\"/></shape>\n"
+                            "<shape type=\"instance\"><ref id=\"g\"/></shape>\n<emitter type=\"constant\"/>\n";
+  int rc = load_body(&t, body, &s, &e);
+  if (!rc) rc = pc_scene_build(&s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 3);
+  for (int i = 0; i < s.nshapes; i++) {
+    RTCGeometry g = rtcGetGeometry((RTCScene)s.rtc_scene, (unsigned)i);
+    assert_non_null(g);
+    assert_ptr_equal(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0), s.shapes[i].mesh.p);
+    assert_ptr_equal(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0), s.shapes[i].mesh.idx);
+  }
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 static void test_instances(void **state) {
   (void)state;
   tmp t;
@@ -1543,7 +1571,8 @@ int main(void) {
       cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
       cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
-      cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
+      cmocka_unit_test(test_embree_shares_meshes),
+    cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
       cmocka_unit_test(test_thinlens_params),  cmocka_unit_test(test_pt_complete),
