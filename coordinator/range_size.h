@@ -41,13 +41,14 @@ typedef struct pc_range_size_in {
  * it; alone on a bounded job (not interleaved), all of it instead: the probe's upload of a
  * whole film (first-touch memory and all: 0.1-0.25 s of a 512x512 BDPT render's 5 s) would
  * measure nothing the one worker's trusted claim does not, and the worker spaces the uploads
- * within the range by their cost. Otherwise a range is range_seconds of the worker's rate, and near the end of a
- * bounded job half of the worker's fair share of the work left (unassigned + outstanding,
- * in proportion to its rate, so all would finish together): the ranges shrink as the job
- * ends, and the half kept back evens out wrong rate estimates on later requests; alone, the
- * whole share (every range ends in an upload of a whole film). Not under
- * PC_RANGE_MIN_SECONDS of work, nor under what pays for the range's upload (its cost over
- * PC_WIRE_UPLOAD_SHARE, up to PC_WIRE_UPLOAD_MAX_INTERVAL), unless the whole share is less. */
+ * within the range by their cost. Otherwise a range is range_seconds of the worker's rate,
+ * and near the end of a bounded job half of the worker's fair share of the work left
+ * (unassigned + outstanding, in proportion to its rate, so all would finish together): the
+ * ranges shrink as the job ends, and the half kept back evens out wrong rate estimates on
+ * later requests; alone, the whole share (every range ends in an upload of a whole film).
+ * Not under PC_RANGE_MIN_SECONDS of work, nor under what pays for the range's upload (its
+ * cost over PC_WIRE_UPLOAD_SHARE, up to PC_WIRE_UPLOAD_MAX_INTERVAL), unless the whole share
+ * is less. */
 uint64_t pc_range_size(const pc_range_size_in *in);
 
 #endif

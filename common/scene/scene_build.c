@@ -24,7 +24,6 @@ static void on_embree_error(void *user, enum RTCError code, const char *str) {
   snprintf(ee->msg, sizeof ee->msg, "Embree error %d: %s", (int)code, str ? str : "");
 }
 
-
 /* Whether Embree may read a mesh array in place instead of a copy: it loads a shared buffer's
  * last 12-byte element with 16 bytes, so 4 more must be readable. Arrays from pc_big_alloc
  * have PC_BIG_ALLOC_SLACK; others (grown by realloc) are asked (under AddressSanitizer the
