@@ -99,8 +99,7 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     if (c->kept[k].job == job) r = &c->kept[k];
   if (!r) {
     /* the job's pending film, and the renderer's scratch and light-splat films */
-    size_t layer = (size_t)set->width * (size_t)set->height * 3 * sizeof(double);
-    size_t bytes = layer * (size_t)pc_film_layer_count(set->strategy_layers) + pc_renderer_film_bytes(set, w->threads);
+    size_t bytes = pc_film_bytes(set->width, set->height, set->strategy_layers) + pc_renderer_film_bytes(set, w->threads);
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
       int lru = -1;

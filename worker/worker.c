@@ -173,8 +173,7 @@ static void finish_range(worker *w) {
  * after PC_WIRE_UPLOAD_INTERVAL, at the cost of the probe it replaced. */
 static double upload_interval(const worker *w, double zip_seconds, const pc_render_settings *set) {
   if (!(zip_seconds > 0))
-    zip_seconds = PC_WIRE_ZIP_SECONDS_PER_BYTE * (double)set->width * (double)set->height * 3 * sizeof(double) *
-                  (double)pc_film_layer_count(set->strategy_layers);
+    zip_seconds = PC_WIRE_ZIP_SECONDS_PER_BYTE * (double)pc_film_bytes(set->width, set->height, set->strategy_layers);
   double t = pc_wire_upload_spacing(zip_seconds, w->upload_share);
   return t < PC_WIRE_UPLOAD_INTERVAL ? PC_WIRE_UPLOAD_INTERVAL : t;
 }

@@ -71,6 +71,10 @@ int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned s
 static inline int pc_film_layer_count(int strategy_depth) {
   return PC_LAYER_STD_COUNT + strategy_depth * (strategy_depth + 3) / 2 + 2;
 }
+/* Bytes of the sums of a w x h film with every layer (pc_film_init's). */
+static inline size_t pc_film_bytes(int w, int h, int strategy_depth) {
+  return (size_t)w * (size_t)h * 3 * sizeof(double) * (size_t)pc_film_layer_count(strategy_depth);
+}
 static inline int pc_film_stored_layer_count(int strategy_depth, unsigned stored) {
   int light = 1 + strategy_depth, eye = PC_LAYER_STD_COUNT - 1 + strategy_depth * (strategy_depth + 1) / 2;
   return (stored & PC_FILM_NORM(PC_NORM_EYE) ? eye : 0) + (stored & PC_FILM_NORM(PC_NORM_LIGHT) ? light : 0) +

@@ -25,9 +25,10 @@ static void on_embree_error(void *user, enum RTCError code, const char *str) {
 }
 
 /* Whether Embree may read a mesh array in place instead of a copy: it loads a shared buffer's
- * last 12-byte element with 16 bytes, so 4 more must be readable. Arrays from pc_big_alloc
- * have PC_BIG_ALLOC_SLACK; others (grown by realloc) are asked (under AddressSanitizer the
- * answer is the size asked for, so it stays exact). A 5M-triangle mesh's copies were 120 MB,
+ * last 12-byte element with 16 bytes, so 4 more must be readable. A scene's mesh arrays are
+ * its own, from the malloc family (pc_mesh_free frees them), so their allocation can be asked:
+ * those from pc_big_alloc have PC_BIG_ALLOC_SLACK, those grown by realloc may (under
+ * AddressSanitizer the answer is the size asked for, so they are copied there). A 5M-triangle mesh's copies were 120 MB,
  * most of the faults left in its start. */
 static bool shareable(const void *p, size_t bytes) {
   return p && malloc_usable_size((void *)p) >= bytes + 4 && (uintptr_t)p % 4 == 0;
