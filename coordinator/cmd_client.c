@@ -11,6 +11,7 @@
 #include "bundle.h"
 #include "client.h"
 #include "pilot_farm.h"
+#include "render.h"
 #include "render_flags.h"
 #include "cli_scene.h"
 #include "scene.h"
@@ -87,6 +88,13 @@ int pc_cmd_submit(int argc, char **argv) {
     pc_scene_free(&scene);
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
     return 2;
+  }
+  /* what the workers would refuse (no emitter, a light of zero area, a method not built in) is
+     one line here, not a job that fails on every worker */
+  if (pc_scene_check(&scene, &e) != 0 || pc_renderer_check(&scene, &req.set, &e) != 0) {
+    pc_scene_free(&scene);
+    fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
+    return 1;
   }
   uint8_t *blob, hash[PC_BUNDLE_HASH];
   size_t n;

@@ -278,7 +278,7 @@ int pc_cmd_render(int argc, char **argv) {
   pc_cli_warn_method("render", scene_path, req.set.method, &req);
   if (pc_cli_scene_bundle(&scene, &blob, &blob_n, hash, &err) != PC_OK) goto fail;
   if (pc_render_settings_check(&req.set, &err) != PC_OK) goto fail;
-  if (pc_scene_build(&scene, &err) != PC_OK) goto fail;
+  if (pc_scene_check(&scene, &err) != PC_OK) goto fail;
   /* settings the renderer refuses (e.g. a method not built in) are refused here too */
   if (pc_renderer_check(&scene, &req.set, &err) != PC_OK) goto fail;
   double pilot_s = 0;

@@ -616,7 +616,7 @@ static int study_scene(const study_args *a, pc_study_farm *farm, int k, pc_repor
   int rc = pc_cli_load_scene("study", &s.req, s.path, &scene, e);
   if (!rc) rc = pc_cli_scene_bundle(&scene, &s.blob, &s.blob_n, s.hash, e);
   if (!rc) rc = pc_render_settings_check(&s.req.set, e);
-  if (!rc) rc = pc_scene_build(&scene, e);
+  if (!rc) rc = pc_scene_check(&scene, e);
   if (!rc) rc = check_methods(a, &s.req, &scene, e);
   pc_scene_free(&scene);
   int n = snprintf(s.dir, sizeof s.dir, "%s/%s", a->out, s.name);
@@ -670,7 +670,7 @@ static int precheck(const study_args *a, pc_err *e) {
     pc_scene scene = {0};
     int rc = pc_cli_load_scene("study", &req, a->scenes[k], &scene, e);
     if (!rc) rc = pc_render_settings_check(&req.set, e);
-    if (!rc) rc = pc_scene_build(&scene, e);
+    if (!rc) rc = pc_scene_check(&scene, e);
     if (!rc) rc = check_methods(a, &req, &scene, e);
     for (int m = 0; !rc && m < a->nmethods; m++) pc_cli_warn_method("study", a->scenes[k], a->methods[m].method, &req);
     pc_scene_free(&scene);

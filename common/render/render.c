@@ -289,8 +289,13 @@ int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings,
   if (rc != PC_OK) return rc;
   pc_render_settings tiny = *settings;
   tiny.width = tiny.height = 1;
+  /* A still copy: a moving scene's view is made from its BVH, which a checked scene
+   * (pc_scene_check) does not have, and refuses no setting. */
+  pc_scene still = *scene;
+  still.nmotions = 0;
+  still.camera_anim.n = 0;
   pc_renderer *r = NULL;
-  rc = pc_renderer_create(scene, &tiny, 1, &r, e);
+  rc = pc_renderer_create(&still, &tiny, 1, &r, e);
   pc_renderer_destroy(r);
   return rc;
 }

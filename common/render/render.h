@@ -85,7 +85,8 @@ int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings
                        pc_renderer **out, pc_err *e);
 /* What pc_renderer_create would refuse for these settings and this scene, without allocating
  * what grows with the image (its films): the settings are checked, then a renderer of one
- * thread is made at 1x1. Every refusal but running out of memory is independent of the size. */
+ * thread is made at 1x1. Every refusal but running out of memory is independent of the size.
+ * The scene may be built or only checked (pc_scene_check). */
 int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings, pc_err *e);
 /* Bytes of the films a renderer of these settings and threads (0: one per core) holds: its
  * scratch and its per-thread light splats. */

@@ -118,6 +118,13 @@ int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scen
 int pc_scene_load(const char *path, pc_scene *out, pc_err *e);
 /* Builds Embree geometry, light sampling tables and derived material data. */
 int pc_scene_build(pc_scene *s, pc_err *e);
+/* Instead of pc_scene_build, for a client that only checks a scene before sending it: the same
+ * checks and derived data without the ray-tracing structure (the bounding sphere from the
+ * shapes' vertices), so a scene of millions of triangles is checked in a pass over its arrays
+ * instead of a BVH build. What only the build can meet (Embree out of memory, an Embree without
+ * spheres) is the worker's to report. The scene can then be bundled, given to
+ * pc_renderer_check and freed; it cannot be rendered. */
+int pc_scene_check(pc_scene *s, pc_err *e);
 /* Frees everything (safe on a zeroed or partially loaded scene). */
 void pc_scene_free(pc_scene *s);
 

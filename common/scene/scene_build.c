@@ -169,7 +169,9 @@ static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   return PC_OK;
 }
 
-int pc_scene_build(pc_scene *s, pc_err *e) {
+/* What pc_scene_build and pc_scene_check share: the scene's own checks, the sensor and the
+ * shapes placed at shutter_open, and the materials' derived data. */
+static int prepare(pc_scene *s, pc_err *e) {
   if (s->nshapes == 0) return pc_errf(e, PC_EINVAL, "%s: the scene has no shapes", s->path);
   if (s->camera.width < 1 || s->camera.height < 1)
     return pc_errf(e, PC_EINVAL, "%s: the scene has no sensor with a film", s->path);
@@ -209,6 +211,39 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
     }
     pc_material_prepare(m);
   }
+  return PC_OK;
+}
+
+/* The bounding sphere from the shapes' own data (pc_scene_check: no Embree scene to ask). */
+static void bounds_by_hand(pc_scene *s) {
+  vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
+  for (int i = 0; i < s->nshapes; i++) {
+    const pc_shape *sh = &s->shapes[i];
+    if (sh->kind == PC_SHAPE_SPHERE) {
+      lo = v3_min(lo, v3_sub(sh->center, v3s(sh->radius)));
+      hi = v3_max(hi, v3_add(sh->center, v3s(sh->radius)));
+    } else {
+      for (uint32_t v = 0; v < sh->mesh.nverts; v++) {
+        lo = v3_min(lo, sh->mesh.p[v]);
+        hi = v3_max(hi, sh->mesh.p[v]);
+      }
+    }
+  }
+  pc_scene_motion_bounds(s, &lo, &hi);
+  s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
+  s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
+}
+
+int pc_scene_check(pc_scene *s, pc_err *e) {
+  int rc = prepare(s, e);
+  if (rc != PC_OK) return rc;
+  bounds_by_hand(s);
+  return build_lights(s, e);
+}
+
+int pc_scene_build(pc_scene *s, pc_err *e) {
+  int rc = prepare(s, e);
+  if (rc != PC_OK) return rc;
   /* Embree calls the error function with this address for the device's lifetime; it lives in
    * the scene so it outlives every call. */
   embree_error *ee = calloc(1, sizeof *ee);

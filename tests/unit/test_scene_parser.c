@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include "fresnel.h"
+#include "render.h"
 #include "scene.h"
 #include "test_helpers_fs.h"
 
@@ -242,6 +243,7 @@ static int load_body(tmp *t, const char *body, pc_scene *s, pc_err *e) {
 }
 
 #define SENSOR "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>"
+#define KEY(t, body) "<transform time=\"" #t "\">" body "</transform>"
 
 typedef struct bad_case {
   const char *body;
@@ -1136,6 +1138,73 @@ static void test_embree_shares_meshes(void **state) {
   th_rm_rf(t.root);
 }
 
+/* pc_scene_check, the clients' check without a BVH: the errors pc_scene_build reports for the
+ * scene itself, word for word; on good scenes (a still one with an environment, a moving one)
+ * the same light tables and bounding sphere as the build, no Embree scene, and a renderer
+ * check that passes for every method. */
+static void test_check_without_bvh(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const char *const bad[] = {
+      SENSOR "\n<shape type=\"cube\"/>\n",                                                   /* no emitter */
+      SENSOR "\n<emitter type=\"constant\"/>\n",                                              /* no shapes */
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+    pc_scene a, b;
+    pc_err ea = {0}, eb = {0};
+    assert_int_equal(load_body(&t, bad[i], &a, &ea), 0);
+    assert_int_equal(load_body(&t, bad[i], &b, &eb), 0);
+    int ra = pc_scene_check(&a, &ea), rb = pc_scene_build(&b, &eb);
+    if (ra != rb || !ra || strcmp(ea.msg, eb.msg) != 0) print_error("case %zu: '%s' against '%s'\n", i, ea.msg, eb.msg);
+    assert_int_not_equal(ra, 0);
+    assert_int_equal(ra, rb);
+    assert_string_equal(ea.msg, eb.msg);
+    pc_scene_free(&a);
+    pc_scene_free(&b);
+  }
+  static const char *const good[] = {
+      SENSOR "\n<shape type=\"cube\"/>\n<shape type=\"sphere\"><point name=\"center\" x=\"3\" y=\"0\" z=\"0\"/></shape>\n"
+             "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate y=\"4\"/></transform>"
+             "<emitter type=\"area\"><rgb name=\"radiance\" value=\"2\"/></emitter></shape>\n"
+             "<emitter type=\"constant\"/>\n",
+      "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><float name=\"shutterOpen\" value=\"0\"/><float name=\"shutterClose\" value=\"1\"/>"
+      "</sensor>\n<shape type=\"sphere\"><animation name=\"toWorld\">" KEY(0, "<translate x=\"-1\"/>")
+          KEY(1, "<translate x=\"1\"/>") "</animation></shape>\n"
+      "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n",
+  };
+  for (size_t i = 0; i < sizeof good / sizeof *good; i++) {
+    pc_scene a, b;
+    pc_err e = {0};
+    assert_int_equal(load_body(&t, good[i], &a, &e), 0);
+    assert_int_equal(load_body(&t, good[i], &b, &e), 0);
+    int rc = pc_scene_check(&a, &e);
+    if (!rc) rc = pc_scene_build(&b, &e);
+    if (rc) print_error("%s\n", e.msg);
+    assert_int_equal(rc, 0);
+    assert_null(a.rtc_scene);
+    assert_non_null(b.rtc_scene);
+    assert_int_equal(a.nlights, b.nlights);
+    assert_memory_equal(a.light_cdf, b.light_cdf, sizeof(float) * (size_t)(a.nlights + 1));
+    assert_int_equal(a.env_light, b.env_light);
+    assert_true(fabsf(a.scene_radius - b.scene_radius) <= 1e-5f * b.scene_radius);
+    assert_true(v3_len(v3_sub(a.scene_center, b.scene_center)) <= 1e-5f * b.scene_radius);
+    assert_int_equal(pc_scene_moves(&a), i == 1);
+    for (int m = PC_METHOD_PT; m <= PC_METHOD_PCBPT; m++) {
+      pc_render_settings set;
+      pc_render_settings_default(&set);
+      set.method = (pc_method)m;
+      set.width = set.height = 8;
+      rc = pc_renderer_check(&a, &set, &e);
+      if (rc) print_error("method %d: %s\n", m, e.msg);
+      assert_int_equal(rc, 0);
+    }
+    pc_scene_free(&a);
+    pc_scene_free(&b);
+  }
+  th_rm_rf(t.root);
+}
+
 static void test_instances(void **state) {
   (void)state;
   tmp t;
@@ -1226,8 +1295,6 @@ static void test_animation(void **state) {
   assert_non_null(strstr(e.msg, "two keyframes at time 2"));
   pc_anim_free(&a);
 }
-
-#define KEY(t, body) "<transform time=\"" #t "\">" body "</transform>"
 
 static void test_motion_params(void **state) {
   (void)state;
@@ -1571,7 +1638,7 @@ int main(void) {
       cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
       cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
-      cmocka_unit_test(test_embree_shares_meshes),
+      cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_check_without_bvh),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
