@@ -1,5 +1,6 @@
 # bad_input.sh: wrong token, garbage, oversized and truncated frames, and a valid frame of the
-# wrong type are each refused with a log line while a concurrent job still completes.
+# wrong type are each refused with a log line while a concurrent job still completes; a scene
+# the workers would refuse is refused by submit before it reaches the farm.
 . "$(dirname "$0")/lib.inc"
 start_coord
 start_worker w1
@@ -24,6 +25,13 @@ send(struct.pack(">I", (1 << 20) + 1))                # over the limit
 send(struct.pack(">I", 100) + b"\x0a\x02")            # truncated, then closed
 send(struct.pack(">I", 2) + b"\x2a\x00")              # a valid work_request before hello
 PY
+# a scene the workers would refuse is refused by submit, in one line naming it, and sent nowhere
+mkdir -p "$T/dark"
+jobs_before=$("$B/pcbpt-coord" list $H | wc -l)
+printf '<scene version="0.6.0"><sensor type="perspective"><float name="fov" value="45"/></sensor><shape type="cube"/></scene>' > "$T/dark/scene.xml"
+"$B/pcbpt-coord" submit "$T/dark/scene.xml" --spp 1 $H > "$T/dark.out" 2> "$T/dark.err" && fail "a scene without an emitter was submitted"
+[ "$(wc -l < "$T/dark.err")" = 1 ] && grep -q "dark/scene.xml: the scene has no emitter" "$T/dark.err" || fail "submit's refusal: $(cat "$T/dark.err")"
+[ "$("$B/pcbpt-coord" list $H | wc -l)" = "$jobs_before" ] || fail "the refused scene became a job"
 timeout 50 "$B/pcbpt-coord" wait "$J" $H >/dev/null || fail "job did not complete"
 grep -q "wrong token" "$T/coord.log" || fail "no log line for the wrong token"
 grep -q "exceeds the limit" "$T/coord.log" || fail "no log line for the oversized frame"
