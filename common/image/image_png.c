@@ -163,6 +163,11 @@ static void png_encode(png_writer *wr) {
   png_set_IHDR(wr->png, wr->info, (png_uint_32)wr->w, (png_uint_32)wr->h, 8, PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB_gAMA_and_cHRM(wr->png, wr->info, PNG_sRGB_INTENT_PERCEPTUAL);
+  /* A preview, written after every render while the user waits. A 512x512 render's: 55 ms at
+   * libpng's defaults (deflate level 6, each row's filter chosen among five), 19.5 ms at level 1
+   * with the Up filter alone, for a file 9% larger (530 KB against 484 KB). */
+  png_set_compression_level(wr->png, 1);
+  png_set_filter(wr->png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_write_info(wr->png, wr->info);
   for (int y = 0; y < wr->h; y++) png_write_row(wr->png, wr->pixels + (size_t)y * wr->w * 3);
   png_write_end(wr->png, NULL);
