@@ -1,6 +1,7 @@
 /* scene_build.c: turns a parsed scene into a renderable one: Embree geometry (one geometry per
  * shape, geomID == shape index; triangles, exact spheres), light sampling tables, derived
- * material data; and the ray queries (closest hit, visibility, origin offsets). */
+ * material data; the same checks and tables without Embree for a client (pc_scene_check); and
+ * the ray queries (closest hit, visibility, origin offsets). */
 #include <embree3/rtcore.h>
 #include <malloc.h>
 #include <stdbool.h>
