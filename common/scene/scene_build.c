@@ -29,8 +29,8 @@ static void on_embree_error(void *user, enum RTCError code, const char *str) {
  * last 12-byte element with 16 bytes, so 4 more must be readable. A scene's mesh arrays are
  * its own, from the malloc family (pc_mesh_free frees them), so their allocation can be asked:
  * those from pc_big_alloc have PC_BIG_ALLOC_SLACK, those grown by realloc may (under
- * AddressSanitizer the answer is the size asked for, so they are copied there). A 5M-triangle mesh's copies were 120 MB,
- * most of the faults left in its start. */
+ * AddressSanitizer the answer is the size asked for, so they are copied there). A
+ * 5M-triangle mesh's copies were 120 MB, most of the faults left in its start. */
 static bool shareable(const void *p, size_t bytes) {
   return p && malloc_usable_size((void *)p) >= bytes + 4 && (uintptr_t)p % 4 == 0;
 }
@@ -145,6 +145,14 @@ int pc_scene_commit(const pc_scene *s, void *rtc_scene, pc_err *e) {
   return ee->failed ? pc_errf(e, PC_EEMBREE, "%s: %s", s->path, ee->msg) : PC_OK;
 }
 
+/* The bounding sphere of the box lo..hi of the still shapes, grown to hold the animated ones
+ * at every time (light paths from the environment start outside it). */
+static void set_bounding_sphere(pc_scene *s, vec3 lo, vec3 hi) {
+  pc_scene_motion_bounds(s, &lo, &hi);
+  s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
+  s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
+}
+
 static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   RTCDevice dev = rtcNewDevice("verbose=0");
   if (!dev) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
@@ -161,12 +169,7 @@ static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   if (rc != PC_OK) return rc;
   struct RTCBounds b;
   rtcGetSceneBounds(scn, &b);
-  vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
-  /* the bounding sphere holds the animated shapes at every time (light paths from the
-   * environment start outside it) */
-  pc_scene_motion_bounds(s, &lo, &hi);
-  s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
-  s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
+  set_bounding_sphere(s, v3(b.lower_x, b.lower_y, b.lower_z), v3(b.upper_x, b.upper_y, b.upper_z));
   return PC_OK;
 }
 
@@ -216,7 +219,7 @@ static int prepare(pc_scene *s, pc_err *e) {
 }
 
 /* The bounding sphere from the shapes' own data (pc_scene_check: no Embree scene to ask). */
-static void bounds_by_hand(pc_scene *s) {
+static void bounds_from_shapes(pc_scene *s) {
   vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
   for (int i = 0; i < s->nshapes; i++) {
     const pc_shape *sh = &s->shapes[i];
@@ -230,15 +233,13 @@ static void bounds_by_hand(pc_scene *s) {
       }
     }
   }
-  pc_scene_motion_bounds(s, &lo, &hi);
-  s->scene_center = v3_scale(v3_add(lo, hi), 0.5f);
-  s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
+  set_bounding_sphere(s, lo, hi);
 }
 
 int pc_scene_check(pc_scene *s, pc_err *e) {
   int rc = prepare(s, e);
   if (rc != PC_OK) return rc;
-  bounds_by_hand(s);
+  bounds_from_shapes(s);
   return build_lights(s, e);
 }
 
