@@ -14,16 +14,19 @@
 
 #include "auth.h"
 #include "serve.h"
+#include "thread_pool.h"
 #include "wire_log.h"
 #include "wire_upload.h"
 
 static void coord_main(void *arg) {
   pc_embedded *f = arg;
+  pc_thread_set_name("pc-coord");
   uv_run(&f->loop, UV_RUN_DEFAULT);
 }
 
 static void worker_main(void *arg) {
   pc_err e;
+  pc_thread_set_name("pc-worker");
   if (pc_worker_run(arg, &e) != 0) pc_wire_log("worker: %s", e.msg); /* (one token for both: cannot happen) */
 }
 

@@ -20,6 +20,7 @@
 #include "coord.h"
 #include "render_flags.h"
 #include "file_read.h"
+#include "thread_pool.h"
 #include "wire_film.h"
 #include "wire_log.h"
 
@@ -189,7 +190,10 @@ void pc_job_take_stored_settings(pc_job *j, const Pcbpt__Settings *s) {
   j->snapshots = s->snapshots <= PC_JOB_MAX_SNAPSHOTS ? s->snapshots : PC_JOB_MAX_SNAPSHOTS;
 }
 
+/* The ops run on libuv's shared pool threads, each named for what it does now (the name stays
+ * through any later file-system work of the loop on that thread until its next op). */
 static void merge_work(uv_work_t *w) {
+  pc_thread_set_name("pc-merge");
   pc_op *op = w->data;
   pc_job *j = op->j;
   size_t want = pc_wire_film_size_traced(&j->film, upload_traced(op->first, op->count));
@@ -232,6 +236,7 @@ static int write_ckpt_file(pc_op *op, pc_job *j, const char *dir) {
 }
 
 static void ckpt_work(uv_work_t *w) {
+  pc_thread_set_name("pc-checkpoint");
   pc_op *op = w->data;
   pc_job *j = op->j;
   char dir[512];
@@ -249,6 +254,7 @@ static void ckpt_work(uv_work_t *w) {
 /* A study snapshot of the merged film (pc_job_snapshot_due). Its worker-seconds are those of
  * the uploads in the film now, which an op queued meanwhile may have added to. */
 static void snap_work(uv_work_t *w) {
+  pc_thread_set_name("pc-snapshot");
   pc_op *op = w->data;
   pc_job *j = op->j;
   char leaf[40], path[600];

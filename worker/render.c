@@ -175,7 +175,11 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   pc_err e = {0};
   double t0 = now_s();
   job_rend *r = c->loaded ? c->cur : NULL;
+  /* zstd's threads start inside the call and inherit the name: the upload's CPU time is told
+   * apart from the render's */
+  pc_thread_set_name("pc-upload");
   int rc = count && r ? pc_wire_film_zip(&r->pending, pool_threads(w), &z, &zn, &e) : 0;
+  pc_thread_set_name("pc-render");
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);
@@ -206,6 +210,7 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
 
 static void thread_main(void *arg) {
   pc_wrender *w = arg;
+  pc_thread_set_name("pc-render");
   job_ctx ctx = {0};
   uint64_t loaded_job = 0;
   for (;;) {

@@ -5,6 +5,7 @@
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -40,6 +41,7 @@ static void drain(pc_pool *p, int thread) {
 static void *worker_main(void *v) {
   worker_arg wa = *(worker_arg *)v;
   free(v);
+  pc_thread_set_name("pc-render");
   pc_pool *p = wa.p;
   uint64_t seen = 0;
   pthread_mutex_lock(&p->mu);
@@ -134,6 +136,15 @@ double pc_pool_cpu_seconds(const pc_pool *p) {
     sum = s < 0 ? -1.0 : sum + s;
   }
   return sum;
+}
+
+void pc_thread_set_name(const char *name) {
+  char cut[16];
+  snprintf(cut, sizeof cut, "%s", name);
+  int rc = pthread_setname_np(pthread_self(), cut);
+  /* cut to the kernel's 15 characters above, so only a missing /proc/self/task can refuse it:
+   * the thread keeps its inherited name, which only tools read */
+  (void)rc;
 }
 
 int pc_cpu_count(void) {

@@ -21,5 +21,10 @@ void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg);
 double pc_pool_cpu_seconds(const pc_pool *p);
 /* Number of online CPUs (at least 1). */
 int pc_cpu_count(void);
+/* Names the calling thread (at most 15 characters; longer names are cut) for `top -H`, perf
+ * and debuggers, and so for the benchmarks' CPU split by role. Threads it then starts inherit
+ * the name. Best effort: a name the kernel refuses leaves the thread as it was. Never call it
+ * on a process's main thread, whose name is the one `ps` shows. */
+void pc_thread_set_name(const char *name);
 
 #endif
