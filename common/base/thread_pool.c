@@ -142,8 +142,9 @@ void pc_thread_set_name(const char *name) {
   char cut[16];
   snprintf(cut, sizeof cut, "%s", name);
   int rc = pthread_setname_np(pthread_self(), cut);
-  /* cut to the kernel's 15 characters above, so only a missing /proc/self/task can refuse it:
-   * the thread keeps its inherited name, which only tools read */
+  /* for the calling thread glibc sets the name with prctl, which only refuses a name longer
+   * than the kernel's 15 characters (cut above); a refusal would leave the inherited name,
+   * which only tools read */
   (void)rc;
 }
 
