@@ -58,7 +58,9 @@ static inline uint32_t pc_float_bits(float f) {
 static inline bool v3_is_zero(vec3 a) { return ((pc_float_bits(a.x) | pc_float_bits(a.y) | pc_float_bits(a.z)) << 1) == 0; }
 static inline bool v3_is_finite(vec3 a) {
   uint32_t e = 0x7f800000u;
-  return ((pc_float_bits(a.x) & e) != e) & ((pc_float_bits(a.y) & e) != e) & ((pc_float_bits(a.z) & e) != e);
+  /* bitwise & on purpose: no branch per component */
+  int fx = (pc_float_bits(a.x) & e) != e, fy = (pc_float_bits(a.y) & e) != e, fz = (pc_float_bits(a.z) & e) != e;
+  return (fx & fy & fz) != 0;
 }
 static inline float v3_get(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
 
