@@ -157,7 +157,8 @@ static int run_job(pc_embedded *farm, int threads, const char *scene_path, const
   pc_pilot_farm fp = {.cl = &cl, .hash = hash, .name = scene_path};
   double prior_amount = 0;
   rc = pc_client_send_bundle(&cl, blob, blob_n, hash, e);
-  if (!rc) rc = pc_embedded_start_worker(farm, threads, e);
+  double share = req->halt_noise > 0 ? PC_EMBEDDED_UPLOAD_SHARE_LIVE : PC_EMBEDDED_UPLOAD_SHARE_SPARSE;
+  if (!rc) rc = pc_embedded_start_worker(farm, threads, share, e);
   if (!rc && req->method_auto && (rc = pc_pilot_farm_choose(&fp, req, auto_report, sizeof auto_report, pilot_s, &prior_amount, e)) == 0) {
     printf("auto: %s\n", auto_report);
     fflush(stdout);

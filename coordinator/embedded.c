@@ -119,11 +119,11 @@ fail:
   return rc;
 }
 
-int pc_embedded_start_worker(pc_embedded *f, int threads, pc_err *e) {
+int pc_embedded_start_worker(pc_embedded *f, int threads, double upload_share, pc_err *e) {
   char cache[300];
   snprintf(cache, sizeof cache, "%s/cache", f->dir);
   pc_worker_opts o = {.host = "127.0.0.1", .port = f->coord.bound_port, .key = f->key, .threads = threads,
-                      .name = "local", .cache_dir = cache, .upload_share = 0.01};
+                      .name = "local", .cache_dir = cache, .upload_share = upload_share};
   int rc = pc_worker_create(&o, &f->worker, e);
   if (rc) return rc;
   int r = uv_thread_create(&f->worker_thread, worker_main, f->worker);

@@ -26,9 +26,21 @@ typedef struct pc_embedded {
 
 /* Starts the coordinator. */
 int pc_embedded_start(pc_embedded *f, pc_err *e);
-/* Starts the worker with `threads` render threads (0 = every core). Started after the job is
- * submitted, its first work request gets the job at once instead of a retry later. */
-int pc_embedded_start_worker(pc_embedded *f, int threads, pc_err *e);
+/* The share of the render thread's time the embedded worker's uploads may take to compress
+ * (pc_worker_opts.upload_share), which spaces its uploads within a range:
+ * - LIVE where the merged image is read while it renders (a noise target is checked at each
+ *   merge; a study's snapshots);
+ * - SPARSE otherwise, where the uploads before the last only refresh the progress bar's
+ *   estimate: an upload's whole cost (its sealing and copies on both loops, the merge) was
+ *   about three times its compression (docs/performance.md, by thread at 128 spp), so this
+ *   keeps all of it near 1% of the render. Films that compress in milliseconds still upload
+ *   every PC_WIRE_UPLOAD_INTERVAL, and none waits more than PC_WIRE_UPLOAD_MAX_INTERVAL. */
+#define PC_EMBEDDED_UPLOAD_SHARE_LIVE 0.01
+#define PC_EMBEDDED_UPLOAD_SHARE_SPARSE 0.0025
+/* Starts the worker with `threads` render threads (0 = every core) and the upload share above.
+ * Started after the job is submitted, its first work request gets the job at once instead of
+ * a retry later. */
+int pc_embedded_start_worker(pc_embedded *f, int threads, double upload_share, pc_err *e);
 /* Stops both, restores stderr and removes the temporary directory. */
 void pc_embedded_stop(pc_embedded *f);
 

@@ -230,7 +230,7 @@ static int fetch_point(pc_client *cl, const pc_study_group *g, uint64_t job, uin
 
 static int start_worker(pc_study_farm *f, pc_err *e) {
   if (!f->embedded || f->worker_started) return PC_OK;
-  int rc = pc_embedded_start_worker(&f->emb, f->threads, e);
+  int rc = pc_embedded_start_worker(&f->emb, f->threads, PC_EMBEDDED_UPLOAD_SHARE_LIVE, e);
   f->worker_started = rc == PC_OK;
   return rc;
 }

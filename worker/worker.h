@@ -69,8 +69,9 @@ typedef struct pc_worker_opts {
    * this share of the render thread's time (wire_upload.h: between PC_WIRE_UPLOAD_INTERVAL
    * and PC_WIRE_UPLOAD_MAX_INTERVAL apart); 0: every PC_WIRE_UPLOAD_INTERVAL. pcbpt-worker
    * sets PC_WIRE_UPLOAD_SHARE, the share the coordinator sizes ranges by. The embedded farm
-   * sets 0.01: its coordinator shares the machine, so every upload's sealing, decompression
-   * and merge are the render's own cost too, and a crash loses the whole render anyway. */
+   * sets much less (embedded.h): its coordinator shares the machine, so every upload's
+   * sealing, decompression and merge are the render's own cost too, and a crash loses the
+   * whole render anyway. */
   double upload_share;
 } pc_worker_opts;
 
