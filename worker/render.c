@@ -175,11 +175,14 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   pc_err e = {0};
   double t0 = now_s();
   job_rend *r = c->loaded ? c->cur : NULL;
-  /* zstd's threads start inside the call and inherit the name: the upload's CPU time is told
-   * apart from the render's */
-  pc_thread_set_name("pc-upload");
-  int rc = count && r ? pc_wire_film_zip(&r->pending, pool_threads(w), &z, &zn, &e) : 0;
-  pc_thread_set_name("pc-render");
+  int rc = 0;
+  if (count && r) {
+    /* zstd's threads start inside the call and inherit the name: the upload's CPU time is
+     * told apart from the render's */
+    pc_thread_set_name("pc-upload");
+    rc = pc_wire_film_zip(&r->pending, pool_threads(w), &z, &zn, &e);
+    pc_thread_set_name("pc-render");
+  }
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
   uv_mutex_lock(&w->mu);

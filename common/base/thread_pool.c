@@ -141,11 +141,10 @@ double pc_pool_cpu_seconds(const pc_pool *p) {
 void pc_thread_set_name(const char *name) {
   char cut[16];
   snprintf(cut, sizeof cut, "%s", name);
-  int rc = pthread_setname_np(pthread_self(), cut);
   /* for the calling thread glibc sets the name with prctl, which only refuses a name longer
    * than the kernel's 15 characters (cut above); a refusal would leave the inherited name,
    * which only tools read */
-  (void)rc;
+  (void)pthread_setname_np(pthread_self(), cut);
 }
 
 int pc_cpu_count(void) {

@@ -39,7 +39,7 @@ static void record(void *arg, int thread, int item) {
 
 static void test_every_item_once_on_named_threads(void **state) {
   (void)state;
-  char before[16];
+  char now[16];
   assert_int_equal(pthread_setname_np(pthread_self(), "test-caller"), 0);
   pc_pool *p = NULL;
   pc_err e = {0};
@@ -54,8 +54,8 @@ static void test_every_item_once_on_named_threads(void **state) {
     assert_true(atomic_load(&s.by_thread[t]) > 0);
     assert_string_equal(s.names[t], "pc-render");
   }
-  assert_int_equal(pthread_getname_np(pthread_self(), before, sizeof before), 0);
-  assert_string_equal(before, "test-caller");
+  assert_int_equal(pthread_getname_np(pthread_self(), now, sizeof now), 0);
+  assert_string_equal(now, "test-caller");
   assert_true(pc_pool_cpu_seconds(p) >= 0.0);
   pc_pool_destroy(p);
 }
