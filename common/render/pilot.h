@@ -1,6 +1,7 @@
 /* pilot.h: `--method auto` (docs/auto.md): a short pilot renders each candidate configuration
  * (BDPT, PT, PCBPT with K in 1 and 2, then 4 and 8 while doubling K still paid, then K = 1
- * with a raised MIS count for its inner strategies) on the same
+ * with a raised MIS count for its inner strategies, then the best PCBPT one with a quarter and
+ * a sixteenth of the light-tracing paths while that paid) on the same
  * iterations (the same seeds, so the bidirectional ones share their eye and light paths and the
  * noise those carry), measures its efficiency 1 / (estimated relMSE x render time) from the
  * spread of its iterations (docs/variance.md), and picks the most efficient. The pilot renders with a seed of
@@ -18,7 +19,7 @@
 #include "render.h"
 #include "scene.h"
 
-#define PC_PILOT_MAX 8
+#define PC_PILOT_MAX 10
 /* Share of a --time budget the pilot may spend, over all candidates. Its cost is certain and
  * its gain is only where candidates differ: where they are within a few percent the choice
  * hardly matters and the pilot is pure loss, where they differ by 2x a few iterations each
@@ -58,6 +59,19 @@
  * -3%, glossy-floor +6% (docs/pmf-ceiling.md). */
 #define PC_PILOT_RAISED_COUNT 4.f
 #define PC_PILOT_COUNT_MARGIN 1.1
+/* Stage 5 tries the PCBPT configuration chosen so far with the light-tracing paths (N_L, the
+ * t = 1 strategy's samples) divided by PC_PILOT_LIGHT_DIVISOR, then by its square, each kept
+ * only if its efficiency is higher by PC_PILOT_LIGHT_MARGIN. PCBPT's inner connections use its
+ * M stored paths, so unlike BDPT (one light sub-path per pixel for its connections) it traces
+ * only N_L light paths besides them: fewer cost less, and where light tracing carries little
+ * the other strategies take its share in the MIS weights. Where it carries caustics seen
+ * directly, fewer cost more error than they save (glass-lamp: 1.35x worse at a quarter), and a
+ * few iterations see those rare paths less often than a long render: hence the margin.
+ * 128x128, 64 iterations, one thread, the image's own relMSE x CPU time, a quarter against
+ * W*H: furnace 0.61, cornell-box 0.81, ajar-door 0.80, open-room 0.78, slit-room 0.91,
+ * glossy-glass 0.90, thin-glass 0.97, glossy-floor 0.96, glass-lamp 1.35 (docs/auto.md). */
+#define PC_PILOT_LIGHT_DIVISOR 4
+#define PC_PILOT_LIGHT_MARGIN 1.1
 
 /* A candidate keeps its image (a fixed subsample of at most this many pixels) so that every
  * candidate's error is measured against the same denominator: the mean of all candidates'
@@ -70,9 +84,11 @@ typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
   bool mis_raised;      /* PCBPT with the raised MIS count of stage 4 */
+  int light_divisor;    /* stage 5: the base's light-tracing paths divided by this (0 or 1: as
+                           they are) */
   bool counts;          /* its iterations may count in the image (docs/auto.md): rendered
                            whatever the data says (stages 1 and 4) and not PT (its fireflies
-                           where it fails); K = 4 and 8 are not */
+                           where it fails); K = 4 and 8 and stage 5's are not */
   uint64_t iterations;  /* rendered by the pilot */
   double seconds;       /* worker-seconds (wall) of the candidate's jobs: what the pilot spent */
   double cpu_seconds;   /* CPU seconds of the render threads over them (<= 0: unknown): the cost
@@ -127,8 +143,10 @@ uint64_t pc_pilot_seed(uint64_t job_seed);
  * render's cost: worker-seconds on a farm; 0: none) buy at their cost; stages 2 and 3 render
  * K = 4 and 8 on those same iterations, each only while the last doubling paid by
  * PC_PILOT_K_MARGIN; where stage 1 had room for its second batch, stage 4 renders K = 1 with the
- * raised MIS count on them too. Picks that PCBPT K (K = 1 with the raised count where that is
- * better by PC_PILOT_COUNT_MARGIN), or BDPT unless the PCBPT candidate beats it by
+ * raised MIS count on them too; stage 5 (always) the PCBPT configuration chosen so far with
+ * fewer light-tracing paths (PC_PILOT_LIGHT_DIVISOR, then its square while that paid). Picks that
+ * PCBPT K (K = 1 with the raised count where that is better by PC_PILOT_COUNT_MARGIN; then its
+ * fewer light paths where better by PC_PILOT_LIGHT_MARGIN), or BDPT unless the PCBPT candidate beats it by
  * PC_PILOT_BDPT_MARGIN, then PT if it beats that winner by PC_PILOT_PT_MARGIN. PT is a
  * candidate only `with_pt`: where it cannot sample every path of the scene
  * (pc_scene_pt_complete), its image lacks light however long it runs. Free with

@@ -1,6 +1,9 @@
 /* test_auto.c: --method auto's pilot (common/render/pilot.h).
  * - choose: the most efficient candidate wins; BDPT keeps ties within PC_PILOT_BDPT_MARGIN; a
  *   pilot that could not tell falls back to BDPT; a noiseless candidate wins (deterministic).
+ * - fewer lights: stage 5 tries the chosen PCBPT configuration with a quarter, then a sixteenth,
+ *   of the light-tracing paths, each kept only past PC_PILOT_LIGHT_MARGIN, on the same
+ *   iterations, never counted in the image.
  * - grid: K = 4 and 8 are tried only while doubling K paid by PC_PILOT_K_MARGIN, a smaller gain
  *   keeps the smaller K, the job's uniform mix is kept, every
  *   candidate renders with the pilot seed, never the job's (a scripted
@@ -235,14 +238,15 @@ static void test_pt_disagreement(void **state) {
  * with the base count) (cost 1 s per candidate). */
 typedef struct script {
   double bdpt, pt, k[9], raised[9]; /* pt 0: PT cannot tell its error */
+  double fewer[3]; /* stage 5: [1] with a quarter, [2] a sixteenth of the light paths (0: as its base) */
   int calls, raised_calls;
   uint64_t job_seed;
   bool seed_leaked;
   bool no_pt; /* the scene has paths PT cannot sample: pc_pilot_run without PT */
-  /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count, 10 PT):
-   * iterations and salt */
-  int nbatch[11];
-  uint64_t batch_it[11][2], batch_salt[11][2];
+  /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count, 10 PT, 11
+   * and 12 stage 5's quarter and sixteenth of the light paths): iterations and salt */
+  int nbatch[13];
+  uint64_t batch_it[13][2], batch_salt[13][2];
 } script;
 
 static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t iterations, uint64_t salt,
@@ -253,7 +257,11 @@ static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t ite
     const pc_render_settings *set = &c[i].set;
     s->calls++;
     if ((set->seed ^ salt) == s->job_seed) s->seed_leaked = true;
-    int key = set->method == PC_METHOD_BDPT ? 0 : set->method == PC_METHOD_PT ? 10 : c[i].mis_raised ? 9 : set->pcbpt_k;
+    int step = c[i].light_divisor == 16 ? 2 : c[i].light_divisor == 4 ? 1 : 0;
+    int key = set->method == PC_METHOD_BDPT ? 0 : set->method == PC_METHOD_PT ? 10 : step ? 10 + step : c[i].mis_raised ? 9 : set->pcbpt_k;
+    /* stage 5 divides the job's light paths (W*H) and keeps everything else of its base */
+    assert_int_equal(set->light_paths, step ? (uint64_t)set->width * set->height / (uint64_t)c[i].light_divisor : 0);
+    assert_true(!step || !c[i].counts);
     int b = s->nbatch[key]++;
     if (b < 2) s->batch_it[key][b] = iterations, s->batch_salt[key][b] = salt;
     out[i].iterations = iterations;
@@ -265,6 +273,7 @@ static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t ite
       assert_true(set->mis_mode == PC_MIS_COUNT && set->mis_count == PC_PILOT_RAISED_COUNT);
       if (s->raised[set->pcbpt_k] > 0) out[i].own_relmse = s->raised[set->pcbpt_k];
     }
+    if (step && s->fewer[step] > 0) out[i].own_relmse = s->fewer[step];
   }
   return 0;
 }
@@ -290,17 +299,20 @@ static void test_grid(void **state) {
    * either (however good the raised count would have been): stage 1 took the whole budget */
   script a = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}, .raised = {[1] = 0.01}};
   run_script(&a, 0.1, &p);
-  assert_int_equal(a.calls, 4);
+  assert_int_equal(a.calls, 5); /* and stage 5's quarter of the light paths, no better */
   assert_int_equal(a.raised_calls, 0);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   assert_true(p.c[p.best].set.uniform_mix == 0.5f);
   pc_pilot_free(&p);
   /* the same with room for a second batch (two batches per candidate from here on): stage 4
-   * tries K=1 with the raised count, which is no better, so the base count stays */
+   * tries K=1 with the raised count, which is no better, so the base count stays; stage 5 K=1
+   * with a quarter of the light paths, no better either, so a sixteenth is not tried */
   script a2 = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3, [4] = 0.01, [8] = 0.01}};
   run_script(&a2, 2.0, &p);
-  assert_int_equal(a2.calls, 10);
+  assert_int_equal(a2.calls, 12);
+  assert_int_equal(a2.nbatch[11], 2);
+  assert_int_equal(a2.nbatch[12], 0);
   assert_int_equal(a2.raised_calls, 2);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
@@ -311,7 +323,7 @@ static void test_grid(void **state) {
    * K=4 with it would win, which shows that it is never tried */
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}, .raised = {[1] = 0.5, [4] = 0.08}};
   run_script(&b, 2.0, &p);
-  assert_int_equal(b.calls, 14);
+  assert_int_equal(b.calls, 16);
   assert_int_equal(b.nbatch[9], 2);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
@@ -327,20 +339,20 @@ static void test_grid(void **state) {
   script d = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.4 / (0.5 * (1 + PC_PILOT_K_MARGIN)), [4] = 0.01},
               .raised = {[1] = 0.4 / (0.5 * (1 + PC_PILOT_COUNT_MARGIN))}};
   run_script(&d, 2.0, &p);
-  assert_int_equal(d.calls, 10);
+  assert_int_equal(d.calls, 12);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
   /* BDPT best, also against the raised count */
   script c = {.bdpt = 0.1, .k = {[1] = 0.4, [2] = 0.5, [4] = 0.6, [8] = 0.5}, .raised = {[1] = 0.2}};
   run_script(&c, 2.0, &p);
-  assert_int_equal(c.calls, 10);
+  assert_int_equal(c.calls, 12);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_BDPT);
   pc_pilot_free(&p);
   /* BDPT better than K=1 with the base count, but not than K=1 with the raised one */
   script f = {.bdpt = 0.2, .k = {[1] = 0.22, [2] = 0.5}, .raised = {[1] = 0.1}};
   run_script(&f, 2.0, &p);
-  assert_int_equal(f.calls, 10);
+  assert_int_equal(f.calls, 12);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_true(p.c[p.best].mis_raised);
   pc_pilot_free(&p);
@@ -367,6 +379,62 @@ static void test_grid(void **state) {
   pc_pilot_free(&p);
 }
 
+/* Stage 5: the PCBPT configuration chosen so far, with a quarter of the light-tracing paths, then
+ * a sixteenth, each taken only past PC_PILOT_LIGHT_MARGIN; it renders the same two batches as the
+ * others and does not count in the image (the scripted renderer checks both, and that the light
+ * paths are the job's W*H divided). */
+static void test_fewer_lights(void **state) {
+  (void)state;
+  pc_pilot p;
+  /* a quarter past the margin, a sixteenth within it: a quarter */
+  script j = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.2 / (1.01 * PC_PILOT_LIGHT_MARGIN)}};
+  j.fewer[2] = j.fewer[1] / (0.5 * (1 + PC_PILOT_LIGHT_MARGIN));
+  run_script(&j, 2.0, &p);
+  assert_int_equal(j.nbatch[11], 2);
+  assert_int_equal(j.nbatch[12], 2);
+  assert_int_equal(p.c[p.best].light_divisor, 4);
+  assert_int_equal(p.c[p.best].set.light_paths, 256 * 256 / 4);
+  assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
+  assert_false(p.c[p.best].counts);
+  assert_true(pc_pilot_counted_share(&p) == 1.0 / 4); /* BDPT, K = 1, K = 2 and stage 4 */
+  pc_pilot_free(&p);
+  /* both steps past it: a sixteenth */
+  script k = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.15, [2] = 0.1}};
+  run_script(&k, 2.0, &p);
+  assert_int_equal(p.c[p.best].light_divisor, 16);
+  assert_int_equal(p.c[p.best].set.light_paths, 256 * 256 / 16);
+  pc_pilot_free(&p);
+  /* a quarter within the margin: the job's light paths, and a sixteenth is never tried however
+   * good it would have been */
+  script l = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.2 / (0.5 * (1 + PC_PILOT_LIGHT_MARGIN)), [2] = 0.01}};
+  run_script(&l, 2.0, &p);
+  assert_int_equal(l.nbatch[12], 0);
+  assert_int_equal(p.c[p.best].light_divisor, 1);
+  assert_int_equal(p.c[p.best].set.light_paths, 0);
+  pc_pilot_free(&p);
+  /* it starts from the chosen configuration: K = 1 with the raised count here */
+  script m = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.5}, .raised = {[1] = 0.2}, .fewer = {[1] = 0.1}};
+  run_script(&m, 2.0, &p);
+  assert_true(p.c[p.best].mis_raised);
+  assert_int_equal(p.c[p.best].light_divisor, 4);
+  pc_pilot_free(&p);
+  /* ... and K = 4 here; where it makes PCBPT beat BDPT, PCBPT */
+  script n = {.bdpt = 0.25, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.28, [8] = 0.5}, .fewer = {[1] = 0.1}};
+  run_script(&n, 2.0, &p);
+  assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
+  assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
+  assert_int_equal(p.c[p.best].light_divisor, 4);
+  pc_pilot_free(&p);
+  /* where stage 1 took the budget, no stage 4, but stage 5 still (its gain is no refinement) */
+  script o = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .raised = {[1] = 0.01}, .fewer = {[1] = 0.1, [2] = 0.05}};
+  run_script(&o, 0.1, &p);
+  assert_int_equal(o.raised_calls, 0);
+  assert_int_equal(o.nbatch[11], 1);
+  assert_int_equal(o.nbatch[12], 1);
+  assert_int_equal(p.c[p.best].light_divisor, 16);
+  pc_pilot_free(&p);
+}
+
 /* Every candidate renders the same iterations: the first batch's floor, then what the rest of
  * stage 1's 5 slices buys at the four candidates' cost (here (5 x 2 - 4 x 1) / (4 x 0.5) = 3
  * iterations), and K = 4 and 8 and the raised count, tried later, the same two batches. */
@@ -375,9 +443,9 @@ static void test_matched(void **state) {
   pc_pilot p;
   script b = {.bdpt = 1.0, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.1, [8] = 0.25}};
   run_script(&b, 2.0, &p);
-  assert_int_equal(b.calls, 14);
-  assert_int_equal(p.n, 7);
-  for (int key = 0; key <= 10; key = key == 8 ? 9 : key == 9 ? 10 : key ? 2 * key : 1) {
+  assert_int_equal(b.calls, 16);
+  assert_int_equal(p.n, 8);
+  for (int key = 0; key <= 11; key = key == 8 ? 9 : key >= 9 ? key + 1 : key ? 2 * key : 1) {
     assert_int_equal(b.nbatch[key], 2);
     assert_int_equal(b.batch_it[key][0], 2);
     assert_int_equal(b.batch_it[key][1], 3);
@@ -572,6 +640,7 @@ int main(void) {
       cmocka_unit_test(test_pooled_own_noise),
       cmocka_unit_test(test_pt_disagreement),
       cmocka_unit_test(test_grid),
+      cmocka_unit_test(test_fewer_lights),
       cmocka_unit_test(test_matched),
       cmocka_unit_test(test_picks_winner),
       cmocka_unit_test(test_unbiased),
