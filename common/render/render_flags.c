@@ -10,9 +10,10 @@
 
 const char pc_render_flags_help[] =
     "  --method M            pt, lt, bdpt, cbdpt, pcbpt or auto (default: the scene's integrator;\n"
-    "                        auto for pcbpt): auto runs a short pilot of bdpt and pcbpt K=1,2,4,8\n"
-    "                        (and the best K with --mis 4) and renders with the most efficient\n"
-    "                        (docs/auto.md)\n"
+    "                        auto for pcbpt): auto runs a short pilot of pt, bdpt and pcbpt\n"
+    "                        K=1,2,4,8 (K=1 also with --mis 4; the best pcbpt also with a\n"
+    "                        quarter and a sixteenth of the light paths) and renders with the\n"
+    "                        most efficient (docs/auto.md)\n"
     "  --spp N               iterations to render, one sample per pixel each\n"
     "  --time SECONDS        render for this wall time (with --spp: whichever comes first)\n"
     "  --halt-noise E        stop once the image's estimated relMSE is at most E (--spp and\n"
