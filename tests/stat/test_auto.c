@@ -25,8 +25,10 @@
  *   (pilot, then the winner with the job's seed, and the counted candidates' films mixed in
  *   with the weight the coordinator gives them under --spp: coordinator/job_prior.c) is 2
  *   within 4 standard errors of the seeds' spread: the choice never leaks into the image. The
- *   pilot's costs are scripted so that its choice is decided by its images alone (BDPT, PT and
- *   PCBPT each win on some seeds) and is the same on every machine: with measured costs and 8
+ *   pilot's costs are scripted so that its choice is decided by its images alone (BDPT, PT,
+ *   PCBPT and PCBPT with stage 5's fewer light paths each win on some seeds, so the job and the
+ *   counted candidates it is mixed with differ in their light paths too) and is the same on
+ *   every machine: with measured costs and 8
  *   seeds, a loaded CI machine chose otherwise and the 8 seeds' spread came out at 0.4x its
  *   true size (per-seed sd 0.012 over 300 seeds, whose mean was 2.0002 +- 0.0007).
  * Candidates render in this process here (local_render), each keeping its film. */
@@ -475,6 +477,9 @@ typedef struct local {
  * then sees whether that choice leaks into the image. */
 static double scripted_ms(const pc_render_settings *s) {
   if (s->method == PC_METHOD_PT) return 0.35;
+  /* stage 5's fewer light paths (relMSE about 0.02 and 0.017 at a quarter and a sixteenth)
+   * are charged more than they cost, to stay near-equal too */
+  if (s->method == PC_METHOD_PCBPT && s->light_paths > 0) return s->light_paths * 16 > (uint64_t)s->width * (uint64_t)s->height ? 1.75 : 2.1;
   if (s->method == PC_METHOD_PCBPT) return 1.4 + 0.05 * (s->pcbpt_k - 1);
   return 1.0;
 }
