@@ -140,7 +140,7 @@ int pc_pilot_farm_choose(pc_pilot_farm *fp, pc_render_request *req, char *report
   int rc = farm_size(fp, &fp->farm_size, e);
   if (rc) return rc;
   /* the slices in worker-seconds, the unit of a candidate's cost */
-  rc = pc_pilot_run(&pilot, &req->set, req->pt_complete, slice * fp->farm_size, min_it, pc_pilot_farm_render, fp, e);
+  rc = pc_pilot_run(&pilot, &req->set, req->pt_complete, !req->caustics, slice * fp->farm_size, min_it, pc_pilot_farm_render, fp, e);
   if (!rc) {
     uint64_t seed = req->set.seed;
     req->set = pilot.c[pilot.best].set;

@@ -84,7 +84,7 @@ static int run_pilot(pc_client *cl, const pc_study_group *g, auto_choice *ac, pc
   pc_pilot_budget(g->seconds, 0, &slice, &min_it);
   pc_pilot_farm fp = {.cl = cl, .hash = g->hash, .name = g->scene_path, .workers = g->workers, .keep = true};
   pc_pilot pilot;
-  int rc = pc_pilot_run(&pilot, &base, g->req->pt_complete, slice * g->workers, min_it, pc_pilot_farm_render, &fp, e);
+  int rc = pc_pilot_run(&pilot, &base, g->req->pt_complete, !g->req->caustics, slice * g->workers, min_it, pc_pilot_farm_render, &fp, e);
   if (rc) {
     pc_pilot_free(&pilot);
     return rc;

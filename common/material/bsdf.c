@@ -52,6 +52,27 @@ bool pc_material_has_delta(const pc_material *materials, int n, int i) {
   }
 }
 
+bool pc_material_casts_caustics(const pc_material *materials, int n, int i) {
+  if (i < 0 || i >= n) return false;
+  const pc_material *m = &materials[i];
+  switch (m->type) {
+  case PC_MAT_CONDUCTOR:
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_THINDIELECTRIC:
+  case PC_MAT_ROUGHDIELECTRIC: return true;
+  case PC_MAT_BUMPMAP:
+  case PC_MAT_COATING: /* its coat does not count; what it coats may */
+  case PC_MAT_ROUGHCOATING:
+  case PC_MAT_MASK: return m->nested < i && pc_material_casts_caustics(materials, n, m->nested);
+  case PC_MAT_BLEND:
+  case PC_MAT_MIXTURE:
+    for (int k = 0; k < m->nmix && k < PC_MIX_MAX; k++)
+      if (m->mix_nested[k] < i && pc_material_casts_caustics(materials, n, m->mix_nested[k])) return true;
+    return false;
+  default: return false;
+  }
+}
+
 static bool is_dielectric(const pc_material *m) {
   return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
 }

@@ -198,6 +198,11 @@ bool pc_bsdf_is_delta(const pc_material *m);
  * nested indices, so it holds before pc_scene_build too; an index out of [0, n) counts as
  * none. */
 bool pc_material_has_delta(const pc_material *materials, int n, int i);
+/* True if materials[i] is, or wraps, a mirror or a glass (a smooth conductor; a smooth, thin or
+ * rough dielectric): light off or through it focuses onto what it lights (caustics), which light
+ * tracing samples best. A plastic's or a coating's smooth coat reflects a few per cent and does
+ * not count. Reads the nested indices as pc_material_has_delta does. */
+bool pc_material_casts_caustics(const pc_material *materials, int n, int i);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
  * point (not on depth or directions) so a reverse pdf can include it. */
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);

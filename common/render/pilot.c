@@ -397,8 +397,8 @@ static uint64_t second_batch(const pc_pilot *p, double slice) {
   return per_it > 0 && left >= 2 * per_it ? (uint64_t)(left / per_it) : 0;
 }
 
-int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, double slice, uint64_t min_it,
-                 pc_pilot_render_fn render, void *user, pc_err *e) {
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, bool with_fewer_lights, double slice,
+                 uint64_t min_it, pc_pilot_render_fn render, void *user, pc_err *e) {
   memset(p, 0, sizeof *p);
   double t0 = now_s();
   /* stage 1: BDPT, PT, K = 1 and K = 2, whatever the data says, so the iterations of BDPT and
@@ -449,9 +449,10 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, doub
   /* stage 5: the PCBPT configuration chosen so far with a PC_PILOT_LIGHT_DIVISOR-th of the
    * light-tracing paths, then with the square of it if that paid, on the same iterations (the
    * first N_L light paths are the same ones, so these share their paths with the others too).
-   * Not counted: whether it is rendered depends on the data. Also where stage 1 left no room:
+   * Not counted: whether it is rendered depends on the data. Not where the scene has caustics
+   * (pilot.h). Also where stage 1 left no room:
    * unlike stage 4's few per cent, this is worth 1.2-1.9x where it pays (docs/auto.md) */
-  for (int div = PC_PILOT_LIGHT_DIVISOR; !rc && div <= PC_PILOT_LIGHT_DIVISOR * PC_PILOT_LIGHT_DIVISOR &&
+  for (int div = PC_PILOT_LIGHT_DIVISOR; !rc && with_fewer_lights && div <= PC_PILOT_LIGHT_DIVISOR * PC_PILOT_LIGHT_DIVISOR &&
                                          p->n < PC_PILOT_MAX;
        div *= PC_PILOT_LIGHT_DIVISOR) {
     int from = pcbpt_choice(p);

@@ -61,12 +61,15 @@
 #define PC_PILOT_COUNT_MARGIN 1.1
 /* Stage 5 tries the PCBPT configuration chosen so far with the light-tracing paths (N_L, the
  * t = 1 strategy's samples) divided by PC_PILOT_LIGHT_DIVISOR, then by its square, each kept
- * only if its efficiency is higher by PC_PILOT_LIGHT_MARGIN. PCBPT's inner connections use its
+ * only if its efficiency is higher by PC_PILOT_LIGHT_MARGIN, and not on scenes with caustics
+ * (pc_pilot_run's with_fewer_lights). PCBPT's inner connections use its
  * M stored paths, so unlike BDPT (one light sub-path per pixel for its connections) it traces
  * only N_L light paths besides them: fewer cost less, and where light tracing carries little
  * the other strategies take its share in the MIS weights. Where it carries caustics seen
- * directly, fewer cost more error than they save (glass-lamp: 1.35x worse at a quarter), and a
- * few iterations see those rare paths less often than a long render: hence the margin.
+ * directly (glass-lamp), the error is in rare large samples, which neither a few pilot
+ * iterations nor an image's own estimate measure: those put a quarter 1.4x better and 1.35x
+ * worse there, a reference about even and a sixteenth 1.2-3x worse per iteration. Hence no
+ * stage 5 where the scene has caustics, and the margin.
  * 128x128, 64 iterations, one thread, the image's own relMSE x CPU time, a quarter against
  * W*H: furnace 0.61, cornell-box 0.81, ajar-door 0.80, open-room 0.78, slit-room 0.91,
  * glossy-glass 0.90, thin-glass 0.97, glossy-floor 0.96, glass-lamp 1.35 (docs/auto.md). */
@@ -149,10 +152,12 @@ uint64_t pc_pilot_seed(uint64_t job_seed);
  * fewer light paths where better by PC_PILOT_LIGHT_MARGIN), or BDPT unless the PCBPT candidate beats it by
  * PC_PILOT_BDPT_MARGIN, then PT if it beats that winner by PC_PILOT_PT_MARGIN. PT is a
  * candidate only `with_pt`: where it cannot sample every path of the scene
- * (pc_scene_pt_complete), its image lacks light however long it runs. Free with
+ * (pc_scene_pt_complete), its image lacks light however long it runs. Stage 5 runs only
+ * `with_fewer_lights`: not where the scene has caustics (pc_scene_has_caustics), which light
+ * tracing carries and a few pilot iterations with fewer light paths miss. Free with
  * pc_pilot_free, also after a failure. */
-int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, double slice_seconds,
-                 uint64_t min_iterations, pc_pilot_render_fn render, void *user, pc_err *e);
+int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, bool with_fewer_lights,
+                 double slice_seconds, uint64_t min_iterations, pc_pilot_render_fn render, void *user, pc_err *e);
 
 /* Measures every candidate against the pooled mean of their images (candidates without an
  * image keep their own estimate) and picks p->best by pc_pilot_run's rule: the PCBPT K reached

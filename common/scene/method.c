@@ -1,5 +1,5 @@
 /* method.c: names of the rendering methods, for the CLI, the integrator element and headers,
- * and which scenes a method cannot render in full. */
+ * which scenes a method cannot render in full, and which ones have caustics. */
 #include <string.h>
 
 #include "scene.h"
@@ -38,4 +38,10 @@ bool pc_scene_pt_complete(const pc_scene *s) {
   for (int i = 0; i < s->nshapes; i++)
     if (pc_material_has_delta(s->materials, s->nmaterials, s->shapes[i].material)) return false;
   return true;
+}
+
+bool pc_scene_has_caustics(const pc_scene *s) {
+  for (int i = 0; i < s->nshapes; i++)
+    if (pc_material_casts_caustics(s->materials, s->nmaterials, s->shapes[i].material)) return true;
+  return false;
 }

@@ -138,6 +138,10 @@ int pc_method_parse(const char *name, pc_method *out); /* "pt" or "path", "lt", 
  * light, however long it runs, while the bidirectional methods' light sub-paths find it. Judged
  * from the shapes' materials and the lights, before or after pc_scene_build. */
 bool pc_scene_pt_complete(const pc_scene *s);
+/* A shape is a mirror or a glass (pc_material_casts_caustics): light that reaches a diffuse
+ * surface by way of it and is seen from there (a caustic) is sampled well by light tracing
+ * alone, so the light-tracing paths are not to be cut (--method auto's stage 5, pilot.h). */
+bool pc_scene_has_caustics(const pc_scene *s);
 
 /* Motion blur (scene_motion.c). True if the scene changes during the shutter. */
 bool pc_scene_moves(const pc_scene *s);

@@ -245,6 +245,7 @@ typedef struct script {
   uint64_t job_seed;
   bool seed_leaked;
   bool no_pt; /* the scene has paths PT cannot sample: pc_pilot_run without PT */
+  bool caustics; /* the scene has caustics: pc_pilot_run without stage 5 */
   /* the batches each candidate rendered (index 0 BDPT, else K; 9 the raised count, 10 PT, 11
    * and 12 stage 5's quarter and sixteenth of the light paths): iterations and salt */
   int nbatch[13];
@@ -286,7 +287,7 @@ static void run_script(script *s, double slice, pc_pilot *p) {
   base.method = PC_METHOD_PCBPT;
   base.seed = s->job_seed = 77;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(p, &base, !s->no_pt, slice, 2, scripted, s, &e), 0);
+  assert_int_equal(pc_pilot_run(p, &base, !s->no_pt, !s->caustics, slice, 2, scripted, s, &e), 0);
   assert_false(s->seed_leaked);
   char line[1024];
   pc_pilot_report(p, line, sizeof line);
@@ -435,6 +436,12 @@ static void test_fewer_lights(void **state) {
   assert_int_equal(o.nbatch[12], 1);
   assert_int_equal(p.c[p.best].light_divisor, 16);
   pc_pilot_free(&p);
+  /* a scene with caustics: never fewer light paths, however good they look */
+  script q = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.01, [2] = 0.01}, .caustics = true};
+  run_script(&q, 2.0, &p);
+  assert_int_equal(q.nbatch[11], 0);
+  assert_int_equal(p.c[p.best].light_divisor, 1);
+  pc_pilot_free(&p);
 }
 
 /* Every candidate renders the same iterations: the first batch's floor, then what the rest of
@@ -536,7 +543,7 @@ static void test_picks_winner(void **state) {
   local l = {.scene = &scene};
   pc_pilot p;
   pc_err e = {0};
-  assert_int_equal(pc_pilot_run(&p, &req.set, req.pt_complete, 0, 4, local_render, &l, &e), 0);
+  assert_int_equal(pc_pilot_run(&p, &req.set, req.pt_complete, !req.caustics, 0, 4, local_render, &l, &e), 0);
   local_free(&l);
   char line[1024];
   pc_pilot_report(&p, line, sizeof line);
@@ -568,7 +575,7 @@ static void test_unbiased(void **state) {
     local l = {.scene = &scene, .scripted_cost = true};
     pc_pilot p;
     pc_err e = {0};
-    assert_int_equal(pc_pilot_run(&p, &base, req.pt_complete, 0, 2, local_render, &l, &e), 0);
+    assert_int_equal(pc_pilot_run(&p, &base, req.pt_complete, !req.caustics, 0, 2, local_render, &l, &e), 0);
     pc_render_settings chosen = p.c[p.best].set;
     chosen.seed = base.seed;
     /* the job's film, then the mix: the counted candidates by iterations (as the coordinator

@@ -622,7 +622,9 @@ static void test_warnings(void **state) {
 
 /* PT cannot sample a path from a point or spot light through a delta lobe: with such a light,
  * any shape with a delta lobe (also wrapped or mixed in) makes the scene incomplete for it; an
- * area light, or only rough and diffuse materials, leave it complete. */
+ * area light, or only rough and diffuse materials, leave it complete. And caustics
+ * (pc_scene_has_caustics): a shape of mirror or glass, smooth, thin or rough, also wrapped or
+ * mixed in; not a plastic's or a coating's coat over a diffuse base. */
 static void test_pt_complete(void **state) {
   (void)state;
   tmp t;
@@ -632,26 +634,26 @@ static void test_pt_complete(void **state) {
 #define AREA "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>"
   static const struct {
     const char *light, *bsdf;
-    bool complete;
+    bool complete, caustics;
   } cases[] = {
-      {POINT, "<bsdf type=\"diffuse\"/>", true},
-      {POINT, "<bsdf type=\"roughconductor\"/>", true},
-      {POINT, "<bsdf type=\"roughdielectric\"/>", true},
-      {POINT, "<bsdf type=\"dielectric\"/>", false},
-      {POINT, "<bsdf type=\"thindielectric\"/>", false},
-      {SPOT, "<bsdf type=\"conductor\"/>", false},
-      {POINT, "<bsdf type=\"plastic\"/>", false},
-      {POINT, "<bsdf type=\"roughplastic\"/>", true},
-      {POINT, "<bsdf type=\"bumpmap\"><bsdf type=\"conductor\"/><texture type=\"checkerboard\"/></bsdf>", false},
-      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"diffuse\"/></bsdf>", true},
-      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"conductor\"/></bsdf>", false},
-      {POINT, "<bsdf type=\"coating\"><bsdf type=\"diffuse\"/></bsdf>", false},
-      {POINT, "<bsdf type=\"mask\"><bsdf type=\"diffuse\"/><float name=\"opacity\" value=\"0.5\"/></bsdf>", false},
+      {POINT, "<bsdf type=\"diffuse\"/>", true, false},
+      {POINT, "<bsdf type=\"roughconductor\"/>", true, false},
+      {POINT, "<bsdf type=\"roughdielectric\"/>", true, true},
+      {POINT, "<bsdf type=\"dielectric\"/>", false, true},
+      {POINT, "<bsdf type=\"thindielectric\"/>", false, true},
+      {SPOT, "<bsdf type=\"conductor\"/>", false, true},
+      {POINT, "<bsdf type=\"plastic\"/>", false, false},
+      {POINT, "<bsdf type=\"roughplastic\"/>", true, false},
+      {POINT, "<bsdf type=\"bumpmap\"><bsdf type=\"conductor\"/><texture type=\"checkerboard\"/></bsdf>", false, true},
+      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"diffuse\"/></bsdf>", true, false},
+      {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"conductor\"/></bsdf>", false, true},
+      {POINT, "<bsdf type=\"coating\"><bsdf type=\"diffuse\"/></bsdf>", false, false},
+      {POINT, "<bsdf type=\"mask\"><bsdf type=\"diffuse\"/><float name=\"opacity\" value=\"0.5\"/></bsdf>", false, false},
       {POINT, "<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5, 0.5\"/><bsdf type=\"diffuse\"/>"
-              "<bsdf type=\"roughconductor\"/></bsdf>", true},
+              "<bsdf type=\"roughconductor\"/></bsdf>", true, false},
       {POINT, "<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5, 0.5\"/><bsdf type=\"diffuse\"/>"
-              "<bsdf type=\"conductor\"/></bsdf>", false},
-      {AREA, "<bsdf type=\"dielectric\"/>", true},
+              "<bsdf type=\"conductor\"/></bsdf>", false, true},
+      {AREA, "<bsdf type=\"dielectric\"/>", true, true},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     char body[1024];
@@ -663,6 +665,8 @@ static void test_pt_complete(void **state) {
     assert_int_equal(rc, 0);
     if (pc_scene_pt_complete(&s) != cases[i].complete) print_error("case %zu: %s\n", i, cases[i].bsdf);
     assert_true(pc_scene_pt_complete(&s) == cases[i].complete);
+    if (pc_scene_has_caustics(&s) != cases[i].caustics) print_error("case %zu: caustics %s\n", i, cases[i].bsdf);
+    assert_true(pc_scene_has_caustics(&s) == cases[i].caustics);
     pc_scene_free(&s);
   }
   /* a delta material no shape uses does not count */
@@ -672,6 +676,7 @@ static void test_pt_complete(void **state) {
   snprintf(body, sizeof body, SENSOR "%s<bsdf type=\"conductor\" id=\"unused\"/><shape type=\"sphere\"/>", POINT);
   assert_int_equal(load_body(&t, body, &s, &e), 0);
   assert_true(pc_scene_pt_complete(&s));
+  assert_false(pc_scene_has_caustics(&s));
   pc_scene_free(&s);
   th_rm_rf(t.root);
 #undef POINT
