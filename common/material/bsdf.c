@@ -30,47 +30,60 @@ bool pc_bsdf_is_delta(const pc_material *m) {
   }
 }
 
-bool pc_material_has_delta(const pc_material *materials, int n, int i) {
+/* What a material says of a property of the materials it is made of: it has it, it does not,
+ * or it wraps one (`nested`) that answers. Mixes answer for any of theirs. */
+typedef enum { HAS_NOT, HAS, HAS_IF_WRAPPED } has_answer;
+
+static bool material_has(const pc_material *materials, int n, int i, has_answer (*ask)(const pc_material *)) {
   if (i < 0 || i >= n) return false;
   const pc_material *m = &materials[i];
+  /* a nested material is always read before its parent: the index falls, so this ends */
+  if (m->type == PC_MAT_BLEND || m->type == PC_MAT_MIXTURE) {
+    for (int k = 0; k < m->nmix && k < PC_MIX_MAX; k++)
+      if (m->mix_nested[k] < i && material_has(materials, n, m->mix_nested[k], ask)) return true;
+    return false;
+  }
+  switch (ask(m)) {
+  case HAS: return true;
+  case HAS_IF_WRAPPED: return m->nested < i && material_has(materials, n, m->nested, ask);
+  default: return false;
+  }
+}
+
+static has_answer delta_lobe(const pc_material *m) {
   switch (m->type) {
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC:
   case PC_MAT_PLASTIC:
   case PC_MAT_COATING:
-  case PC_MAT_MASK: return true;
-  /* a nested material is always read before its parent: the index falls, so this ends */
+  case PC_MAT_MASK: return HAS;
   case PC_MAT_BUMPMAP:
-  case PC_MAT_ROUGHCOATING: return m->nested < i && pc_material_has_delta(materials, n, m->nested);
-  case PC_MAT_BLEND:
-  case PC_MAT_MIXTURE:
-    for (int k = 0; k < m->nmix && k < PC_MIX_MAX; k++)
-      if (m->mix_nested[k] < i && pc_material_has_delta(materials, n, m->mix_nested[k])) return true;
-    return false;
-  default: return false;
+  case PC_MAT_ROUGHCOATING: return HAS_IF_WRAPPED;
+  default: return HAS_NOT;
   }
 }
 
-bool pc_material_casts_caustics(const pc_material *materials, int n, int i) {
-  if (i < 0 || i >= n) return false;
-  const pc_material *m = &materials[i];
+bool pc_material_has_delta(const pc_material *materials, int n, int i) {
+  return material_has(materials, n, i, delta_lobe);
+}
+
+static has_answer caustic_surface(const pc_material *m) {
   switch (m->type) {
   case PC_MAT_CONDUCTOR:
   case PC_MAT_DIELECTRIC:
   case PC_MAT_THINDIELECTRIC:
-  case PC_MAT_ROUGHDIELECTRIC: return true;
+  case PC_MAT_ROUGHDIELECTRIC: return HAS;
   case PC_MAT_BUMPMAP:
   case PC_MAT_COATING: /* its coat does not count; what it coats may */
   case PC_MAT_ROUGHCOATING:
-  case PC_MAT_MASK: return m->nested < i && pc_material_casts_caustics(materials, n, m->nested);
-  case PC_MAT_BLEND:
-  case PC_MAT_MIXTURE:
-    for (int k = 0; k < m->nmix && k < PC_MIX_MAX; k++)
-      if (m->mix_nested[k] < i && pc_material_casts_caustics(materials, n, m->mix_nested[k])) return true;
-    return false;
-  default: return false;
+  case PC_MAT_MASK: return HAS_IF_WRAPPED;
+  default: return HAS_NOT;
   }
+}
+
+bool pc_material_casts_caustics(const pc_material *materials, int n, int i) {
+  return material_has(materials, n, i, caustic_surface);
 }
 
 static bool is_dielectric(const pc_material *m) {
