@@ -46,16 +46,15 @@ double pc_pilot_remaining(double seconds, double pilot_seconds) {
 
 uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
 
-/* What the candidate divides the base's light-tracing paths by. */
-static int divisor(const pc_pilot_candidate *c) { return c->light_divisor > 1 ? c->light_divisor : 1; }
-
 /* "pcbpt K=2", "pcbpt K=1 mis 4 N_L/4" */
 static void pcbpt_label(pc_pilot_candidate *c) {
   int n = snprintf(c->label, sizeof c->label, "pcbpt K=%d", c->set.pcbpt_k);
   if (c->mis_raised && n > 0 && (size_t)n < sizeof c->label)
     n += snprintf(c->label + n, sizeof c->label - (size_t)n, " mis %g", (double)c->set.mis_count);
-  if (divisor(c) > 1 && n > 0 && (size_t)n < sizeof c->label)
-    snprintf(c->label + n, sizeof c->label - (size_t)n, " N_L/%d", c->light_divisor);
+  int div = 1;
+  for (int j = 0; j < c->light_step; j++) div *= PC_PILOT_LIGHT_DIVISOR;
+  if (div > 1 && n > 0 && (size_t)n < sizeof c->label)
+    snprintf(c->label + n, sizeof c->label - (size_t)n, " N_L/%d", div);
 }
 
 /* count > 0: a PCBPT candidate whose inner strategies carry that count in the MIS weights
@@ -65,7 +64,6 @@ static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method
   pc_pilot_candidate *c = &p->c[p->n++];
   memset(c, 0, sizeof *c);
   c->counts = counts;
-  c->light_divisor = 1;
   c->set = *base;
   c->set.method = m;
   c->set.seed = pc_pilot_seed(base->seed);
@@ -83,17 +81,17 @@ static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method
   }
 }
 
-/* Stage 5: candidate `from` (PCBPT) again with its base's light-tracing paths divided by `div`.
- * False when there are too few to divide. */
-static bool add_fewer_lights(pc_pilot *p, const pc_render_settings *base, int from, int div) {
-  uint64_t all = base->light_paths ? base->light_paths : (uint64_t)base->width * (uint64_t)base->height;
-  if (all / (uint64_t)div < 1) return false;
+/* Stage 5: candidate `from` (PCBPT) again with the base's light-tracing paths divided by
+ * PC_PILOT_LIGHT_DIVISOR once more. False when there are too few to divide. */
+static bool add_fewer_lights(pc_pilot *p, const pc_render_settings *base, int from) {
+  const pc_pilot_candidate *f = &p->c[from];
+  uint64_t left = base->light_paths ? base->light_paths : (uint64_t)base->width * (uint64_t)base->height;
+  for (int j = 0; j <= f->light_step; j++) left /= PC_PILOT_LIGHT_DIVISOR;
+  if (left < 1) return false;
   pc_pilot_candidate *c = &p->c[p->n];
-  add_candidate(p, base, PC_METHOD_PCBPT, p->c[from].set.pcbpt_k, 0.f, false);
-  c->set = p->c[from].set;
-  c->mis_raised = p->c[from].mis_raised;
-  c->light_divisor = div;
-  c->set.light_paths = all / (uint64_t)div;
+  add_candidate(p, base, PC_METHOD_PCBPT, f->set.pcbpt_k, f->mis_raised ? f->set.mis_count : 0.f, false);
+  c->light_step = f->light_step + 1;
+  c->set.light_paths = left;
   pcbpt_label(c);
   return true;
 }
@@ -243,17 +241,17 @@ static void pooled_relmse(pc_pilot *p) {
 }
 
 /* The candidate of method m and (for PCBPT) K = k, with the base MIS count or the raised one,
- * and the base's light-tracing paths divided by div (1: as they are), or -1. */
-static int find_div(const pc_pilot *p, pc_method m, int k, bool raised, int div) {
+ * and stage 5's light step (0: the base's light-tracing paths), or -1. */
+static int find_step(const pc_pilot *p, pc_method m, int k, bool raised, int step) {
   for (int i = 0; i < p->n; i++)
     if (p->c[i].set.method == m &&
         (m != PC_METHOD_PCBPT ||
-         (p->c[i].set.pcbpt_k == k && p->c[i].mis_raised == raised && divisor(&p->c[i]) == div)))
+         (p->c[i].set.pcbpt_k == k && p->c[i].mis_raised == raised && p->c[i].light_step == step)))
       return i;
   return -1;
 }
 
-static int find(const pc_pilot *p, pc_method m, int k, bool raised) { return find_div(p, m, k, raised, 1); }
+static int find(const pc_pilot *p, pc_method m, int k, bool raised) { return find_step(p, m, k, raised, 0); }
 
 /* The cost the candidates are compared by: CPU seconds of the render threads when every
  * candidate has them, else wall seconds. The pilot's short ranges run beside the farm's other
@@ -276,7 +274,7 @@ static double pilot_cost(const pc_pilot_candidate *c, bool cpu) { return cpu ? c
  * by up to 35%, which would have decided the choice instead of their errors). */
 static double candidate_cost(const pc_pilot *p, int i, bool cpu) {
   const pc_pilot_candidate *c = &p->c[i];
-  if (c->set.method != PC_METHOD_PCBPT || divisor(c) != 1) return pilot_cost(c, cpu);
+  if (c->set.method != PC_METHOD_PCBPT || c->light_step) return pilot_cost(c, cpu);
   int twin = find(p, PC_METHOD_PCBPT, c->set.pcbpt_k, !c->mis_raised);
   if (twin < 0 || p->c[twin].iterations != c->iterations) return pilot_cost(c, cpu);
   return 0.5 * (pilot_cost(c, cpu) + pilot_cost(&p->c[twin], cpu));
@@ -300,8 +298,8 @@ static int pcbpt_choice(const pc_pilot *p) {
   int raised = pc >= 0 ? find(p, PC_METHOD_PCBPT, p->c[pc].set.pcbpt_k, true) : -1;
   if (raised >= 0 && p->c[raised].efficiency > PC_PILOT_COUNT_MARGIN * p->c[pc].efficiency) pc = raised;
   /* then fewer light-tracing paths, step by step, while each step is clearly better */
-  for (int div = PC_PILOT_LIGHT_DIVISOR; pc >= 0; div *= PC_PILOT_LIGHT_DIVISOR) {
-    int f = find_div(p, PC_METHOD_PCBPT, p->c[pc].set.pcbpt_k, p->c[pc].mis_raised, div);
+  for (int step = 1; pc >= 0; step++) {
+    int f = find_step(p, PC_METHOD_PCBPT, p->c[pc].set.pcbpt_k, p->c[pc].mis_raised, step);
     if (f < 0 || !(p->c[f].efficiency > PC_PILOT_LIGHT_MARGIN * p->c[pc].efficiency)) break;
     pc = f;
   }
@@ -451,13 +449,11 @@ int pc_pilot_run(pc_pilot *p, const pc_render_settings *base, bool with_pt, bool
    * first N_L light paths are the same ones, so these share their paths with the others too).
    * Not counted: whether it is rendered depends on the data. Not where the scene has caustics
    * (pilot.h). Also where stage 1 left no room:
-   * unlike stage 4's few per cent, this is worth 1.2-1.9x where it pays (docs/auto.md) */
-  for (int div = PC_PILOT_LIGHT_DIVISOR; !rc && with_fewer_lights && div <= PC_PILOT_LIGHT_DIVISOR * PC_PILOT_LIGHT_DIVISOR &&
-                                         p->n < PC_PILOT_MAX;
-       div *= PC_PILOT_LIGHT_DIVISOR) {
+   * unlike stage 4's few per cent, this is worth 1.2-2x where it pays (docs/auto.md) */
+  for (int step = 1; !rc && with_fewer_lights && step <= 2 && p->n < PC_PILOT_MAX; step++) {
     int from = pcbpt_choice(p);
-    if (from < 0 || divisor(&p->c[from]) * PC_PILOT_LIGHT_DIVISOR != div) break; /* the last step did not pay */
-    if (!add_fewer_lights(p, base, from, div)) break;
+    if (from < 0 || p->c[from].light_step != step - 1) break; /* the last step did not pay */
+    if (!add_fewer_lights(p, base, from)) break;
     rc = render_batch(p, p->n - 1, min_it, 0, render, user, e);
     if (!rc && second) rc = render_batch(p, p->n - 1, second, SECOND_BATCH_SALT, render, user, e);
   }

@@ -87,8 +87,8 @@ typedef struct pc_pilot_candidate {
   pc_render_settings set;
   char label[40];       /* "bdpt", "pcbpt K=2" */
   bool mis_raised;      /* PCBPT with the raised MIS count of stage 4 */
-  int light_divisor;    /* stage 5: the base's light-tracing paths divided by this (0 or 1: as
-                           they are) */
+  int light_step;       /* stage 5: the base's light-tracing paths divided by
+                           PC_PILOT_LIGHT_DIVISOR this many times (0: as they are) */
   bool counts;          /* its iterations may count in the image (docs/auto.md): rendered
                            whatever the data says (stages 1 and 4) and not PT (its fireflies
                            where it fails); K = 4 and 8 and stage 5's are not */

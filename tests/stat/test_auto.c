@@ -260,10 +260,10 @@ static int scripted(void *user, const pc_pilot_candidate *c, int n, uint64_t ite
     const pc_render_settings *set = &c[i].set;
     s->calls++;
     if ((set->seed ^ salt) == s->job_seed) s->seed_leaked = true;
-    int step = c[i].light_divisor == 16 ? 2 : c[i].light_divisor == 4 ? 1 : 0;
+    int step = c[i].light_step;
     int key = set->method == PC_METHOD_BDPT ? 0 : set->method == PC_METHOD_PT ? 10 : step ? 10 + step : c[i].mis_raised ? 9 : set->pcbpt_k;
     /* stage 5 divides the job's light paths (W*H) and keeps everything else of its base */
-    assert_int_equal(set->light_paths, step ? (uint64_t)set->width * set->height / (uint64_t)c[i].light_divisor : 0);
+    assert_int_equal(set->light_paths, step ? (uint64_t)set->width * set->height / (step == 1 ? 4 : 16) : 0);
     assert_true(!step || !c[i].counts);
     int b = s->nbatch[key]++;
     if (b < 2) s->batch_it[key][b] = iterations, s->batch_salt[key][b] = salt;
@@ -395,7 +395,7 @@ static void test_fewer_lights(void **state) {
   run_script(&j, 2.0, &p);
   assert_int_equal(j.nbatch[11], 2);
   assert_int_equal(j.nbatch[12], 2);
-  assert_int_equal(p.c[p.best].light_divisor, 4);
+  assert_int_equal(p.c[p.best].light_step, 1);
   assert_int_equal(p.c[p.best].set.light_paths, 256 * 256 / 4);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 1);
   assert_false(p.c[p.best].counts);
@@ -404,7 +404,7 @@ static void test_fewer_lights(void **state) {
   /* both steps past it: a sixteenth */
   script k = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.15, [2] = 0.1}};
   run_script(&k, 2.0, &p);
-  assert_int_equal(p.c[p.best].light_divisor, 16);
+  assert_int_equal(p.c[p.best].light_step, 2);
   assert_int_equal(p.c[p.best].set.light_paths, 256 * 256 / 16);
   pc_pilot_free(&p);
   /* a quarter within the margin: the job's light paths, and a sixteenth is never tried however
@@ -412,21 +412,21 @@ static void test_fewer_lights(void **state) {
   script l = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.2 / (0.5 * (1 + PC_PILOT_LIGHT_MARGIN)), [2] = 0.01}};
   run_script(&l, 2.0, &p);
   assert_int_equal(l.nbatch[12], 0);
-  assert_int_equal(p.c[p.best].light_divisor, 1);
+  assert_int_equal(p.c[p.best].light_step, 0);
   assert_int_equal(p.c[p.best].set.light_paths, 0);
   pc_pilot_free(&p);
   /* it starts from the chosen configuration: K = 1 with the raised count here */
   script m = {.bdpt = 1.0, .k = {[1] = 0.4, [2] = 0.5}, .raised = {[1] = 0.2}, .fewer = {[1] = 0.1}};
   run_script(&m, 2.0, &p);
   assert_true(p.c[p.best].mis_raised);
-  assert_int_equal(p.c[p.best].light_divisor, 4);
+  assert_int_equal(p.c[p.best].light_step, 1);
   pc_pilot_free(&p);
   /* ... and K = 4 here; where it makes PCBPT beat BDPT, PCBPT */
   script n = {.bdpt = 0.25, .k = {[1] = 0.8, [2] = 0.3, [4] = 0.28, [8] = 0.5}, .fewer = {[1] = 0.1}};
   run_script(&n, 2.0, &p);
   assert_int_equal(p.c[p.best].set.method, PC_METHOD_PCBPT);
   assert_int_equal(p.c[p.best].set.pcbpt_k, 4);
-  assert_int_equal(p.c[p.best].light_divisor, 4);
+  assert_int_equal(p.c[p.best].light_step, 1);
   pc_pilot_free(&p);
   /* where stage 1 took the budget, no stage 4, but stage 5 still (its gain is no refinement) */
   script o = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .raised = {[1] = 0.01}, .fewer = {[1] = 0.1, [2] = 0.05}};
@@ -434,13 +434,13 @@ static void test_fewer_lights(void **state) {
   assert_int_equal(o.raised_calls, 0);
   assert_int_equal(o.nbatch[11], 1);
   assert_int_equal(o.nbatch[12], 1);
-  assert_int_equal(p.c[p.best].light_divisor, 16);
+  assert_int_equal(p.c[p.best].light_step, 2);
   pc_pilot_free(&p);
   /* a scene with caustics: never fewer light paths, however good they look */
   script q = {.bdpt = 1.0, .k = {[1] = 0.2, [2] = 0.3}, .fewer = {[1] = 0.01, [2] = 0.01}, .caustics = true};
   run_script(&q, 2.0, &p);
   assert_int_equal(q.nbatch[11], 0);
-  assert_int_equal(p.c[p.best].light_divisor, 1);
+  assert_int_equal(p.c[p.best].light_step, 0);
   pc_pilot_free(&p);
 }
 

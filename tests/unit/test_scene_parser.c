@@ -648,6 +648,8 @@ static void test_pt_complete(void **state) {
       {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"diffuse\"/></bsdf>", true, false},
       {POINT, "<bsdf type=\"roughcoating\"><bsdf type=\"conductor\"/></bsdf>", false, true},
       {POINT, "<bsdf type=\"coating\"><bsdf type=\"diffuse\"/></bsdf>", false, false},
+      {POINT, "<bsdf type=\"coating\"><bsdf type=\"conductor\"/></bsdf>", false, true},
+      {POINT, "<bsdf type=\"mask\"><bsdf type=\"dielectric\"/><float name=\"opacity\" value=\"0.5\"/></bsdf>", false, true},
       {POINT, "<bsdf type=\"mask\"><bsdf type=\"diffuse\"/><float name=\"opacity\" value=\"0.5\"/></bsdf>", false, false},
       {POINT, "<bsdf type=\"mixturebsdf\"><string name=\"weights\" value=\"0.5, 0.5\"/><bsdf type=\"diffuse\"/>"
               "<bsdf type=\"roughconductor\"/></bsdf>", true, false},
