@@ -19,6 +19,9 @@ void pc_wire_settings_to_proto(const pc_render_settings *s, Pcbpt__Settings *out
   out->pcbpt_unseen_rate = s->pcbpt_unseen_rate;
   out->pcbpt_candidates = (uint32_t)s->pcbpt_candidates;
   out->pcbpt_candidate_visibility = (uint32_t)s->candidate_visibility;
+  out->pcbpt_dark_seen = s->pcbpt_dark_seen;
+  out->pcbpt_dark_candidates = (uint32_t)s->pcbpt_dark_candidates;
+  out->pcbpt_dark_mix = s->pcbpt_dark_mix;
   out->cache_fraction = s->cache_fraction;
   out->knn = (uint32_t)s->knn;
   out->uniform_mix = s->uniform_mix;
@@ -43,7 +46,7 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   if (pc_method_parse(p->method, &s.method) != 0) return pc_errf(e, PC_EINVAL, "settings: unknown method '%.32s'", p->method);
   if (s.method == PC_METHOD_AUTO) return pc_errf(e, PC_EINVAL, "settings: method auto is chosen by the client's pilot, not sent");
   if (p->width > PC_SCENE_MAX_FILM_DIM || p->height > PC_SCENE_MAX_FILM_DIM || p->strategy_layers > 64 ||
-      p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
+      p->pcbpt_m > (1u << 24) || p->pcbpt_k > (1u << 24) || p->pcbpt_candidates > 1024 || p->pcbpt_dark_candidates > 1024 || p->knn > 1024 || p->mis_heuristic > PC_MIS_POWER ||
       p->mis_mode > PC_MIS_COUNT || p->pmf_mode > PC_PMF_EXACT ||
       p->pcbpt_candidate_visibility > PC_CANDVIS_TRACED)
     return pc_errf(e, PC_EINVAL, "settings: a value is out of range (size %ux%u)", p->width, p->height);
@@ -60,6 +63,9 @@ int pc_wire_settings_from_proto(const Pcbpt__Settings *p, pc_render_settings *ou
   s.pcbpt_unseen_rate = p->pcbpt_unseen_rate == 0.f ? 1.f : p->pcbpt_unseen_rate;
   s.pcbpt_candidates = (int)p->pcbpt_candidates;
   s.candidate_visibility = (pc_candidate_visibility)p->pcbpt_candidate_visibility;
+  s.pcbpt_dark_seen = p->pcbpt_dark_seen; /* ranges: pc_render_settings_check */
+  if (p->pcbpt_dark_candidates != 0) s.pcbpt_dark_candidates = (int)p->pcbpt_dark_candidates;
+  if (p->pcbpt_dark_mix != 0.f) s.pcbpt_dark_mix = p->pcbpt_dark_mix;
   s.cache_fraction = p->cache_fraction;
   s.knn = (int)p->knn;
   s.uniform_mix = p->uniform_mix;

@@ -83,7 +83,7 @@ static float candidate_target(void *user, int slot, int v) {
  * strategies' (they do not involve p_conn), so only this estimate of the sum over the stored
  * vertices changes; it stays unbiased for any p_conn > 0. */
 static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path_vertex *ev, const pc_irec_lookup *L,
-                            double xi, double m_eff) {
+                            double xi, double m_eff, int ncand) {
   const pc_render_settings *set = c->set;
   candidates cs; /* not zeroed: 2 KB per eye vertex; candidate_target fills each slot it is given */
   cs.c = c;
@@ -91,7 +91,7 @@ static void resample_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_pat
   cs.L = L;
   int slot[PC_IREC_MAX_CANDIDATES];
   double factor[PC_IREC_MAX_CANDIDATES];
-  int n = pc_irec_resample(L, set->pcbpt_candidates, set->pcbpt_k, xi, crng, candidate_target, &cs, slot, factor);
+  int n = pc_irec_resample(L, ncand, set->pcbpt_k, xi, crng, candidate_target, &cs, slot, factor);
   for (int k = 0; k < n; k++) {
     const pc_connection *con = &cs.k[slot[k]];
     const pc_path_vertex *lv = &c->pcbpt->lv[cs.v[slot[k]]];
@@ -124,6 +124,7 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     m_eff *= unseen;
   }
   pc_irec_lookup L;
+  int ncand = set->pcbpt_candidates;
   if (set->pmf_mode == PC_PMF_EXACT) {
     pc_path_vertex unit = *ev; /* pc_pcbpt_importance wants throughput 1 */
     unit.beta = v3s(1.f);
@@ -133,12 +134,18 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
   } else {
     pc_irec_site z = pc_pcbpt_site(c->scene, ev);
     pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
+    /* Dark vertices only where records shape p_conn (at uniform-mix 1 the user asked for none)
+     * and see something somewhere: in an iteration where none does, more candidates drawn
+     * uniformly would find as little as one. */
+    if (set->pcbpt_dark_seen > 0.f && set->uniform_mix < 1.f && !pc_irec_none_seen(p->store) &&
+        pc_irec_lookup_dark(&L, set->pcbpt_dark_seen, set->pcbpt_dark_mix) && set->pcbpt_dark_candidates > ncand)
+      ncand = set->pcbpt_dark_candidates;
   }
   /* The draws' component choices are stratified: each draw alone follows p_conn (so every
    * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */
   double xi = (double)pc_rng_f(crng);
-  if (set->pcbpt_candidates > 1) {
-    resample_stored(c, x, y, crng, ev, &L, xi, m_eff);
+  if (ncand > 1) {
+    resample_stored(c, x, y, crng, ev, &L, xi, m_eff, ncand);
     return;
   }
   for (int k = 0; k < set->pcbpt_k; k++) {

@@ -10,12 +10,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* What a lookup reads of record r, packed into 40 bytes. Its PMF is at mass[2*r*V ..), its CMF
+/* What a lookup reads of record r, packed into 44 bytes. Its PMF is at mass[2*r*V ..), its CMF
  * right after it. */
 typedef struct pc_irec_record {
   vec3 p, n, wi;
   bool lambertian;
-  bool seen; /* its importance sum is > 0: it has a distribution */
+  bool seen;        /* its importance sum is > 0: it has a distribution */
+  float seen_share; /* the share of the V light vertices its PMF is > 0 at */
 } pc_irec_record;
 
 /* The first bad callback value a thread met during a build (record < 0: none). */
@@ -180,10 +181,11 @@ const float *pc_irec_pmf(const pc_irec_store *s, int r) { return s->mass + 2 * (
 const float *pc_irec_cmf(const pc_irec_store *s, int r) { return pc_irec_pmf(s, r) + s->V; }
 double pc_irec_total(const pc_irec_store *s, int r) { return s->total[r]; }
 
-/* Fills one PMF/CMF row for the eye vertex z. Returns the importance sum, or -1 after noting
- * the first bad value in *te. */
+/* Fills one PMF/CMF row for the eye vertex z, and in *nonzero how many of its entries are > 0.
+ * Returns the importance sum, or -1 after noting the first bad value in *te. */
 static double fill_row(pc_irec_importance_fn fn, void *user, int thread, const pc_irec_site *z, int V, float *pmf,
-                       float *cmf, int record, thread_err *te) {
+                       float *cmf, int record, thread_err *te, int *nonzero) {
+  *nonzero = 0;
   double total = 0.0;
   for (int v = 0; v < V; v++) {
     float x = fn(user, thread, z, v);
@@ -201,10 +203,13 @@ static double fill_row(pc_irec_importance_fn fn, void *user, int thread, const p
   /* The CMF sums the rounded PMF, so zero entries stay flat, and is divided by its own total
    * so it ends at exactly 1. */
   double sum = 0.0;
+  int nz = 0;
   for (int v = 0; v < V; v++) {
     pmf[v] = (float)(pmf[v] / total);
     sum += pmf[v];
+    nz += pmf[v] > 0.f;
   }
+  *nonzero = nz;
   double run = 0.0;
   for (int v = 0; v < V; v++) {
     run += pmf[v];
@@ -224,8 +229,10 @@ static void build_record(void *arg, int thread, int r) {
   build_job *j = arg;
   pc_irec_store *s = j->s;
   float *pmf = s->mass + 2 * (size_t)r * (size_t)s->V;
-  s->total[r] = fill_row(j->fn, j->user, thread, &j->sites[r], s->V, pmf, pmf + s->V, r, &s->terr[thread]);
+  int nonzero;
+  s->total[r] = fill_row(j->fn, j->user, thread, &j->sites[r], s->V, pmf, pmf + s->V, r, &s->terr[thread], &nonzero);
   s->rec[r].seen = s->total[r] > 0.0;
+  s->rec[r].seen_share = s->V > 0 ? (float)nonzero / (float)s->V : 0.f;
 }
 
 /* Grows the buffers to the build's needs, never past the limit: capacities kept from an
@@ -319,7 +326,7 @@ int pc_irec_build(pc_irec_store *s, const pc_irec_site *sites, int nrecords, int
   int rc = reserve(s, nrecords, nlight, e);
   if (rc != PC_OK) return rc;
   for (int r = 0; r < nrecords; r++) {
-    s->rec[r] = (pc_irec_record){sites[r].p, sites[r].n, sites[r].wi, sites[r].lambertian, false};
+    s->rec[r] = (pc_irec_record){sites[r].p, sites[r].n, sites[r].wi, sites[r].lambertian, false, 0.f};
     s->total[r] = 0.0;
     s->pos[r] = sites[r].p;
   }
@@ -454,6 +461,7 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
   L->V = s->V;
   L->u = uniform_mix;
   L->n = 0;
+  L->seen = 0.0;
   if (s->V == 0 || s->nseen == 0) return;
   if (knn < 1) knn = 1;
   if (knn > PC_IREC_MAX_KNN) knn = PC_IREC_MAX_KNN;
@@ -465,6 +473,7 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
     d[j] = v3_len(v3_sub(z->p, s->rec[idx[j]].p));
     dsum += d[j];
   }
+  double seen_sum = 0.0, w_sum = 0.0;
   for (int j = 0; j < k; j++) {
     const pc_irec_record *rec = &s->rec[idx[j]];
     if (!rec->seen) continue; /* no distribution to contribute */
@@ -472,12 +481,17 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
     double w = 0.0;
     /* The distance factor ranks records against each other; a lone record keeps factor 1. */
     if (cn > 0.0 && cw > 0.0) w = cn * cw * (k > 1 && dsum > 0.0 ? 1.0 - d[j] / dsum : 1.0);
+    if (w > 0.0) {
+      seen_sum += w * rec->seen_share;
+      w_sum += w;
+    }
     L->w[L->n] = w;
     L->pmf[L->n] = pc_irec_pmf(s, idx[j]);
     L->cmf[L->n] = L->pmf[L->n] + s->V;
     L->n++;
   }
   if (L->n > 0) normalize_weights(L);
+  if (L->n > 0) L->seen = seen_sum / w_sum;
 }
 
 int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc_irec_importance_fn fn, void *user,
@@ -485,20 +499,29 @@ int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc
   L->V = s->V;
   L->u = uniform_mix;
   L->n = 0;
+  L->seen = 0.0;
   if (thread < 0 || thread >= s->nthreads) return pc_errf(e, PC_EINVAL, "importance records: thread %d out of range", thread);
   if (s->V == 0) return PC_OK;
   float *pmf = s->scratch + 2 * (size_t)thread * (size_t)s->V, *cmf = pmf + s->V;
   thread_err te = {-1, 0, 0.f};
-  double total = fill_row(fn, user, thread, z, s->V, pmf, cmf, 0, &te);
+  int nonzero;
+  double total = fill_row(fn, user, thread, z, s->V, pmf, cmf, 0, &te, &nonzero);
   if (total < 0.0)
     return pc_errf(e, PC_ENUMERIC, "exact PMF: importance of light vertex %d is %g (must be finite and >= 0)", te.v, (double)te.value);
   if (total > 0.0) {
     L->n = 1;
+    L->seen = (double)nonzero / s->V;
     L->w[0] = 1.0;
     L->pmf[0] = pmf;
     L->cmf[0] = cmf;
   }
   return PC_OK;
+}
+
+bool pc_irec_lookup_dark(pc_irec_lookup *L, float below, float mix) {
+  if (!(L->seen < (double)below) && below < 1.f) return false;
+  if (L->n > 0) L->u = mix;
+  return true;
 }
 
 double pc_irec_interp_pmf(const pc_irec_lookup *L, int i) {

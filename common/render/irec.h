@@ -90,6 +90,7 @@ typedef struct pc_irec_lookup {
   int V;
   float u;                               /* uniform mix in [0, 1] */
   int n;                                 /* distributions interpolated; 0: none (see below) */
+  double seen;                           /* the share of the light vertices they see (below) */
   double w[PC_IREC_MAX_KNN];             /* their weights, summing to 1 */
   const float *pmf[PC_IREC_MAX_KNN], *cmf[PC_IREC_MAX_KNN];
 } pc_irec_lookup;
@@ -110,6 +111,14 @@ typedef struct pc_irec_lookup {
  * when u == 0. */
 void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, int knn, float uniform_mix,
                            pc_irec_lookup *L);
+
+/* A dark eye vertex: one whose interpolated records see (have a PMF > 0 at) less than `below`
+ * of the V light vertices (every one when below >= 1), their shares weighted as the records are (L->seen; 0 when no record
+ * is interpolated; in exact mode the share of the exact PMF). There p_conn's uniform mix
+ * becomes `mix` (mix > 0 keeps every light vertex drawable), and the caller may draw more
+ * candidates: a proposal chosen from the records alone, so the estimate stays unbiased.
+ * Returns whether L is dark. */
+bool pc_irec_lookup_dark(pc_irec_lookup *L, float below, float mix);
 
 /* Starts loading the memoised neighbour set a lookup at p would read (the memo's entries are
  * spread over more memory than stays in cache), so that it is there when the lookup comes. */

@@ -33,6 +33,11 @@ const char pc_render_flags_help[] =
     "                        an iteration whose records see no light vertex, (0, 1] (default 0.25)\n"
     "  --pcbpt-candidates N  PCBPT candidates drawn from p_conn per eye vertex, K of them\n"
     "                        resampled by their contribution (1: no resampling)\n"
+    "  --pcbpt-dark-seen S   PCBPT: an eye vertex whose nearby records see less than this share\n"
+    "                        of the light vertices is dark (default 0.1; 0: none is; 1: all are)\n"
+    "  --pcbpt-dark-candidates N  candidates per dark eye vertex, at least --pcbpt-candidates\n"
+    "                        (default 3)\n"
+    "  --pcbpt-dark-mix F    uniform mix of p_conn at a dark eye vertex, (0, 1] (default 0.85)\n"
     "  --pcbpt-candidate-visibility V  what the resampling knows of a candidate's visibility:\n"
     "                        traced (default; its own shadow ray, reused by the selected one),\n"
     "                        uncertain (its shadow ray unless every nearby record sees it) or\n"
@@ -59,7 +64,8 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
   static const char *const flags[] = {"--method", "--spp", "--time", "--seed", "--max-depth", "--width", "--height",
                                       "--light-paths", "--mis-heuristic", "--strategy-layers", "--pcbpt-m", "--pcbpt-k",
                                       "--cache-fraction", "--knn", "--uniform-mix", "--mis", "--pmf", "--halt-noise",
-                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", "--pcbpt-rate", "--pcbpt-unseen-rate", NULL};
+                                      "--pcbpt-candidates", "--pcbpt-candidate-visibility", "--pcbpt-rate", "--pcbpt-unseen-rate",
+                                      "--pcbpt-dark-seen", "--pcbpt-dark-candidates", "--pcbpt-dark-mix", NULL};
   const char *flag = argv[*i];
   if (strcmp(flag, "--strict") == 0) {
     r->strict = true;
@@ -182,6 +188,18 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
     *(which == 20 ? &s->pcbpt_rate : &s->pcbpt_unseen_rate) = (float)d;
     break;
+  case 22:
+    if (!pc_parse_f64(v, 0.0, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in [0, 1]", flag, v);
+    s->pcbpt_dark_seen = (float)d;
+    break;
+  case 23:
+    if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
+    s->pcbpt_dark_candidates = (int)ll;
+    break;
+  case 24:
+    if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
+    s->pcbpt_dark_mix = (float)d;
+    break;
   }
   return 1;
 }
@@ -193,9 +211,11 @@ int pc_render_settings_pcbpt_flags(const pc_render_settings *s, char *buf, size_
   if (s->mis_mode == PC_MIS_COUNT) snprintf(mis, sizeof mis, "%g", (double)s->mis_count);
   else snprintf(mis, sizeof mis, "%s", s->mis_mode == PC_MIS_STANDARD ? "standard" : "upper-bound");
   return snprintf(buf, size,
-                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-rate %g --pcbpt-unseen-rate %g --pcbpt-candidates %d --pcbpt-candidate-visibility %s --cache-fraction %g"
+                  "--pcbpt-m %d --pcbpt-k %d --pcbpt-rate %g --pcbpt-unseen-rate %g --pcbpt-candidates %d --pcbpt-candidate-visibility %s"
+                  " --pcbpt-dark-seen %g --pcbpt-dark-candidates %d --pcbpt-dark-mix %g --cache-fraction %g"
                   " --knn %d --uniform-mix %g --mis %s --pmf %s",
                   s->pcbpt_m, s->pcbpt_k, (double)s->pcbpt_rate, (double)s->pcbpt_unseen_rate, s->pcbpt_candidates, visibility[s->candidate_visibility],
+                  (double)s->pcbpt_dark_seen, s->pcbpt_dark_candidates, (double)s->pcbpt_dark_mix,
                   (double)s->cache_fraction, s->knn, (double)s->uniform_mix, mis,
                   s->pmf_mode == PC_PMF_EXACT ? "exact" : "cached");
 }

@@ -26,12 +26,16 @@ check bad-rate-high 2 "--pcbpt-rate: '1.5'" -- "$bin" render "$scene" --pcbpt-ra
 check bad-rate-float-zero 2 "--pcbpt-rate: '1e-300'" -- "$bin" render "$scene" --pcbpt-rate 1e-300
 check bad-unseen-rate 2 "--pcbpt-unseen-rate: '0'" -- "$bin" render "$scene" --pcbpt-unseen-rate 0
 check bad-unseen-rate-high 2 "--pcbpt-unseen-rate: '2'" -- "$bin" render "$scene" --pcbpt-unseen-rate 2
+check bad-dark-seen 2 "--pcbpt-dark-seen: '1.5'" -- "$bin" render "$scene" --pcbpt-dark-seen 1.5
+check bad-dark-candidates 2 "--pcbpt-dark-candidates: '0'" -- "$bin" render "$scene" --pcbpt-dark-candidates 0
+check bad-dark-mix 2 "--pcbpt-dark-mix: '0'" -- "$bin" render "$scene" --pcbpt-dark-mix 0
 check small-rate 0 "pcbpt: 1 iterations" -- "$bin" render "$scene" --method pcbpt --pcbpt-rate 1e-7 --spp 1 --width 8 --height 8 \
   --threads 1 --out "$tmp/small-rate.exr"
 # the PCBPT settings are in the image header as the flags that give them
 check render-pcbpt 0 "pcbpt: 1 iterations" -- "$bin" render "$scene" --method pcbpt --spp 1 --width 16 --height 16 --threads 2 \
-  --pcbpt-candidates 3 --pcbpt-candidate-visibility uncertain --mis 3.5 --pcbpt-rate 0.5 --pcbpt-unseen-rate 0.75 --out "$tmp/pc.exr"
-grep -aq -- "--pcbpt-rate 0.5 --pcbpt-unseen-rate 0.75 --pcbpt-candidates 3 --pcbpt-candidate-visibility uncertain .*--mis 3.5 " "$tmp/pc.exr" ||
+  --pcbpt-candidates 3 --pcbpt-candidate-visibility uncertain --mis 3.5 --pcbpt-rate 0.5 --pcbpt-unseen-rate 0.75 \
+  --pcbpt-dark-seen 0.2 --pcbpt-dark-candidates 5 --pcbpt-dark-mix 0.7 --out "$tmp/pc.exr"
+grep -aq -- "--pcbpt-rate 0.5 --pcbpt-unseen-rate 0.75 --pcbpt-candidates 3 --pcbpt-candidate-visibility uncertain --pcbpt-dark-seen 0.2 --pcbpt-dark-candidates 5 --pcbpt-dark-mix 0.7 .*--mis 3.5 " "$tmp/pc.exr" ||
   { echo "FAIL render-pcbpt: no PCBPT flags in the header"; fail=1; }
 check render 0 "est. relMSE" -- "$bin" render "$scene" --method pt --spp 2 --width 32 --height 24 --threads 2 --out "$tmp/cb.exr"
 # with 2 iterations it can tell how their errors spread (docs/variance.md)

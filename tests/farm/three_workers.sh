@@ -3,7 +3,8 @@
 # and per pixel), on cornell-box with PT (pt and nee layers) and PCBPT (every layer) and on the white furnace, whose
 # image must also be L = 2 (maxDepth -1) within 1.5%; and on ajar-door with PCBPT's resampled
 # connections tracing the candidates' visibility, which the workers must get from the job's
-# settings (a render with the records' visibility has other sums).
+# settings (a render with the records' visibility has other sums), and with the dark-vertex
+# rule's settings, which they must get the same way.
 . "$(dirname "$0")/lib.inc"
 start_coord
 for w in w1 w2 w3; do start_worker $w; done
@@ -27,5 +28,13 @@ run cornell-box 12 pcbpt
 run ajar-door 12 pcbpt --pcbpt-candidates 4 --pcbpt-candidate-visibility traced
 "$B/tests/farm_tool" exact "$(ckpt "$J")" "$S/scenes/ajar-door/scene.xml" --spp 12 --method pcbpt --width 64 --height 64 \
   --pcbpt-candidates 4 --pcbpt-candidate-visibility records 2>/dev/null && fail "ajar-door: the candidate visibility changes nothing"
+# the dark-vertex rule's settings travel to the workers too
+run ajar-door 12 pcbpt --pcbpt-dark-seen 0.5 --pcbpt-dark-candidates 4 --pcbpt-dark-mix 0.7
+"$B/tests/farm_tool" exact "$(ckpt "$J")" "$S/scenes/ajar-door/scene.xml" --spp 12 --method pcbpt --width 64 --height 64 \
+  --pcbpt-dark-seen 0.5 --pcbpt-dark-candidates 4 --pcbpt-dark-mix 0.5 2>/dev/null && fail "ajar-door: the dark mix changes nothing"
+# the dark-vertex rule's settings travel to the workers too
+run ajar-door 12 pcbpt --pcbpt-dark-seen 0.5 --pcbpt-dark-candidates 4 --pcbpt-dark-mix 0.7
+"$B/tests/farm_tool" exact "$(ckpt "$J")" "$S/scenes/ajar-door/scene.xml" --spp 12 --method pcbpt --width 64 --height 64 \
+  --pcbpt-dark-seen 0.5 --pcbpt-dark-candidates 4 --pcbpt-dark-mix 0.5 2>/dev/null && fail "ajar-door: the dark mix changes nothing"
 for w in w1 w2 w3; do grep -q "range .* -> $w" "$T/coord.log" || fail "worker $w got no range"; done
 echo PASS

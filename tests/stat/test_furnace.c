@@ -1,7 +1,7 @@
 /* test_furnace.c: the white furnace (scenes/furnace: a closed sphere emitting Le inward with
  * diffuse albedo a) has the exact radiance Le * sum_{k<d} a^k everywhere for maxDepth d.
- * Every method (PCBPT with cached and exact PMF, both MIS modes, and resampled connections with
- * each candidate-visibility mode) must reproduce it for
+ * Every method (PCBPT with cached and exact PMF, both MIS modes, resampled connections with
+ * each candidate-visibility mode, and every eye vertex dark) must reproduce it for
  * d = 1..5 and infinite: the image mean
  * of each independent iteration is one sample, the tolerance is 4 standard errors measured
  * from those samples (and the estimate must be within 1.5% in any case). */
@@ -25,6 +25,7 @@ typedef struct variant {
   int candidates; /* PCBPT resampling candidates (1: none) */
   pc_candidate_visibility vis;
   float count; /* PC_MIS_COUNT: the inner strategies' count */
+  float dark;  /* --pcbpt-dark-seen (0: no dark eye vertex; 1: every one) */
 } variant;
 
 static void check(variant v) {
@@ -49,6 +50,7 @@ static void check(variant v) {
     req.set.cache_fraction = 0.05f;
     req.set.pcbpt_candidates = v.candidates;
     req.set.candidate_visibility = v.vis;
+    req.set.pcbpt_dark_seen = v.dark;
     pc_scene scene = {0};
     assert_int_equal(stat_load("furnace", &req, &scene), 0);
     assert_true(scene.nlights == 1 && scene.lights[0].type == PC_LIGHT_AREA);
@@ -64,9 +66,9 @@ static void check(variant v) {
     assert_int_equal(stat_render_blocks(&scene, &req.set, 2, 0, v.iterations, -1, RES, &st), 0);
     double mean = stat_mean(&st, 0), se = stat_se(&st, 0);
     double err = fabs(mean - exact);
-    printf("furnace %-5s pmf %-6s mis %-11s cand %d vis %d maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
+    printf("furnace %-5s pmf %-6s mis %-11s cand %d vis %d dark %g maxDepth %2d: mean %.6f exact %.6f  err %.2e  se %.2e  (%.2f%%)\n",
            pc_method_name(v.method), v.pmf == PC_PMF_EXACT ? "exact" : "cached",
-           v.mis == PC_MIS_STANDARD ? "standard" : v.mis == PC_MIS_COUNT ? "count" : "upper-bound", v.candidates, (int)v.vis, depths[k], mean, exact, err, se, 100 * err / exact);
+           v.mis == PC_MIS_STANDARD ? "standard" : v.mis == PC_MIS_COUNT ? "count" : "upper-bound", v.candidates, (int)v.vis, (double)v.dark, depths[k], mean, exact, err, se, 100 * err / exact);
     assert_true(err <= fmax(4 * se, 1e-5 * exact));
     assert_true(err <= 0.015 * exact);
     stat_free(&st);
@@ -76,35 +78,36 @@ static void check(variant v) {
 
 static void test_furnace_pt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_PT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
 }
 
 static void test_furnace_lt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_LT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
 }
 
 static void test_furnace_bdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_BDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
 }
 
 static void test_furnace_cbdpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f});
+  check((variant){PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
 }
 
 static void test_furnace_pcbpt(void **state) {
   (void)state;
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_RECORDS, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_TRACED, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 4, PC_CANDVIS_UNCERTAIN, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1, PC_CANDVIS_RECORDS, 0.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 1, PC_CANDVIS_RECORDS, 4.f});
-  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 3, PC_CANDVIS_TRACED, 2.5f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_RECORDS, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, ITERATIONS, 4, PC_CANDVIS_TRACED, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 4, PC_CANDVIS_UNCERTAIN, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 16, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, ITERATIONS, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_STANDARD, 16, 1, PC_CANDVIS_RECORDS, 0.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 1, PC_CANDVIS_RECORDS, 4.f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 3, PC_CANDVIS_TRACED, 2.5f, 0.f});
+  check((variant){PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, ITERATIONS, 1, PC_CANDVIS_TRACED, 2.f, 1.f});
 }
 
 int main(void) {

@@ -98,6 +98,7 @@ typedef struct variant {
   int layer; /* compared layer: PC_LAYER_INNER or -1 (beauty) */
   float count; /* PC_MIS_COUNT: the inner strategies' count */
   float rate;  /* --pcbpt-rate */
+  float dark;  /* --pcbpt-dark-seen (0: no dark eye vertices) */
 } variant;
 
 static void test_inner_agrees(void **state) {
@@ -106,22 +107,28 @@ static void test_inner_agrees(void **state) {
   pc_scene scene = {0};
   assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
   const variant vs[] = {
-      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f},
-      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1, 0.f, 1.f},
-      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1, 0.f, 1.f},
-      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1, 0.f, 1.f},
-      {"pcbpt-mis-count", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 3.f, 1.f},
-      {"pcbpt-mis-count-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.85f, 1, 3, PC_CANDVIS_TRACED, -1, 7.5f, 1.f},
-      {"pcbpt-rate", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 2.f, 0.3f},
-      {"pcbpt-rate-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.85f, 1, 3, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 0.5f},
-      {"cbdpt-rate", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 0.4f},
+      {"cbdpt", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-resampled-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-traced-k1", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 8, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-uncertain", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 4, PC_CANDVIS_UNCERTAIN, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-exact", PC_METHOD_PCBPT, PC_PMF_EXACT, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-uniform", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 1.f, 60, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 0.f},
+      {"pcbpt-mis-standard", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 1, PC_CANDVIS_RECORDS, -1, 0.f, 1.f, 0.f},
+      {"pcbpt-mis-std-resampled", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_RECORDS, -1, 0.f, 1.f, 0.f},
+      {"pcbpt-mis-std-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_STANDARD, 0.1f, 2, 4, PC_CANDVIS_TRACED, -1, 0.f, 1.f, 0.f},
+      {"pcbpt-mis-count", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 3.f, 1.f, 0.f},
+      {"pcbpt-mis-count-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.85f, 1, 3, PC_CANDVIS_TRACED, -1, 7.5f, 1.f, 0.f},
+      {"pcbpt-rate", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_RECORDS, -1, 2.f, 0.3f, 0.f},
+      {"pcbpt-rate-traced", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.85f, 1, 3, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 0.5f, 0.f},
+      {"cbdpt-rate", PC_METHOD_CBDPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 0.4f, 0.f},
+      /* Every eye vertex dark: three candidates resampled at mix 0.85, traced or by the
+       * records' visibility. */
+      {"pcbpt-dark", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.1f, 2, 1, PC_CANDVIS_TRACED, PC_LAYER_INNER, 0.f, 1.f, 1.f},
+      {"pcbpt-dark-records", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_UPPER_BOUND, 0.5f, 1, 1, PC_CANDVIS_RECORDS, PC_LAYER_INNER, 0.f, 1.f, 1.f},
+      /* Some dark (the default share), with a count */
+      {"pcbpt-dark-default", PC_METHOD_PCBPT, PC_PMF_CACHED, PC_MIS_COUNT, 0.5f, 1, 1, PC_CANDVIS_TRACED, -1, 2.f, 1.f, 0.1f},
   };
   const int nv = sizeof vs / sizeof vs[0];
   stat_blocks ref_inner, ref_beauty;
@@ -138,6 +145,7 @@ static void test_inner_agrees(void **state) {
     set.pcbpt_candidates = vs[i].candidates;
     set.candidate_visibility = vs[i].vis;
     set.pcbpt_rate = vs[i].rate;
+    set.pcbpt_dark_seen = vs[i].dark;
     stat_blocks st;
     const stat_blocks *ref = vs[i].layer < 0 ? &ref_beauty : &ref_inner;
     assert_int_equal(stat_render_blocks(&scene, &set, 2, 1000, ITER, vs[i].layer, BS, &st), 0);
@@ -148,6 +156,28 @@ static void test_inner_agrees(void **state) {
   }
   stat_free(&ref_inner);
   stat_free(&ref_beauty);
+  pc_scene_free(&scene);
+}
+
+/* The dark rule changes the inner draws where it fires (so the variants above test it) and no
+ * other strategy: the layers PCBPT shares with BDPT stay bit-identical. */
+static void test_dark_touches_inner_only(void **state) {
+  (void)state;
+  pc_render_request req = request(PC_METHOD_PCBPT, 16, -1);
+  pc_scene scene = {0};
+  assert_int_equal(stat_load("cornell-box", &req, &scene), 0);
+  pc_render_settings off = req.set, on = req.set;
+  off.pcbpt_dark_seen = 0.f;
+  on.pcbpt_dark_seen = 1.f;
+  pc_film a, b;
+  render_film(&scene, &off, 2, &a);
+  render_film(&scene, &on, 2, &b);
+  for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
+    if (l == PC_LAYER_INNER) assert_memory_not_equal(a.layers[l].sum, b.layers[l].sum, sizeof(double) * 3 * 16 * 16);
+    else assert_memory_equal(a.layers[l].sum, b.layers[l].sum, sizeof(double) * 3 * 16 * 16);
+  }
+  pc_film_free(&a);
+  pc_film_free(&b);
   pc_scene_free(&scene);
 }
 
@@ -356,6 +386,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_shared_layers_equal_bdpt),
       cmocka_unit_test(test_inner_agrees),
+      cmocka_unit_test(test_dark_touches_inner_only),
       cmocka_unit_test(test_unseen_rate_agrees),
       cmocka_unit_test(test_inner_count),
       cmocka_unit_test(test_all_scenes_finite),

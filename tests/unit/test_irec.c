@@ -450,6 +450,51 @@ static void test_fallbacks(void **state) {
   free_scene(&sc);
 }
 
+/* The share of the light vertices record r's PMF is > 0 at. */
+static double share_of(const pc_irec_store *s, int r) {
+  int nz = 0, V = pc_irec_light_count(s);
+  for (int v = 0; v < V; v++) nz += pc_irec_pmf(s, r)[v] > 0.f;
+  return (double)nz / V;
+}
+
+/* A lookup's seen share is its records' shares weighted as the records are; it is 0 with no
+ * record. pc_irec_lookup_dark: below the threshold the mix becomes the dark one (kept where no
+ * record shapes p_conn) and sampling still follows p_conn; at or above it nothing changes. */
+static void test_dark(void **state) {
+  (void)state;
+  scene sc = make_scene(30, 40, 7);
+  pc_irec_site two[2] = {{v3(0.5f, 0.5f, 0.5f), v3(0, 0, -1), v3(0, 0, -1), NULL, false},
+                         {v3(0.5f, 0.5f, 0.9f), v3(0, 0, -1), v3(0, 0, -1), NULL, false}};
+  pc_irec_store *s = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(1, 6, 1u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, two, 2, sc.V, importance, &sc, NULL, &e), PC_OK);
+  double s0 = share_of(s, 0), s1 = share_of(s, 1);
+  assert_true(s0 > 0.0 && s0 < 1.0 && s1 > 0.0 && s1 < 1.0); /* some light vertices face away */
+  pc_irec_site down = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, -1), v3(0, 0, -1), NULL, false};
+  pc_irec_lookup L;
+  pc_irec_lookup_cached(s, 0, &down, 6, 0.3f, &L);
+  assert_int_equal(L.n, 2);
+  double seen = L.w[0] * (L.pmf[0] == pc_irec_pmf(s, 0) ? s0 : s1) + L.w[1] * (L.pmf[1] == pc_irec_pmf(s, 0) ? s0 : s1);
+  assert_true(fabs(L.seen - seen) < 1e-6);
+  assert_false(pc_irec_lookup_dark(&L, (float)(seen * 0.99), 0.9f));
+  assert_true(L.u == 0.3f);
+  assert_true(pc_irec_lookup_dark(&L, (float)(seen * 1.01), 0.9f));
+  assert_true(L.u == 0.9f);
+  chi_square(&L, 50000, 71);
+  pc_irec_lookup_cached(s, 0, &down, 6, 0.3f, &L); /* 1: dark whatever the share */
+  assert_true(pc_irec_lookup_dark(&L, 1.f, 0.9f));
+  /* Records facing away: none is interpolated, the share is 0 and p_conn stays uniform. */
+  pc_irec_site up = {v3(0.5f, 0.5f, 0.6f), v3(0, 0, 1), v3(0, 0, 1), NULL, false};
+  pc_irec_lookup_cached(s, 0, &up, 6, 0.3f, &L);
+  assert_int_equal(L.n, 0);
+  assert_true(L.seen == 0.0);
+  assert_true(pc_irec_lookup_dark(&L, 0.1f, 0.9f));
+  assert_true(L.u == 1.f);
+  pc_irec_destroy(s);
+  free_scene(&sc);
+}
+
 static bool same_lookup(const pc_irec_lookup *a, const pc_irec_lookup *b) {
   if (a->n != b->n || a->V != b->V || a->u != b->u) return false;
   for (int j = 0; j < a->n; j++)
@@ -622,7 +667,7 @@ int main(void) {
       cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
       cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_mixture_draw_equals_scan),
       cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_memo_grows),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
-      cmocka_unit_test(test_fallbacks),         cmocka_unit_test(test_resample),
+      cmocka_unit_test(test_fallbacks),         cmocka_unit_test(test_dark),         cmocka_unit_test(test_resample),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "irec.h"
 #include "wire_film.h"
 #include "wire_frame.h"
 #include "wire_settings.h"
@@ -636,12 +637,52 @@ static void settings_rate_roundtrip(void **st) {
   }
 }
 
+/* The dark-vertex rule (--pcbpt-dark-seen, --pcbpt-dark-candidates, --pcbpt-dark-mix) reaches
+ * a worker as set. Settings from before the fields (all 0) render as they did, with no dark
+ * vertex; a 0 count or mix reads as the default; values out of range are refused. */
+static void settings_dark_roundtrip(void **st) {
+  (void)st;
+  pc_render_settings s, back, def;
+  pc_render_settings_default(&s);
+  pc_render_settings_default(&def);
+  s.method = PC_METHOD_PCBPT;
+  s.pcbpt_dark_seen = 0.25f;
+  s.pcbpt_dark_candidates = 5;
+  s.pcbpt_dark_mix = 0.7f;
+  Pcbpt__Settings p;
+  pc_wire_settings_buf buf;
+  pc_err e = {0};
+  pc_wire_settings_to_proto(&s, &p, &buf);
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_true(back.pcbpt_dark_seen == 0.25f && back.pcbpt_dark_candidates == 5 && back.pcbpt_dark_mix == 0.7f);
+  p.pcbpt_dark_seen = 0.f;
+  p.pcbpt_dark_candidates = 0;
+  p.pcbpt_dark_mix = 0.f;
+  assert_int_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  assert_true(back.pcbpt_dark_seen == 0.f);
+  assert_true(back.pcbpt_dark_candidates == def.pcbpt_dark_candidates && back.pcbpt_dark_mix == def.pcbpt_dark_mix);
+  const float bad_seen[] = {1.5f, -0.5f, NAN}, bad_mix[] = {1.5f, -0.5f, NAN};
+  const uint32_t bad_count[] = {PC_IREC_MAX_CANDIDATES + 1, 1025, UINT32_MAX};
+  for (int i = 0; i < 3; i++) {
+    pc_wire_settings_to_proto(&s, &p, &buf);
+    p.pcbpt_dark_seen = bad_seen[i];
+    assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+    pc_wire_settings_to_proto(&s, &p, &buf);
+    p.pcbpt_dark_mix = bad_mix[i];
+    assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+    pc_wire_settings_to_proto(&s, &p, &buf);
+    p.pcbpt_dark_candidates = bad_count[i];
+    assert_int_not_equal(pc_wire_settings_from_proto(&p, &back, &e), 0);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(byte_by_byte), cmocka_unit_test(whole_buffer), cmocka_unit_test(refusals),
     cmocka_unit_test(film_roundtrip), cmocka_unit_test(film_v1_and_add), cmocka_unit_test(film_trace_travels), cmocka_unit_test(film_blocks),
     cmocka_unit_test(film_without_per_iteration), cmocka_unit_test(film_max_roundtrip), cmocka_unit_test(film_bounds), cmocka_unit_test(film_streamed),
     cmocka_unit_test(settings_mis_roundtrip), cmocka_unit_test(settings_rate_roundtrip),
+    cmocka_unit_test(settings_dark_roundtrip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
