@@ -138,8 +138,12 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
      * and see something somewhere: in an iteration where none does, more candidates drawn
      * uniformly would find as little as one. */
     if (set->pcbpt_dark_seen > 0.f && set->uniform_mix < 1.f && !pc_irec_none_seen(p->store) &&
-        pc_irec_lookup_dark(&L, set->pcbpt_dark_seen, set->pcbpt_dark_mix) && set->pcbpt_dark_candidates > ncand)
-      ncand = set->pcbpt_dark_candidates;
+        pc_irec_lookup_dark(&L, set->pcbpt_dark_seen, set->pcbpt_dark_mix)) {
+      /* per connection, so that K connections still come from K times as many candidates */
+      long dark = (long)set->pcbpt_dark_candidates * set->pcbpt_k;
+      if (dark > PC_IREC_MAX_CANDIDATES) dark = PC_IREC_MAX_CANDIDATES;
+      if (dark > ncand) ncand = (int)dark;
+    }
   }
   /* The draws' component choices are stratified: each draw alone follows p_conn (so every
    * term of the sum is unbiased), and together they take the uniform PMF in proportion u. */

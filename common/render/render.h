@@ -40,7 +40,8 @@ typedef struct pc_render_settings {
   int pcbpt_candidates;    /* candidates drawn from p_conn and resampled per eye vertex (1: none) */
   float pcbpt_dark_seen;   /* eye vertices whose records see less than this share of the light
                               vertices are dark (0: none is, 1: all are) */
-  int pcbpt_dark_candidates; /* candidates at a dark eye vertex (at least pcbpt_candidates) */
+  int pcbpt_dark_candidates; /* candidates per connection at a dark eye vertex (K times this, at
+                                most PC_IREC_MAX_CANDIDATES, at least pcbpt_candidates) */
   float pcbpt_dark_mix;    /* uniform_mix at a dark eye vertex */
   pc_candidate_visibility candidate_visibility;
   float cache_fraction;    /* importance-record eye paths per pixel (0.004; pc_cache_path_count) */
