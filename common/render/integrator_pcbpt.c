@@ -135,9 +135,10 @@ static void connect_stored(pc_tctx *c, int x, int y, pc_rng *crng, const pc_path
     pc_irec_site z = pc_pcbpt_site(c->scene, ev);
     pc_irec_lookup_cached(p->store, c->thread, &z, set->knn, set->uniform_mix, &L);
     /* Dark vertices only where records shape p_conn (at uniform-mix 1 the user asked for none)
-     * and see something somewhere: in an iteration where none does, more candidates drawn
-     * uniformly would find as little as one. */
-    if (set->pcbpt_dark_seen > 0.f && set->uniform_mix < 1.f && !pc_irec_none_seen(p->store) &&
+     * and see something somewhere (in an iteration where none does, more candidates drawn
+     * uniformly would find as little as one), and where K connections can be resampled. */
+    if (set->pcbpt_dark_seen > 0.f && set->uniform_mix < 1.f && set->pcbpt_k <= PC_IREC_MAX_CANDIDATES &&
+        !pc_irec_none_seen(p->store) &&
         pc_irec_lookup_dark(&L, set->pcbpt_dark_seen, set->pcbpt_dark_mix)) {
       /* per connection, so that K connections still come from K times as many candidates */
       long dark = (long)set->pcbpt_dark_candidates * set->pcbpt_k;

@@ -113,8 +113,9 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
                            pc_irec_lookup *L);
 
 /* A dark eye vertex: one whose interpolated records see (have a PMF > 0 at) less than `below`
- * of the V light vertices (every one when below >= 1), their shares weighted as the records are (L->seen; 0 when no record
- * is interpolated; in exact mode the share of the exact PMF). There p_conn's uniform mix
+ * of the V light vertices (every one when below >= 1), their shares weighted as the records
+ * are (L->seen; 0 when no record is interpolated; in exact mode the share of the exact PMF,
+ * which the integrator does not use). There p_conn's uniform mix
  * becomes `mix` (mix > 0 keeps every light vertex drawable), and the caller may draw more
  * candidates: a proposal chosen from the records alone, so the estimate stays unbiased.
  * Returns whether L is dark. */

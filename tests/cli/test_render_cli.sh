@@ -29,6 +29,9 @@ check bad-unseen-rate-high 2 "--pcbpt-unseen-rate: '2'" -- "$bin" render "$scene
 check bad-dark-seen 2 "--pcbpt-dark-seen: '1.5'" -- "$bin" render "$scene" --pcbpt-dark-seen 1.5
 check bad-dark-candidates 2 "--pcbpt-dark-candidates: '0'" -- "$bin" render "$scene" --pcbpt-dark-candidates 0
 check bad-dark-mix 2 "--pcbpt-dark-mix: '0'" -- "$bin" render "$scene" --pcbpt-dark-mix 0
+# K past what can be resampled: no dark vertices then, and nothing overruns (ASan build)
+check large-k 0 "pcbpt: 1 iterations" -- "$bin" render "$scene" --method pcbpt --pcbpt-k 80 --spp 1 --width 8 --height 8 \
+  --threads 1 --out "$tmp/large-k.exr"
 check small-rate 0 "pcbpt: 1 iterations" -- "$bin" render "$scene" --method pcbpt --pcbpt-rate 1e-7 --spp 1 --width 8 --height 8 \
   --threads 1 --out "$tmp/small-rate.exr"
 # the PCBPT settings are in the image header as the flags that give them
