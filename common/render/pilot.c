@@ -46,15 +46,20 @@ double pc_pilot_remaining(double seconds, double pilot_seconds) {
 
 uint64_t pc_pilot_seed(uint64_t job_seed) { return job_seed ^ UINT64_C(0x9e3779b97f4a7c15); }
 
+/* What stage 5's step divides the base's light-tracing paths by (step <= 2). */
+static uint64_t light_divisor(int step) {
+  uint64_t div = 1;
+  for (int j = 0; j < step; j++) div *= PC_PILOT_LIGHT_DIVISOR;
+  return div;
+}
+
 /* "pcbpt K=2", "pcbpt K=1 mis 4 N_L/4" */
 static void pcbpt_label(pc_pilot_candidate *c) {
   int n = snprintf(c->label, sizeof c->label, "pcbpt K=%d", c->set.pcbpt_k);
   if (c->mis_raised && n > 0 && (size_t)n < sizeof c->label)
     n += snprintf(c->label + n, sizeof c->label - (size_t)n, " mis %g", (double)c->set.mis_count);
-  int div = 1;
-  for (int j = 0; j < c->light_step; j++) div *= PC_PILOT_LIGHT_DIVISOR;
-  if (div > 1 && n > 0 && (size_t)n < sizeof c->label)
-    snprintf(c->label + n, sizeof c->label - (size_t)n, " N_L/%d", div);
+  if (c->light_step && n > 0 && (size_t)n < sizeof c->label)
+    snprintf(c->label + n, sizeof c->label - (size_t)n, " N_L/%llu", (unsigned long long)light_divisor(c->light_step));
 }
 
 /* count > 0: a PCBPT candidate whose inner strategies carry that count in the MIS weights
@@ -85,8 +90,8 @@ static void add_candidate(pc_pilot *p, const pc_render_settings *base, pc_method
  * PC_PILOT_LIGHT_DIVISOR once more. False when there are too few to divide. */
 static bool add_fewer_lights(pc_pilot *p, const pc_render_settings *base, int from) {
   const pc_pilot_candidate *f = &p->c[from];
-  uint64_t left = base->light_paths ? base->light_paths : (uint64_t)base->width * (uint64_t)base->height;
-  for (int j = 0; j <= f->light_step; j++) left /= PC_PILOT_LIGHT_DIVISOR;
+  uint64_t all = base->light_paths ? base->light_paths : (uint64_t)base->width * (uint64_t)base->height;
+  uint64_t left = all / light_divisor(f->light_step + 1);
   if (left < 1) return false;
   pc_pilot_candidate *c = &p->c[p->n];
   add_candidate(p, base, PC_METHOD_PCBPT, f->set.pcbpt_k, f->mis_raised ? f->set.mis_count : 0.f, false);

@@ -31,17 +31,17 @@ int pc_method_parse(const char *name, pc_method *out) {
   return PC_EINVAL;
 }
 
+/* Whether any shape's material answers yes to a material predicate of bsdf.h. */
+static bool any_shape(const pc_scene *s, bool (*has)(const pc_material *, int, int)) {
+  for (int i = 0; i < s->nshapes; i++)
+    if (has(s->materials, s->nmaterials, s->shapes[i].material)) return true;
+  return false;
+}
+
 bool pc_scene_pt_complete(const pc_scene *s) {
   bool delta_light = false;
   for (int i = 0; i < s->nlights && !delta_light; i++) delta_light = pc_light_is_delta_pos(&s->lights[i]);
-  if (!delta_light) return true;
-  for (int i = 0; i < s->nshapes; i++)
-    if (pc_material_has_delta(s->materials, s->nmaterials, s->shapes[i].material)) return false;
-  return true;
+  return !delta_light || !any_shape(s, pc_material_has_delta);
 }
 
-bool pc_scene_has_caustics(const pc_scene *s) {
-  for (int i = 0; i < s->nshapes; i++)
-    if (pc_material_casts_caustics(s->materials, s->nmaterials, s->shapes[i].material)) return true;
-  return false;
-}
+bool pc_scene_has_caustics(const pc_scene *s) { return any_shape(s, pc_material_casts_caustics); }

@@ -232,6 +232,11 @@ static void test_sampling_matches_pconn(void **state) {
   for (int v = 0; v < sc.V; v++) total += importance(&sc, 0, &z, v);
   for (int v = 0; v < sc.V; v++)
     assert_true(fabs(pc_irec_pconn(&L, v) - importance(&sc, 0, &z, v) / total) < 1e-6);
+  /* its seen share: the light vertices of non-zero importance at z */
+  int nonzero = 0;
+  for (int v = 0; v < sc.V; v++) nonzero += importance(&sc, 0, &z, v) > 0.f;
+  assert_true(nonzero > 0 && nonzero < sc.V);
+  assert_true(L.seen == (double)nonzero / sc.V);
   pc_irec_destroy(s);
   free_scene(&sc);
 }
