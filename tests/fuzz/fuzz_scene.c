@@ -7,8 +7,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "scene.h"
@@ -21,8 +21,22 @@ static const char *OBJ = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0
                          "g x\nusemtl b\nf 1 3 4\nusemtl c\nf 1 2 4\nusemtl d\nf 2 3 4\n";
 static const char *MTL = "newmtl a\nKd 0.5 0.5 0.5\nnewmtl c\nKs 1 1 1\nNs 10\nillum 2\nd 0.5\nnewmtl d\nillum 7\n";
 
-static int put(const char *dir, const char *name, const void *data, size_t size) {
-  char path[128];
+/* The inputs' folder: made once (mkdtemp, under TMPDIR) and removed with its three files at exit
+ * (libFuzzer exits through exit() at -max_total_time), so runs leave nothing behind. */
+static char dir[4096];
+
+static void remove_dir(void) {
+  static const char *const files[] = {"scene.xml", "g.obj", "m.mtl"};
+  char path[4200];
+  for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+    snprintf(path, sizeof path, "%s/%s", dir, files[i]);
+    (void)unlink(path);
+  }
+  (void)rmdir(dir);
+}
+
+static int put(const char *name, const void *data, size_t size) {
+  char path[4200];
   snprintf(path, sizeof path, "%s/%s", dir, name);
   FILE *f = fopen(path, "wb");
   if (!f) return -1;
@@ -30,18 +44,32 @@ static int put(const char *dir, const char *name, const void *data, size_t size)
   return fclose(f) != 0 || w != size ? -1 : 0;
 }
 
+int LLVMFuzzerInitialize(int *argc, char ***argv) {
+  (void)argc, (void)argv;
+  const char *tmp = getenv("TMPDIR");
+  int n = snprintf(dir, sizeof dir, "%s/pcbpt-fuzz-scene-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+  if (n < 0 || (size_t)n >= sizeof dir || !mkdtemp(dir)) {
+    fprintf(stderr, "fuzz_scene: cannot make a folder for the inputs under %s\n", tmp && *tmp ? tmp : "/tmp");
+    abort();
+  }
+  if (atexit(remove_dir) != 0) {
+    remove_dir();
+    fprintf(stderr, "fuzz_scene: cannot register the folder's removal\n");
+    abort();
+  }
+  return 0;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-  char dir[64], path[96];
-  snprintf(dir, sizeof dir, "/tmp/pcbpt-fuzz-scene-%ld", (long)getpid());
-  (void)mkdir(dir, 0700);
+  char path[4200];
   bool obj = size >= 4 && memcmp(data, "OBJ\n", 4) == 0, mtl = size >= 4 && memcmp(data, "MTL\n", 4) == 0;
   int rc;
   if (obj || mtl) {
-    rc = put(dir, "scene.xml", SCENE, strlen(SCENE));
-    if (!rc) rc = obj ? put(dir, "g.obj", data + 4, size - 4) : put(dir, "g.obj", OBJ, strlen(OBJ));
-    if (!rc) rc = mtl ? put(dir, "m.mtl", data + 4, size - 4) : put(dir, "m.mtl", MTL, strlen(MTL));
+    rc = put("scene.xml", SCENE, strlen(SCENE));
+    if (!rc) rc = obj ? put("g.obj", data + 4, size - 4) : put("g.obj", OBJ, strlen(OBJ));
+    if (!rc) rc = mtl ? put("m.mtl", data + 4, size - 4) : put("m.mtl", MTL, strlen(MTL));
   } else {
-    rc = put(dir, "scene.xml", data, size);
+    rc = put("scene.xml", data, size);
   }
   snprintf(path, sizeof path, "%s/scene.xml", dir);
   if (rc) return 0;
