@@ -491,7 +491,7 @@ void pc_irec_lookup_cached(pc_irec_store *s, int thread, const pc_irec_site *z, 
     L->n++;
   }
   if (L->n > 0) normalize_weights(L);
-  if (L->n > 0) L->seen = seen_sum / w_sum;
+  if (w_sum > 0.0) L->seen = seen_sum / w_sum; /* over the records of weight > 0, which it keeps */
 }
 
 int pc_irec_lookup_exact(pc_irec_store *s, int thread, const pc_irec_site *z, pc_irec_importance_fn fn, void *user,

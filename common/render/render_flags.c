@@ -155,8 +155,9 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     s->knn = (int)ll;
     break;
   case 14:
+  case 22:
     if (!pc_parse_f64(v, 0.0, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in [0, 1]", flag, v);
-    s->uniform_mix = (float)d;
+    *(which == 14 ? &s->uniform_mix : &s->pcbpt_dark_seen) = (float)d;
     break;
   case 15:
     if (strcmp(v, "upper-bound") == 0) s->mis_mode = PC_MIS_UPPER_BOUND;
@@ -175,8 +176,9 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     if (!pc_parse_f64(v, 1e-9, 1e6, &r->halt_noise)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not a relMSE > 0", flag, v);
     break;
   case 18:
+  case 23:
     if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
-    s->pcbpt_candidates = (int)ll;
+    *(which == 18 ? &s->pcbpt_candidates : &s->pcbpt_dark_candidates) = (int)ll;
     break;
   case 19:
     if (strcmp(v, "records") == 0) s->candidate_visibility = PC_CANDVIS_RECORDS;
@@ -186,21 +188,10 @@ int pc_render_flag_parse(pc_render_request *r, int argc, char **argv, int *i, pc
     break;
   case 20:
   case 21:
-    /* (0, 1] as the settings hold it: a positive rate that rounds to a float 0 is 0 */
-    if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
-    *(which == 20 ? &s->pcbpt_rate : &s->pcbpt_unseen_rate) = (float)d;
-    break;
-  case 22:
-    if (!pc_parse_f64(v, 0.0, 1.0, &d)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in [0, 1]", flag, v);
-    s->pcbpt_dark_seen = (float)d;
-    break;
-  case 23:
-    if (!pc_parse_i64(v, 1, PC_IREC_MAX_CANDIDATES, &ll)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not 1..%d", flag, v, PC_IREC_MAX_CANDIDATES);
-    s->pcbpt_dark_candidates = (int)ll;
-    break;
   case 24:
+    /* (0, 1] as the settings hold it: a positive rate or mix that rounds to a float 0 is 0 */
     if (!pc_parse_f64(v, 0.0, 1.0, &d) || !((float)d > 0.f)) return pc_errf(e, PC_EINVAL, "%s: '%s' is not in (0, 1]", flag, v);
-    s->pcbpt_dark_mix = (float)d;
+    *(which == 20 ? &s->pcbpt_rate : which == 21 ? &s->pcbpt_unseen_rate : &s->pcbpt_dark_mix) = (float)d;
     break;
   }
   return 1;
