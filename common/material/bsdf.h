@@ -121,6 +121,13 @@ typedef struct pc_bsdf_sampled {
  * bumpmap seen from behind mirrors its frame to that side). */
 void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
                      vec3 dpdv, vec2 uv, vec3 wo);
+/* The same with the unbumped frame given: f must be what pc_shading_frame(f, ns, dpdu) gives
+ * (a triangle's, computed once: pc_tri_consts). */
+void pc_shading_make_framed(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, const frame *f,
+                            vec3 dpdu, vec3 dpdv, vec2 uv, vec3 wo);
+/* Mitsuba's computeShadingFrame: normal n, first tangent along dpdu projected into the tangent
+ * plane (an arbitrary one where dpdu is degenerate). */
+void pc_shading_frame(frame *f, vec3 n, vec3 dpdu);
 
 /* Precomputes derived data (plastic tables, sampling weights). Call once per material after parsing. A textured
  * slot (tex >= 0) contributes its `value` to Mitsuba's specular sampling weight, so loaders set

@@ -16,10 +16,9 @@
  *   n' = normalize(frame(2c - 1)) turned to the geometric normal's side, s' = dpdu projected. */
 #include "bsdf.h"
 
-/* Mitsuba's computeShadingFrame; an arbitrary tangent where dpdu is degenerate. Written in
- * place, component by component: returned by value, the 36-byte frame went through a stack
- * temporary whose narrow stores the copy's wide loads could not forward from. */
-static void shading_frame(frame *f, vec3 n, vec3 dpdu) {
+/* Written in place, component by component: returned by value, the 36-byte frame went through
+ * a stack temporary whose narrow stores the copy's wide loads could not forward from. */
+void pc_shading_frame(frame *f, vec3 n, vec3 dpdu) {
   vec3 s = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
   float len = v3_len(s);
   if (!(len > 1e-12f * v3_len(dpdu)) || !isfinite(len)) {
@@ -45,7 +44,7 @@ static frame bumped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 dpdu, ve
   vec3 nb = v3_scale(c, 1.f / len);
   if (v3_dot(nb, ng) < 0.f) nb = v3_neg(nb);
   frame r;
-  shading_frame(&r, nb, pu);
+  pc_shading_frame(&r, nb, pu);
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
@@ -59,7 +58,7 @@ static frame normal_mapped_frame(const pc_texture *tex, vec3 ng, frame f, vec3 d
   n = v3_scale(n, 1.f / len);
   if (v3_dot(n, ng) < 0.f) n = v3_neg(n);
   frame r;
-  shading_frame(&r, n, dpdu);
+  pc_shading_frame(&r, n, dpdu);
   return v3_is_finite(r.s) && v3_is_finite(r.t) ? r : f;
 }
 
@@ -78,15 +77,27 @@ static void to_back(pc_shading *sh) {
   sh->nb = v3_neg(nb);
 }
 
-void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
-                     vec3 dpdv, vec2 uv, vec3 wo) {
+/* The rest of pc_shading_make once sh->sh holds the unbumped frame. */
+static void finish_shading(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
+                           vec3 dpdv, vec2 uv, vec3 wo) {
   sh->ng = ng;
   sh->uv = uv;
-  shading_frame(&sh->sh, ns, dpdu);
   sh->nb = ns;
   if (m && m->type == PC_MAT_BUMPMAP && m->bump_tex >= 0 && texs) {
     const pc_texture *tex = &texs[m->bump_tex];
     sh->sh = m->normal_map ? normal_mapped_frame(tex, ng, sh->sh, dpdu, uv) : bumped_frame(tex, ng, sh->sh, dpdu, dpdv, uv);
     if (m->twosided && v3_dot(wo, ns) < 0.f) to_back(sh);
   }
+}
+
+void pc_shading_make(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, vec3 ns, vec3 dpdu,
+                     vec3 dpdv, vec2 uv, vec3 wo) {
+  pc_shading_frame(&sh->sh, ns, dpdu);
+  finish_shading(sh, m, texs, ng, ns, dpdu, dpdv, uv, wo);
+}
+
+void pc_shading_make_framed(pc_shading *sh, const pc_material *m, const pc_texture *texs, vec3 ng, const frame *f,
+                            vec3 dpdu, vec3 dpdv, vec2 uv, vec3 wo) {
+  sh->sh = *f;
+  finish_shading(sh, m, texs, ng, f->n, dpdu, dpdv, uv, wo);
 }

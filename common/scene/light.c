@@ -59,7 +59,7 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
   float b0 = 1.f - su, b1 = u2 * su;
   out->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, 1.f - b0 - b1));
   out->n = l->tri_n[t];
-  out->eps = pc_triangle_eps(out->p, p0, p1, p2);
+  out->eps = sh->tri ? pc_triangle_eps_vmax(out->p, sh->tri[t].vmax) : pc_triangle_eps(out->p, p0, p1, p2);
 }
 
 vec3 pc_light_profile(const pc_light *l, vec3 w) {

@@ -19,9 +19,29 @@
 
 typedef enum { PC_SHAPE_MESH, PC_SHAPE_SPHERE } pc_shape_kind;
 
+/* What a hit on one triangle of a still mesh needs that depends on the triangle alone, taken
+ * once by pc_scene_build instead of at every hit: the unit geometric normal and the texture
+ * tangents (a cross product, a square root and two divisions per hit), the vertices' largest
+ * coordinate for the ray offset, and on a mesh without shading normals the shading frame too
+ * (its normal is the triangle's). 64 bytes, one cache line. */
+typedef struct pc_tri_consts {
+  frame f;          /* f.n: the unit geometric normal (counter-clockwise side); f.s, f.t: the
+                       shading frame from f.n and dpdu where the mesh has no shading normals
+                       (elsewhere f.s.x = 1 marks degenerate texture coordinates) */
+  vec3 dpdu, dpdv;  /* as pc_hit's */
+  float vmax;       /* largest coordinate magnitude of the three vertices (pc_triangle_eps) */
+} pc_tri_consts;
+
+/* The most memory the pc_tri_consts of a scene's still meshes take together (256k triangles;
+ * the meshes that do not fit compute theirs at each hit). A table of a large mesh costs more
+ * memory than it saves time: its rows, read at random, are as far as the vertices are, and on
+ * a 1M-triangle ball it sped BDPT by ~0.5% for 64 MB (ajar-door's boxes and planes: -2.3%). */
+#define PC_TRI_CONSTS_MAX_BYTES ((size_t)16 << 20)
+
 typedef struct pc_shape {
   pc_shape_kind kind;
   pc_mesh mesh;          /* PC_SHAPE_MESH, world space, flipNormals already applied */
+  pc_tri_consts *tri;    /* per triangle of a still mesh, or NULL (scene_build.c, tri_consts) */
   vec3 center;           /* PC_SHAPE_SPHERE, world space */
   float radius;
   bool flip_normals;     /* PC_SHAPE_SPHERE: normals point inward */
@@ -168,6 +188,8 @@ typedef struct pc_hit {
   float t;
   float eps;        /* rays leave and reach the point that far off (PC_OFFSET_RELATIVE) */
   int shape, prim;
+  const frame *frame; /* the shading frame when the triangle's is precomputed (its ng, ns and
+                         dpdu give the same), else NULL */
 } pc_hit;
 
 /* Closest hit along (o, d) within (0, tmax); d need not be normalised. */
@@ -186,8 +208,12 @@ static inline float pc_point_eps(vec3 p) { return PC_OFFSET_RELATIVE * v3_maxabs
 static inline float pc_sphere_eps(vec3 center, float radius, vec3 p) {
   return PC_OFFSET_RELATIVE * pc_maxf(v3_maxabs(p), v3_maxabs(center) + radius);
 }
+static inline float pc_triangle_vmax(vec3 p0, vec3 p1, vec3 p2) {
+  return pc_maxf(v3_maxabs(p0), pc_maxf(v3_maxabs(p1), v3_maxabs(p2)));
+}
+static inline float pc_triangle_eps_vmax(vec3 p, float vmax) { return PC_OFFSET_RELATIVE * pc_maxf(v3_maxabs(p), vmax); }
 static inline float pc_triangle_eps(vec3 p, vec3 p0, vec3 p1, vec3 p2) {
-  return PC_OFFSET_RELATIVE * pc_maxf(pc_maxf(v3_maxabs(p), v3_maxabs(p0)), pc_maxf(v3_maxabs(p1), v3_maxabs(p2)));
+  return pc_triangle_eps_vmax(p, pc_triangle_vmax(p0, p1, p2));
 }
 /* p moved eps off a surface with geometric normal ng, on the side of direction d. */
 static inline vec3 pc_offset_by(vec3 p, vec3 ng, vec3 d, float eps) {

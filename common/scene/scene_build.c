@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "big_alloc.h"
 #include "scene.h"
 #include "scene_embree.h"
 
@@ -153,6 +154,96 @@ static void set_bounding_sphere(pc_scene *s, vec3 lo, vec3 hi) {
   s->scene_radius = 0.5f * v3_len(v3_sub(hi, lo));
 }
 
+/* A triangle's hit record, in parts: the texture coordinates at barycentrics (b0, b1, b2) (the
+ * barycentrics themselves without any) ... */
+static inline vec2 interpolated_uv(const pc_mesh *m, const uint32_t *ix, float b0, float b1, float b2) {
+  if (!m->uv) return (vec2){b1, b2};
+  vec2 t0 = m->uv[ix[0]], t1 = m->uv[ix[1]], t2 = m->uv[ix[2]];
+  return (vec2){b0 * t0.x + b1 * t1.x + b2 * t2.x, b0 * t0.y + b1 * t1.y + b2 * t2.y};
+}
+
+/* ... the interpolated shading normal (ng where it vanishes), with *ng turned to its side:
+ * Mitsuba's front side is the shading normal's side (one-sided BSDFs and emitters test the
+ * shading frame) ... */
+static inline vec3 interpolated_normal(const pc_mesh *m, const uint32_t *ix, float b0, float b1, float b2, vec3 *ng) {
+  vec3 ns = v3_add(v3_add(v3_scale(m->n[ix[0]], b0), v3_scale(m->n[ix[1]], b1)), v3_scale(m->n[ix[2]], b2));
+  float l = v3_len(ns);
+  if (!(l > 0.f && isfinite(l))) return *ng;
+  ns = v3_scale(ns, 1.f / l);
+  if (v3_dot(ns, *ng) < 0.f) *ng = v3_neg(*ng);
+  return ns;
+}
+
+/* ... and dp/du, dp/dv: Mitsuba's computeUVTangents, solving the edges for them; the edges
+ * themselves without texture coordinates. Returns false where the texture coordinates are
+ * degenerate: the tangents are then an arbitrary pair of the plane, frame_from_normal(ng),
+ * which depends on the side ng was turned to. */
+static inline bool uv_tangents(const pc_mesh *m, const uint32_t *ix, vec3 p0, vec3 p1, vec3 p2, vec3 ng, vec3 *dpdu,
+                               vec3 *dpdv) {
+  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+  *dpdu = e1;
+  *dpdv = e2;
+  if (!m->uv) return true;
+  vec2 t0 = m->uv[ix[0]], t1 = m->uv[ix[1]], t2 = m->uv[ix[2]];
+  float du1 = t1.x - t0.x, dv1 = t1.y - t0.y, du2 = t2.x - t0.x, dv2 = t2.y - t0.y;
+  float det = du1 * dv2 - dv1 * du2;
+  if (det != 0.f && isfinite(det)) {
+    float inv = 1.f / det;
+    *dpdu = v3_scale(v3_sub(v3_scale(e1, dv2), v3_scale(e2, dv1)), inv);
+    *dpdv = v3_scale(v3_sub(v3_scale(e2, du1), v3_scale(e1, du2)), inv);
+    return true;
+  }
+  frame f = frame_from_normal(ng);
+  *dpdu = f.s;
+  *dpdv = f.t;
+  return false;
+}
+
+/* Mesh shape sh's pc_tri_consts, the same values fill_hit would take at each hit. A mesh with
+ * shading normals keeps no frame (its normal varies over the triangle): f.s.x = 1 there marks
+ * degenerate texture coordinates, whose tangents the hit takes from the side ng turns to. */
+static void fill_tri_consts(const pc_shape *sh, pc_tri_consts *tri) {
+  const pc_mesh *m = &sh->mesh;
+  for (uint32_t t = 0; t < m->ntris; t++) {
+    const uint32_t *ix = m->idx + 3 * (size_t)t;
+    vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];
+    pc_tri_consts *c = &tri[t];
+    vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    bool solved = uv_tangents(m, ix, p0, p1, p2, ng, &c->dpdu, &c->dpdv);
+    if (m->n) {
+      c->f = (frame){v3(solved ? 0.f : 1.f, 0.f, 0.f), v3s(0.f), ng};
+    } else {
+      pc_shading_frame(&c->f, ng, c->dpdu);
+    }
+    c->vmax = pc_triangle_vmax(p0, p1, p2);
+  }
+}
+
+/* The still meshes' pc_tri_consts, while their total stays within PC_TRI_CONSTS_MAX_BYTES
+ * (the rest compute theirs at each hit, as the moving ones do). */
+static int build_tri_consts(pc_scene *s, pc_err *e) {
+  bool *moves = calloc((size_t)s->nshapes, sizeof *moves);
+  if (!moves) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
+  for (int i = 0; i < s->nmotions; i++)
+    if (s->motions[i].shape >= 0 && s->motions[i].shape < s->nshapes) moves[s->motions[i].shape] = true;
+  size_t total = 0;
+  int rc = PC_OK;
+  for (int i = 0; i < s->nshapes && rc == PC_OK; i++) {
+    pc_shape *sh = &s->shapes[i];
+    free(sh->tri);
+    sh->tri = NULL;
+    if (sh->kind != PC_SHAPE_MESH || sh->mesh.ntris == 0 || moves[i]) continue;
+    size_t bytes = (size_t)sh->mesh.ntris * sizeof *sh->tri;
+    if (bytes > PC_TRI_CONSTS_MAX_BYTES - total) continue;
+    sh->tri = pc_big_alloc(bytes);
+    if (!sh->tri) rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for shape %d's triangle data (%zu bytes)", s->path, i, bytes);
+    else fill_tri_consts(sh, sh->tri);
+    total += bytes;
+  }
+  free(moves);
+  return rc;
+}
+
 static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   RTCDevice dev = rtcNewDevice("verbose=0");
   if (!dev) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
@@ -252,6 +343,7 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
   if (!ee) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
   s->rtc_error = ee;
   rc = build_embree(s, ee, e);
+  if (rc == PC_OK) rc = build_tri_consts(s, e);
   /* After the geometry: the environment's light paths need the bounding sphere. */
   return rc != PC_OK ? rc : build_lights(s, e);
 }
@@ -260,7 +352,10 @@ void pc_scene_free(pc_scene *s) {
   if (s->rtc_scene) rtcReleaseScene(s->rtc_scene);
   if (s->rtc_device) rtcReleaseDevice(s->rtc_device);
   free(s->rtc_error);
-  for (int i = 0; i < s->nshapes; i++) pc_mesh_free(&s->shapes[i].mesh);
+  for (int i = 0; i < s->nshapes; i++) {
+    pc_mesh_free(&s->shapes[i].mesh);
+    free(s->shapes[i].tri);
+  }
   for (int i = 0; i < s->ntextures; i++) pc_texture_free(&s->textures[i]);
   for (int i = 0; i < s->nlights; i++) {
     free(s->lights[i].tri_cdf);
@@ -296,6 +391,7 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   hit->shape = shape;
   hit->prim = (int)rh->hit.primID;
   hit->p = v3_madd(o, d, rh->ray.tfar);
+  hit->frame = NULL;
   if (sh->kind == PC_SHAPE_SPHERE) {
     vec3 n = v3_norm(v3_sub(hit->p, sh->center));
     /* Re-project onto the surface: the parametric hit point drifts with distance. */
@@ -318,45 +414,33 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   float b1 = rh->hit.u, b2 = rh->hit.v, b0 = 1.f - b1 - b2;
   vec3 p0 = m->p[ix[0]], p1 = m->p[ix[1]], p2 = m->p[ix[2]];
   hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
-  hit->eps = pc_triangle_eps(hit->p, p0, p1, p2);
-  vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
-  vec3 ns = ng;
-  if (m->n) {
-    ns = v3_add(v3_add(v3_scale(m->n[ix[0]], b0), v3_scale(m->n[ix[1]], b1)), v3_scale(m->n[ix[2]], b2));
-    float l = v3_len(ns);
-    if (l > 0.f && isfinite(l)) {
-      ns = v3_scale(ns, 1.f / l);
-      /* Mitsuba's front side is the shading normal's side (one-sided BSDFs and emitters test
-       * the shading frame): keep the geometric normal on that side. */
-      if (v3_dot(ns, ng) < 0.f) ng = v3_neg(ng);
-    } else {
-      ns = ng;
+  if (sh->tri) {
+    const pc_tri_consts *tc = &sh->tri[rh->hit.primID];
+    hit->eps = pc_triangle_eps_vmax(hit->p, tc->vmax);
+    hit->uv = interpolated_uv(m, ix, b0, b1, b2);
+    vec3 ng = tc->f.n;
+    hit->dpdu = tc->dpdu;
+    hit->dpdv = tc->dpdv;
+    if (!m->n) {
+      hit->ng = hit->ns = ng;
+      hit->frame = &tc->f;
+      return;
     }
-  }
-  hit->ng = ng;
-  hit->ns = ns;
-  vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
-  hit->dpdu = e1;
-  hit->dpdv = e2;
-  if (m->uv) {
-    vec2 t0 = m->uv[ix[0]], t1 = m->uv[ix[1]], t2 = m->uv[ix[2]];
-    hit->uv = (vec2){b0 * t0.x + b1 * t1.x + b2 * t2.x, b0 * t0.y + b1 * t1.y + b2 * t2.y};
-    /* Mitsuba's computeUVTangents: solve the edges for dp/du and dp/dv; an arbitrary tangent
-     * pair of the plane when the texture coordinates are degenerate. */
-    float du1 = t1.x - t0.x, dv1 = t1.y - t0.y, du2 = t2.x - t0.x, dv2 = t2.y - t0.y;
-    float det = du1 * dv2 - dv1 * du2;
-    if (det != 0.f && isfinite(det)) {
-      float inv = 1.f / det;
-      hit->dpdu = v3_scale(v3_sub(v3_scale(e1, dv2), v3_scale(e2, dv1)), inv);
-      hit->dpdv = v3_scale(v3_sub(v3_scale(e2, du1), v3_scale(e1, du2)), inv);
-    } else {
-      frame f = frame_from_normal(ng);
+    hit->ns = interpolated_normal(m, ix, b0, b1, b2, &ng);
+    hit->ng = ng;
+    if (tc->f.s.x != 0.f) {
+      frame f = frame_from_normal(ng); /* degenerate texture coordinates: the tangents of this side */
       hit->dpdu = f.s;
       hit->dpdv = f.t;
     }
-  } else {
-    hit->uv = (vec2){b1, b2};
+    return;
   }
+  hit->eps = pc_triangle_eps(hit->p, p0, p1, p2);
+  vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+  hit->uv = interpolated_uv(m, ix, b0, b1, b2);
+  hit->ns = m->n ? interpolated_normal(m, ix, b0, b1, b2, &ng) : ng;
+  hit->ng = ng;
+  uv_tangents(m, ix, p0, p1, p2, ng, &hit->dpdu, &hit->dpdv);
 }
 
 bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit) {

@@ -1143,6 +1143,81 @@ static void test_embree_shares_meshes(void **state) {
   th_rm_rf(t.root);
 }
 
+/* pc_tri_consts: a hit on a still mesh takes its triangle's precomputed normal, tangents,
+ * offset and (without shading normals) frame. Every field of every hit, and the shading point
+ * made from it, is bit for bit what the hit computes without the table: on a mesh with shading
+ * normals (one triangle whose normals face against its winding, so that ng turns over, and one
+ * with degenerate texture coordinates, whose tangents then follow the turned ng), the same
+ * mesh with face normals, a rectangle and a sphere. A moving shape has no table. */
+static void test_tri_consts(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  assert_int_equal(th_write_str(t.dir, "uvn.obj",
+                                "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\n"
+                                "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n"
+                                "vn 0 0 1\nvn 0.3 0 1\nvn 0 0.3 1\nvn 0.1 0 -1\n"
+                                "f 1/1/1 2/2/2 3/3/3\nf 2/4/4 4/4/4 3/4/4\nf 1/1/1 5/2/2 2/3/3\n"),
+                   0);
+  const char *body = SENSOR "\n<shape type=\"obj\"><string name=\"filename\" value=\"uvn.obj\"/></shape>\n"
+                            "<shape type=\"obj\"><string name=\"filename\" value=\"uvn.obj\"/>"
+                            "<boolean name=\"faceNormals\" value=\"true\"/><transform name=\"toWorld\">"
+                            "<translate x=\"3\"/></transform></shape>\n"
+                            "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate x=\"-3\"/></transform></shape>\n"
+                            "<shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"3\" z=\"0\"/></shape>\n"
+                            "<emitter type=\"constant\"/>\n";
+  pc_scene s;
+  pc_err e = {0};
+  int rc = load_body(&t, body, &s, &e);
+  if (!rc) rc = pc_scene_build(&s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 4);
+  assert_non_null(s.shapes[0].mesh.n);
+  assert_null(s.shapes[1].mesh.n);
+  for (int i = 0; i < 3; i++) assert_non_null(s.shapes[i].tri);
+  assert_null(s.shapes[3].tri);
+  pc_tri_consts *tables[3];
+  int hits = 0, framed = 0, turned = 0;
+  for (int k = 0; k < 4000; k++) {
+    /* rays from both sides at every shape, through a grid around it */
+    int shape = k % 4, side = (k / 4) % 2;
+    float u = (float)((k / 8) % 25) / 24.f * 1.4f - 0.2f, v = (float)((k / 200) % 20) / 19.f * 1.4f - 0.2f;
+    vec3 base = shape == 1 ? v3(3, 0, 0) : shape == 2 ? v3(-3.5f, -0.5f, 0) : shape == 3 ? v3(-0.5f, 2.5f, 0) : v3s(0);
+    vec3 target = v3_add(base, v3(u, v, (k / 4000.f) * (shape == 0 ? 1.f : 0.f)));
+    vec3 o = v3_add(target, v3(0.37f, -0.21f, side ? 3.f : -3.f)), d = v3_sub(target, o);
+    if (k % 16 == 5) { o = v3_add(base, v3(0.4f, -3, 0.3f)); d = v3_sub(target, o); } /* at the y = 0 triangle */
+    pc_hit a, b;
+    bool ha = pc_scene_intersect(&s, o, d, INFINITY, &a);
+    for (int i = 0; i < 3; i++) tables[i] = s.shapes[i].tri, s.shapes[i].tri = NULL;
+    bool hb = pc_scene_intersect(&s, o, d, INFINITY, &b);
+    for (int i = 0; i < 3; i++) s.shapes[i].tri = tables[i];
+    assert_true(ha == hb);
+    if (!ha) continue;
+    hits++;
+    assert_null(b.frame);
+    assert_memory_equal(&a.p, &b.p, sizeof a.p);
+    assert_memory_equal(&a.ng, &b.ng, sizeof a.ng);
+    assert_memory_equal(&a.ns, &b.ns, sizeof a.ns);
+    assert_memory_equal(&a.uv, &b.uv, sizeof a.uv);
+    assert_memory_equal(&a.dpdu, &b.dpdu, sizeof a.dpdu);
+    assert_memory_equal(&a.dpdv, &b.dpdv, sizeof a.dpdv);
+    assert_true(a.t == b.t && a.eps == b.eps && a.shape == b.shape && a.prim == b.prim);
+    assert_true((a.frame != NULL) == (a.shape == 1 || a.shape == 2));
+    const pc_material *m = &s.materials[s.shapes[a.shape].material];
+    pc_shading sa, sb;
+    if (a.frame) pc_shading_make_framed(&sa, m, s.textures, a.ng, a.frame, a.dpdu, a.dpdv, a.uv, v3_neg(d));
+    else pc_shading_make(&sa, m, s.textures, a.ng, a.ns, a.dpdu, a.dpdv, a.uv, v3_neg(d));
+    pc_shading_make(&sb, m, s.textures, b.ng, b.ns, b.dpdu, b.dpdv, b.uv, v3_neg(d));
+    assert_memory_equal(&sa, &sb, sizeof sa);
+    framed += a.frame != NULL;
+    turned += a.shape == 0 && a.prim == 1 && v3_dot(a.ng, tables[0][1].f.n) < 0.f;
+  }
+  assert_true(hits > 2000 && framed > 500 && turned > 20);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* pc_scene_check, the clients' check without a BVH: the scene errors the loader leaves to the
  * build (no emitter, no shapes) as pc_scene_build reports them, word for word; on good scenes
  * (a still one with a sphere and an environment, a moving one) the same light tables and
@@ -1341,6 +1416,8 @@ static void test_motion_params(void **state) {
   assert_true(pc_scene_time(&s, 1, 0) == t0);
   /* built: placed at shutterOpen; a view moves to its own time, the scene stays */
   assert_int_equal(pc_scene_build(&s, &e), 0);
+  assert_null(s.shapes[2].tri); /* a moving mesh computes its hits' constants at each hit */
+  assert_non_null(s.shapes[1].tri);
   near3(s.shapes[0].center, v3(0, 0, 0), 1e-6f);
   assert_true(fabsf(s.shapes[0].radius - 0.75f) < 1e-6f);
   near3(s.camera.pos, v3(0.25f, 0, -5), 1e-6f);
@@ -1646,7 +1723,8 @@ int main(void) {
       cmocka_unit_test(test_smooth_angle_param), cmocka_unit_test(test_negative_conductor),
       cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
-      cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_check_without_bvh),
+      cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_tri_consts),
+      cmocka_unit_test(test_check_without_bvh),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
