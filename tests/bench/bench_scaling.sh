@@ -3,7 +3,9 @@
 #   triangles  1k, 100k, 1M, 5M (the cornell box with a tessellated ball, gen_tess_scene.py),
 #              256x256, maxDepth 10;
 #   resolution 256x256 .. 3840x2160 on cornell-box, maxDepth 10;
-#   maxDepth   5, 10, 20, 50 on cornell-box 256x256.
+#   maxDepth   5, 10, 20, 50 on cornell-box 256x256, and on the furnace with albedo 0.95 at
+#              128x128 (axis "survive"), where paths last long enough for the connections' and
+#              PCBPT's record build's growth with the square of the path length to show.
 # Per row: CPU seconds per iteration of the render threads, as the render reports it (its
 # "per iteration" line: the worker's render CPU over the iterations, so loading, the BVH build,
 # the embedded farm and the image writes are not in it); the setup CPU (the whole process's
@@ -13,12 +15,12 @@
 # disturbed there). (A first version took the difference of two whole renders of 1 and 1+N
 # iterations: at 1M-5M triangles the setup's spread, ~0.5 s, swamped it.) Usage:
 #   tests/bench/bench_scaling.sh [BUILD_DIR] [AXES] [ITERATIONS]   (defaults: build
-#   "tris res depth" 8; the resolution axis renders 3 past 1024x1024)
+#   "tris res depth survive" 8; the resolution axis renders 3 past 1024x1024)
 #   METHODS="pt bdpt pcbpt" (default) chooses the methods.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$top/build}
-axes=${2:-tris res depth}
+axes=${2:-tris res depth survive}
 iters=${3:-8}
 methods=${METHODS:-pt bdpt pcbpt}
 tmp=$(mktemp -d)
@@ -70,6 +72,15 @@ for axis in $axes; do
     for d in 5 10 20 50; do
       for m in $methods; do run "$d" "$d" "$cornell" 256 256 "$d" "$m"; done
     done ;;
-  *) echo "unknown axis '$axis' (tris, res, depth)" >&2; exit 2 ;;
+  survive)
+    # cornell-box's roulette ends its paths by ~10 vertices; here they last ~20 (q = 0.95), so
+    # what grows with the square of the path length shows (BDPT's connections, PCBPT's R x V)
+    header "path length where paths survive: the furnace with albedo 0.95, 128x128" maxDepth
+    sed 's/value="0.5, 0.5, 0.5"/value="0.95, 0.95, 0.95"/' "$top/scenes/furnace/scene.xml" > "$tmp/bright.xml"
+    grep -q '0.95, 0.95, 0.95' "$tmp/bright.xml" || { echo "scenes/furnace: no albedo 0.5 to raise" >&2; exit 1; }
+    for d in 5 10 20 50; do
+      for m in $methods; do run "$d" "$d" "$tmp/bright.xml" 128 128 "$d" "$m" 4; done
+    done ;;
+  *) echo "unknown axis '$axis' (tris, res, depth, survive)" >&2; exit 2 ;;
   esac
 done
