@@ -48,7 +48,7 @@ struct pc_worker {
   uint64_t job, range, first, count, acked_end;
   /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
   uint8_t *inflight; size_t inflight_len;
-  uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final, in_sent;
+  uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final;
   pc_render_stats in_stats;
   /* a bundle being received */
   uint8_t *bun; size_t bun_len; uint8_t bun_hash[PC_BUNDLE_HASH]; bool bun_wait;
@@ -124,7 +124,6 @@ static void send_inflight(worker *w) {
     env.upload_chunk = &u;
     if (pc_conn_send_bulk(w->conn, &env) != 0) return;
   }
-  w->in_sent = true;
   w->last_upload = now_s();
 }
 
@@ -221,7 +220,6 @@ static void pump(worker *w) {
     w->in_job = w->job;
     w->in_range = w->range;
     w->in_final = all;
-    w->in_sent = false;
     send_inflight(w);
     if (all) finish_range(w);
     return;
