@@ -45,7 +45,7 @@ struct pc_worker {
   pc_wrender r;
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
-  uint64_t job, range, first, count, acked_end;
+  uint64_t job, range, count;
   /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
   uint8_t *inflight; size_t inflight_len;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final;
@@ -263,9 +263,7 @@ static void start_range(worker *w, const Pcbpt__Assign *a, const char *scene) {
   w->busy = true;
   w->job = a->job_id;
   w->range = a->range_id;
-  w->first = a->first;
   w->count = a->count;
-  w->acked_end = a->first;
   w->drop = w->stopping = false;
   w->last_upload = now_s();
 }
