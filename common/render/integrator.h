@@ -79,7 +79,8 @@ static inline float pc_mis_term(const pc_render_settings *s, float p) {
  * bump map applied). */
 static inline void pc_shading_from_hit(pc_shading *sh, const pc_scene *s, const pc_hit *h, vec3 wo) {
   const pc_material *m = &s->materials[s->shapes[h->shape].material];
-  if (h->frame) pc_shading_make_framed(sh, m, s->textures, h->ng, h->frame, h->dpdu, h->dpdv, h->uv, wo);
+  const frame *f = pc_hit_frame(s, h);
+  if (f) pc_shading_make_framed(sh, m, s->textures, h->ng, f, h->dpdu, h->dpdv, h->uv, wo);
   else pc_shading_make(sh, m, s->textures, h->ng, h->ns, h->dpdu, h->dpdv, h->uv, wo);
 }
 

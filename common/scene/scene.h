@@ -41,7 +41,7 @@ typedef struct pc_tri_consts {
 typedef struct pc_shape {
   pc_shape_kind kind;
   pc_mesh mesh;          /* PC_SHAPE_MESH, world space, flipNormals already applied */
-  pc_tri_consts *tri;    /* per triangle of a still mesh, or NULL (scene_build.c, tri_consts) */
+  pc_tri_consts *tri;    /* per triangle of a still mesh, or NULL (scene_build.c, build_tri_consts) */
   vec3 center;           /* PC_SHAPE_SPHERE, world space */
   float radius;
   bool flip_normals;     /* PC_SHAPE_SPHERE: normals point inward */
@@ -188,9 +188,14 @@ typedef struct pc_hit {
   float t;
   float eps;        /* rays leave and reach the point that far off (PC_OFFSET_RELATIVE) */
   int shape, prim;
-  const frame *frame; /* the shading frame when the triangle's is precomputed (its ng, ns and
-                         dpdu give the same), else NULL */
 } pc_hit;
+
+/* The shading frame of a hit whose triangle keeps it (a still mesh without shading normals:
+ * what pc_shading_frame gives for its ng, ns and dpdu), else NULL. */
+static inline const frame *pc_hit_frame(const pc_scene *s, const pc_hit *h) {
+  const pc_shape *sh = &s->shapes[h->shape];
+  return sh->tri && !sh->mesh.n ? &sh->tri[h->prim].f : NULL;
+}
 
 /* Closest hit along (o, d) within (0, tmax); d need not be normalised. */
 bool pc_scene_intersect(const pc_scene *s, vec3 o, vec3 d, float tmax, pc_hit *hit);

@@ -391,7 +391,6 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
   hit->shape = shape;
   hit->prim = (int)rh->hit.primID;
   hit->p = v3_madd(o, d, rh->ray.tfar);
-  hit->frame = NULL;
   if (sh->kind == PC_SHAPE_SPHERE) {
     vec3 n = v3_norm(v3_sub(hit->p, sh->center));
     /* Re-project onto the surface: the parametric hit point drifts with distance. */
@@ -423,7 +422,6 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
     hit->dpdv = tc->dpdv;
     if (!m->n) {
       hit->ng = hit->ns = ng;
-      hit->frame = &tc->f;
       return;
     }
     hit->ns = interpolated_normal(m, ix, b0, b1, b2, &ng);
