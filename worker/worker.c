@@ -46,8 +46,12 @@ struct pc_worker {
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
   uint64_t job, range, count;
-  /* an upload sent and not yet acknowledged (re-sent after a reconnect) */
+  /* an upload being sent (in_next of its in_nchunks chunks handed to the connection) or sent
+   * and not yet acknowledged (re-sent whole after a reconnect). in_unwanted: a dropped range's,
+   * sent to its end only because the coordinator takes an upload's chunks in order on a
+   * connection, then freed. */
   uint8_t *inflight; size_t inflight_len;
+  uint32_t in_next, in_nchunks; bool in_unwanted;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final;
   pc_render_stats in_stats;
   /* a bundle being received */
@@ -93,10 +97,13 @@ static void send_heartbeat(worker *w) {
   send_env(w, &env);
 }
 
-static void send_inflight(worker *w) {
-  if (!w->inflight || !w->authed) return;
-  size_t nchunks = (w->inflight_len + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK;
-  if (nchunks == 0) nchunks = 1;
+/* Hands the connection the upload's next chunks while fewer than PC_WORKER_SEND_WINDOW bytes
+ * wait in its bulk queue, and the rest as it drains (on_drain): the frames of a whole upload,
+ * queued at once, were a second copy of the compressed film for as long as it took to send. */
+#define PC_WORKER_SEND_WINDOW (3 * (size_t)PC_WIRE_CHUNK)
+static void pump(worker *w);
+static void send_upload(worker *w) {
+  if (!w->inflight || !w->conn || !w->authed) return;
   Pcbpt__RenderStats st = PCBPT__RENDER_STATS__INIT;
   st.rays = w->in_stats.rays;
   st.t_paths = w->in_stats.t_paths;
@@ -106,26 +113,57 @@ static void send_inflight(worker *w) {
   st.pmf_bytes = w->in_stats.pmf_bytes;
   st.t_total = w->in_stats.t_total;
   st.t_cpu = w->in_stats.t_cpu;
-  for (size_t i = 0; i < nchunks; i++) {
+  while (w->in_next < w->in_nchunks && w->conn->bulk_queued < PC_WORKER_SEND_WINDOW) {
+    size_t off = (size_t)w->in_next * PC_WIRE_CHUNK;
     Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
     Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;
     u.job_id = w->in_job;
     u.range_id = w->in_range;
     u.first = w->in_first;
     u.count = w->in_count;
-    u.index = (uint32_t)i;
-    u.nchunks = (uint32_t)nchunks;
+    u.index = w->in_next;
+    u.nchunks = w->in_nchunks;
     u.raw_size = w->in_raw;
     u.final = w->in_final;
     u.stats = &st;
-    u.data.data = w->inflight + i * PC_WIRE_CHUNK;
-    u.data.len = w->inflight_len - i * PC_WIRE_CHUNK < PC_WIRE_CHUNK ? w->inflight_len - i * PC_WIRE_CHUNK : PC_WIRE_CHUNK;
+    u.data.data = w->inflight + off;
+    u.data.len = w->inflight_len - off < PC_WIRE_CHUNK ? w->inflight_len - off : PC_WIRE_CHUNK;
     env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
     env.upload_chunk = &u;
     if (pc_conn_send_bulk(w->conn, &env) != 0) return;
+    w->in_next++;
   }
-  w->last_upload = now_s();
+  if (w->in_next == w->in_nchunks && w->in_unwanted) {
+    free(w->inflight);
+    w->inflight = NULL;
+    pump(w);
+  }
 }
+
+/* Sends the upload from its first chunk (a new one, or the last one again after a reconnect). */
+static void send_inflight(worker *w) {
+  if (!w->inflight || !w->authed) return;
+  size_t nchunks = (w->inflight_len + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK;
+  w->in_nchunks = nchunks ? (uint32_t)nchunks : 1;
+  w->in_next = 0;
+  w->last_upload = now_s();
+  send_upload(w);
+}
+
+/* The upload is no longer waited for: freed, unless it is part sent (then sent to its end). */
+static void forget_inflight(worker *w) {
+  if (w->in_unwanted) return;
+  if (w->in_next > 0 && w->in_next < w->in_nchunks && w->conn && w->authed) {
+    pc_wire_log("job %llu: range %llu's upload was dropped with %u of its %u chunks sent; sending the rest",
+                (unsigned long long)w->in_job, (unsigned long long)w->in_range, w->in_next, w->in_nchunks);
+    w->in_unwanted = true;
+    return;
+  }
+  free(w->inflight);
+  w->inflight = NULL;
+}
+
+static void on_drain(pc_conn *c) { send_upload(c->data); }
 
 /* Halted with nothing rendered since the last upload: an upload of no iterations tells the
  * coordinator the range ends here, or it would wait for one that never comes. */
@@ -220,6 +258,7 @@ static void pump(worker *w) {
     w->in_job = w->job;
     w->in_range = w->range;
     w->in_final = all;
+    w->in_unwanted = false;
     send_inflight(w);
     if (all) finish_range(w);
     return;
@@ -344,10 +383,8 @@ static void on_cancel(worker *w, const Pcbpt__Cancel *c) {
   }
   /* an upload of a dropped range (this one or the last) is not waited for: nothing would
    * be uploaded after it */
-  if (!c->upload_partial && w->inflight && w->in_job == c->job_id && (!c->range_id || c->range_id == w->in_range)) {
-    free(w->inflight);
-    w->inflight = NULL;
-  }
+  if (!c->upload_partial && w->inflight && w->in_job == c->job_id && (!c->range_id || c->range_id == w->in_range))
+    forget_inflight(w);
   if (!w->busy || c->job_id != w->job || (c->range_id && c->range_id != w->range)) {
     pump(w);
     return;
@@ -416,6 +453,11 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
     send_heartbeat(w);
+    if (w->inflight && w->in_unwanted) {
+      /* a new connection holds no part of it */
+      free(w->inflight);
+      w->inflight = NULL;
+    }
     if (w->inflight) send_inflight(w);
     if (!w->busy) request_work(w);
     else pump(w);
@@ -504,7 +546,7 @@ static void try_connect(uv_timer_t *t) {
   }
   pc_conn *c = malloc(sizeof *c);
   uv_connect_t *req = malloc(sizeof *req);
-  pc_conn_cbs cbs = {.on_msg = on_msg, .on_closed = on_closed};
+  pc_conn_cbs cbs = {.on_msg = on_msg, .on_drain = on_drain, .on_closed = on_closed};
   int r = !c || !req ? UV_ENOMEM : pc_conn_init(w->loop, c, &cbs, w, PC_WIRE_MAX_FRAME);
   if (r) {
     free(c);

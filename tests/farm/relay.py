@@ -3,14 +3,17 @@
 length prefixes travel in the clear) and appends every frame, in each direction, to
 CAPTURE_DIR/<connection>.<c2s|s2c>. If CAPTURE_DIR/corrupt (or corrupt-s2c) exists when a
 connection is accepted, it is removed and that connection's third frame from the client (or from
-the coordinator), its first sealed one, gets one payload bit flipped on the way."""
-import os, socket, struct, sys, threading
+the coordinator), its first sealed one, gets one payload bit flipped on the way. An optional
+fourth argument, SECONDS, holds back each frame from a client larger than 64 KiB (upload chunks)
+that long: a slow uplink, so that an upload is seen in mid-transfer."""
+import os, socket, struct, sys, threading, time
 
 target_port, port_file, cap = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+bulk_delay = float(sys.argv[4]) if len(sys.argv) > 4 else 0.0
 os.makedirs(cap, exist_ok=True)
 
 
-def pump(src, dst, path, corrupt_frame):
+def pump(src, dst, path, corrupt_frame, delay):
     buf, frames = b"", 0
     with open(path, "ab", buffering=0) as log:
         while True:
@@ -27,6 +30,8 @@ def pump(src, dst, path, corrupt_frame):
                 if frames == corrupt_frame and n > 4:
                     frame[4 + (n - 4) // 2] ^= 0x10
                 frames += 1
+                if delay and n > 65536:
+                    time.sleep(delay)
                 log.write(frame)
                 try:
                     dst.sendall(frame)
@@ -56,5 +61,5 @@ while True:
         except FileNotFoundError:
             pass
     base = os.path.join(cap, str(conn_id))
-    threading.Thread(target=pump, args=(cli, srv, base + ".c2s", corrupt.get("c2s", -1)), daemon=True).start()
-    threading.Thread(target=pump, args=(srv, cli, base + ".s2c", corrupt.get("s2c", -1)), daemon=True).start()
+    threading.Thread(target=pump, args=(cli, srv, base + ".c2s", corrupt.get("c2s", -1), bulk_delay), daemon=True).start()
+    threading.Thread(target=pump, args=(srv, cli, base + ".s2c", corrupt.get("s2c", -1), 0.0), daemon=True).start()
