@@ -1,6 +1,7 @@
 /* worker.c: the farm worker: connects to the coordinator (reconnecting with backoff while it
  * is away), authenticates, takes iteration ranges, fetches and caches scene bundles by hash,
- * and streams deltas (sums + counts since the last acknowledged upload) in bounded chunks.
+ * and streams deltas (sums + counts since the last acknowledged upload) in bounded chunks,
+ * handed to the connection a few at a time as it drains.
  * A delta stays in memory until acknowledged and is re-sent after a reconnect; the
  * coordinator recognises re-sent iterations and never counts them twice. The next range is
  * asked for as soon as the last delta of a range is sent, so the render thread does not sit
