@@ -131,7 +131,13 @@ static void send_upload(worker *w) {
     u.data.len = w->inflight_len - off < PC_WIRE_CHUNK ? w->inflight_len - off : PC_WIRE_CHUNK;
     env.msg_case = PCBPT__ENVELOPE__MSG_UPLOAD_CHUNK;
     env.upload_chunk = &u;
-    if (pc_conn_send_bulk(w->conn, &env) != 0) return;
+    int r = pc_conn_send_bulk(w->conn, &env);
+    if (r != 0) {
+      /* a chunk that cannot be queued (out of memory) would leave the coordinator waiting for
+       * it: the connection goes, and the upload is sent whole on the next one */
+      pc_conn_close(w->conn, uv_strerror(r));
+      return;
+    }
     w->in_next++;
   }
   if (w->in_next == w->in_nchunks && w->in_unwanted) {
