@@ -108,6 +108,8 @@ run clean "$SPP"; clean=$SECS
 for k in $(seq $NW); do impair $k; done
 run impaired "$SPP"
 echo "impaired links: $(python3 -c "print(round($clean / $SECS, 2))")x the clean links' throughput"
-run stalled "$SPP" "$STALL"
+# four times the iterations: the stall must begin while w1 still holds a range (at 120 the job
+# once ended 0.25 s into the stall, with nothing of w1's left to orphan)
+run stalled $((4 * SPP)) "$STALL"
 grep -q "w1.*\(timed out\|heartbeat\|gone\|orphaned\)" "$T/coord.log" || fail "the stalled worker was never dropped"
 echo PASS
