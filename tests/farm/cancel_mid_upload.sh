@@ -9,12 +9,8 @@
 # image on the same connection.
 . "$(dirname "$0")/lib.inc"
 start_coord
-python3 "$S/tests/farm/relay.py" "$PORT" "$T/rport" "$T/cap" 0.025 2>>"$T/relay.log" &
-PIDS+=("$!")
-for _ in $(seq 50); do [ -s "$T/rport" ] && break; sleep 0.1; done
-RPORT=$(cat "$T/rport")
-"$B/pcbpt-worker" --connect 127.0.0.1:$RPORT --token-file "$T/tok" --threads 1 --name w1 --cache-dir "$T/cache-w1" >>"$T/w1.log" 2>&1 &
-PIDS+=("$!")
+start_relay 0.025
+start_worker w1 "$RPORT"
 J=$("$B/pcbpt-coord" submit "$S/scenes/cornell-box/scene.xml" --method pt --spp 100000 --width 1024 --height 1024 $H | tail -1)
 up() { find "$T/cap" -name '*.c2s' -size +1024k | head -1; }
 for _ in $(seq 300); do [ -n "$(up)" ] && break; sleep 0.1; done

@@ -5,7 +5,8 @@ CAPTURE_DIR/<connection>.<c2s|s2c>. If CAPTURE_DIR/corrupt (or corrupt-s2c) exis
 connection is accepted, it is removed and that connection's third frame from the client (or from
 the coordinator), its first sealed one, gets one payload bit flipped on the way. An optional
 fourth argument, SECONDS, holds back each frame from a client larger than 64 KiB (upload chunks)
-that long: a slow uplink, so that an upload is seen in mid-transfer."""
+that long: a slow uplink, so that an upload is seen in mid-transfer. If CAPTURE_DIR/cut exists
+when such a frame arrives, it is removed and that connection is cut there (both sockets shut)."""
 import os, socket, struct, sys, threading, time
 
 target_port, port_file, cap = int(sys.argv[1]), sys.argv[2], sys.argv[3]
@@ -14,9 +15,9 @@ os.makedirs(cap, exist_ok=True)
 
 
 def pump(src, dst, path, corrupt_frame, delay):
-    buf, frames = b"", 0
+    buf, frames, cut = b"", 0, False
     with open(path, "ab", buffering=0) as log:
-        while True:
+        while not cut:
             try:
                 data = src.recv(1 << 16)
             except OSError:
@@ -32,6 +33,12 @@ def pump(src, dst, path, corrupt_frame, delay):
                 frames += 1
                 if delay and n > 65536:
                     time.sleep(delay)
+                    try:
+                        os.unlink(os.path.join(cap, "cut"))
+                        cut = True
+                        break
+                    except FileNotFoundError:
+                        pass
                 log.write(frame)
                 try:
                     dst.sendall(frame)
