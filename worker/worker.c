@@ -47,12 +47,12 @@ struct pc_worker {
   /* current range, as the loop sees it */
   bool busy, drop, stopping;
   uint64_t job, range, count;
-  /* an upload being sent (in_next of its in_nchunks chunks handed to the connection) or sent
-   * and not yet acknowledged (re-sent whole after a reconnect). in_unwanted: a dropped range's,
-   * sent to its end only because the coordinator takes an upload's chunks in order on a
-   * connection, then freed. */
+  /* an upload being sent (in_next of its chunks handed to the current connection) or sent and
+   * not yet acknowledged (re-sent whole after a reconnect). in_unwanted: a dropped range's, sent
+   * to its end only because the coordinator takes an upload's chunks in order on a connection,
+   * then freed (or freed with the connection). */
   uint8_t *inflight; size_t inflight_len;
-  uint32_t in_next, in_nchunks; bool in_unwanted;
+  uint32_t in_next; bool in_unwanted;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final;
   pc_render_stats in_stats;
   /* a bundle being received */
@@ -103,6 +103,18 @@ static void send_heartbeat(worker *w) {
  * queued at once, were a second copy of the compressed film for as long as it took to send. */
 #define PC_WORKER_SEND_WINDOW (3 * (size_t)PC_WIRE_CHUNK)
 static void pump(worker *w);
+
+static uint32_t upload_chunks(const worker *w) {
+  size_t n = (w->inflight_len + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK;
+  return n ? (uint32_t)n : 1;
+}
+
+static void free_inflight(worker *w) {
+  free(w->inflight);
+  w->inflight = NULL;
+  w->in_unwanted = false;
+}
+
 static void send_upload(worker *w) {
   if (!w->inflight || !w->conn || !w->authed) return;
   Pcbpt__RenderStats st = PCBPT__RENDER_STATS__INIT;
@@ -114,7 +126,8 @@ static void send_upload(worker *w) {
   st.pmf_bytes = w->in_stats.pmf_bytes;
   st.t_total = w->in_stats.t_total;
   st.t_cpu = w->in_stats.t_cpu;
-  while (w->in_next < w->in_nchunks && w->conn->bulk_queued < PC_WORKER_SEND_WINDOW) {
+  uint32_t nchunks = upload_chunks(w);
+  while (w->in_next < nchunks && w->conn->bulk_queued < PC_WORKER_SEND_WINDOW) {
     size_t off = (size_t)w->in_next * PC_WIRE_CHUNK;
     Pcbpt__Envelope env = PCBPT__ENVELOPE__INIT;
     Pcbpt__UploadChunk u = PCBPT__UPLOAD_CHUNK__INIT;
@@ -123,7 +136,7 @@ static void send_upload(worker *w) {
     u.first = w->in_first;
     u.count = w->in_count;
     u.index = w->in_next;
-    u.nchunks = w->in_nchunks;
+    u.nchunks = nchunks;
     u.raw_size = w->in_raw;
     u.final = w->in_final;
     u.stats = &st;
@@ -140,9 +153,8 @@ static void send_upload(worker *w) {
     }
     w->in_next++;
   }
-  if (w->in_next == w->in_nchunks && w->in_unwanted) {
-    free(w->inflight);
-    w->inflight = NULL;
+  if (w->in_next == nchunks && w->in_unwanted) {
+    free_inflight(w);
     pump(w);
   }
 }
@@ -150,8 +162,6 @@ static void send_upload(worker *w) {
 /* Sends the upload from its first chunk (a new one, or the last one again after a reconnect). */
 static void send_inflight(worker *w) {
   if (!w->inflight || !w->authed) return;
-  size_t nchunks = (w->inflight_len + PC_WIRE_CHUNK - 1) / PC_WIRE_CHUNK;
-  w->in_nchunks = nchunks ? (uint32_t)nchunks : 1;
   w->in_next = 0;
   w->last_upload = now_s();
   send_upload(w);
@@ -160,14 +170,13 @@ static void send_inflight(worker *w) {
 /* The upload is no longer waited for: freed, unless it is part sent (then sent to its end). */
 static void forget_inflight(worker *w) {
   if (w->in_unwanted) return;
-  if (w->in_next > 0 && w->in_next < w->in_nchunks && w->conn && w->authed) {
+  if (w->in_next > 0 && w->in_next < upload_chunks(w)) {
     pc_wire_log("job %llu: range %llu's upload was dropped with %u of its %u chunks sent; sending the rest",
-                (unsigned long long)w->in_job, (unsigned long long)w->in_range, w->in_next, w->in_nchunks);
+                (unsigned long long)w->in_job, (unsigned long long)w->in_range, w->in_next, upload_chunks(w));
     w->in_unwanted = true;
     return;
   }
-  free(w->inflight);
-  w->inflight = NULL;
+  free_inflight(w);
 }
 
 static void on_drain(pc_conn *c) { send_upload(c->data); }
@@ -265,7 +274,6 @@ static void pump(worker *w) {
     w->in_job = w->job;
     w->in_range = w->range;
     w->in_final = all;
-    w->in_unwanted = false;
     send_inflight(w);
     if (all) finish_range(w);
     return;
@@ -418,8 +426,7 @@ static void on_ack(worker *w, const Pcbpt__UploadAck *a) {
     atomic_store(&w->r.cancel, true);
     w->drop = true;
   }
-  free(w->inflight);
-  w->inflight = NULL;
+  free_inflight(w);
   pump(w);
 }
 
@@ -460,11 +467,6 @@ static void on_msg(pc_conn *c, Pcbpt__Envelope *env) {
     w->backoff = 0.5;
     pc_wire_log("connected to %s:%d", w->host, w->port);
     send_heartbeat(w);
-    if (w->inflight && w->in_unwanted) {
-      /* a new connection holds no part of it */
-      free(w->inflight);
-      w->inflight = NULL;
-    }
     if (w->inflight) send_inflight(w);
     if (!w->busy) request_work(w);
     else pump(w);
@@ -501,6 +503,10 @@ static void on_closed(pc_conn *c) {
   worker *w = c->data;
   free(c);
   w->conn = NULL;
+  /* no part of the upload is on a connection now; a dropped range's was sent only to finish
+   * this connection's stream */
+  w->in_next = 0;
+  if (w->in_unwanted) free_inflight(w);
   if (w->shutting_down) return;
   w->connected = w->challenged = w->authed = w->waiting_work = false;
   if (w->bun_wait) {
