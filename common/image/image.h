@@ -36,11 +36,19 @@ typedef struct pc_exr_attr {
   double d;
 } pc_exr_attr;
 
-/* Writes a single-part EXR (32-bit float, ZIP compressed) with the layers' channels
+/* Writes a single-part EXR (32-bit float, RLE compressed) with the layers' channels
  * "<layer>.R" etc. (beauty as plain R,G,B). Writes to a temporary file and renames, so a
  * reader never sees a partial file. */
 int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int nlayers,
                  const pc_exr_attr *attrs, int nattrs, pc_err *e);
+
+/* The same with the pixels asked for a band of rows at a time, so that no whole image need
+ * exist in floats: fill(user, y0, ny, rows, e) writes rows [y0, y0 + ny) of layer l, ny*w*3
+ * floats of interleaved RGB, into rows[l] for every layer (named names[l], "" the beauty), and
+ * returns PC_OK or an error (e set), which ends the write with no file. */
+typedef int (*pc_exr_rows_fn)(void *user, int y0, int ny, float *const *rows, pc_err *e);
+int pc_exr_write_rows(const char *path, int w, int h, const char *const *names, int nlayers, pc_exr_rows_fn fill,
+                      void *user, const pc_exr_attr *attrs, int nattrs, pc_err *e);
 
 /* Reads every layer of an EXR written by pc_exr_write (or any EXR with RGB channel triplets).
  * Returns layer names (malloc'd, "" for beauty) and images; caller frees with pc_exr_file_free. */

@@ -55,29 +55,28 @@ static char *dup_n(const char *s, size_t n) {
 
 typedef struct out_channel {
   char name[272]; /* "<layer>.R": layer names up to 255 bytes plus the suffix */
-  const float *plane; /* first sample of this channel in the layer's interleaved rgb */
+  int layer, comp; /* its layer's band of interleaved rgb, and the component in it */
 } out_channel;
 
 static int cmp_channel(const void *a, const void *b) {
   return strcmp(((const out_channel *)a)->name, ((const out_channel *)b)->name);
 }
 
-static int check_layers(const char *path, const pc_exr_layer *layers, int nlayers, pc_err *e) {
+static int check_layers(const char *path, const char *const *names, int nlayers, pc_err *e) {
   for (int i = 0; i < nlayers; i++) {
-    if (!layers[i].name || !layers[i].rgb)
-      return pc_errf(e, PC_EINVAL, "%s: layer %d has no name or no pixels", path, i);
-    if (strlen(layers[i].name) > 250)
-      return pc_errf(e, PC_EINVAL, "%s: layer name '%.40s...' too long", path, layers[i].name);
+    if (!names[i]) return pc_errf(e, PC_EINVAL, "%s: layer %d has no name", path, i);
+    if (strlen(names[i]) > 250)
+      return pc_errf(e, PC_EINVAL, "%s: layer name '%.40s...' too long", path, names[i]);
     for (int j = 0; j < i; j++)
-      if (strcmp(layers[i].name, layers[j].name) == 0)
-        return pc_errf(e, PC_EINVAL, "%s: layer '%s' given twice", path, layers[i].name);
+      if (strcmp(names[i], names[j]) == 0) return pc_errf(e, PC_EINVAL, "%s: layer '%s' given twice", path, names[i]);
   }
   return PC_OK;
 }
 
-/* Header and pixels into an open write context; the caller finishes it. */
-static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_channel *ch,
-                      int nch, const pc_exr_attr *attrs, int nattrs, exr_msg *m, pc_err *e) {
+/* Header and pixels into an open write context, the pixels asked of fill a chunk's band of
+ * rows at a time; the caller finishes it. */
+static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_channel *ch, int nch, int nlayers,
+                      pc_exr_rows_fn fill, void *user, const pc_exr_attr *attrs, int nattrs, exr_msg *m, pc_err *e) {
   int part = 0;
   exr_result_t rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
   /* RLE, not ZIP: noisy float radiance does not deflate, what compresses are the runs of
@@ -113,7 +112,19 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
 
   int32_t lines = 1;
   rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
-  if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
+  if (rv || lines < 1 || lines > h) {
+    if (!rv) lines = h; /* (a chunk is at most 256 lines in every compression) */
+    else return exr_fail(e, path, "cannot query the chunk size", rv, m);
+  }
+  size_t band = (size_t)lines * (size_t)w * 3;
+  float *rows = malloc(band * (size_t)nlayers * sizeof *rows);
+  float **bands = malloc((size_t)nlayers * sizeof *bands);
+  if (!rows || !bands) {
+    free(rows);
+    free(bands);
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory for %d rows of %d layers", path, lines, nlayers);
+  }
+  for (int l = 0; l < nlayers; l++) bands[l] = rows + band * (size_t)l;
   exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
   int inited = 0, rc = PC_OK;
   for (int y = 0; y < h && !rv && !rc; y += lines) {
@@ -124,16 +135,17 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
                 : exr_encoding_initialize(ctx, part, &ci, &enc);
     if (rv) break;
     inited = 1;
+    if ((rc = fill(user, y, h - y < lines ? h - y : lines, bands, e)) != PC_OK) break;
     for (int c = 0; c < enc.channel_count; c++) {
       exr_coding_channel_info_t *ec = &enc.channels[c];
       const float *src = NULL;
       for (int k = 0; k < nch && !src; k++)
-        if (strcmp(ec->channel_name, ch[k].name) == 0) src = ch[k].plane;
+        if (strcmp(ec->channel_name, ch[k].name) == 0) src = bands[ch[k].layer] + ch[k].comp;
       if (!src) {
         rc = pc_errf(e, PC_EEXR, "%s: OpenEXR lost channel '%s'", path, ec->channel_name);
         break;
       }
-      ec->encode_from_ptr = (const uint8_t *)(src + (size_t)y * w * 3);
+      ec->encode_from_ptr = (const uint8_t *)src;
       ec->user_pixel_stride = 3 * sizeof(float);
       ec->user_line_stride = 3 * sizeof(float) * w;
       ec->user_data_type = EXR_PIXEL_FLOAT;
@@ -147,18 +159,20 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
     exr_result_t drv = exr_encoding_destroy(ctx, &enc);
     if (!rv) rv = drv;
   }
+  free(rows);
+  free(bands);
   if (rc) return rc;
   if (rv) return exr_fail(e, path, "cannot write pixels", rv, m);
   return PC_OK;
 }
 
-int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int nlayers,
-                 const pc_exr_attr *attrs, int nattrs, pc_err *e) {
-  if (!path || (!layers && nlayers) || (!attrs && nattrs) || nlayers < 1 || nattrs < 0)
+int pc_exr_write_rows(const char *path, int w, int h, const char *const *names, int nlayers, pc_exr_rows_fn fill,
+                      void *user, const pc_exr_attr *attrs, int nattrs, pc_err *e) {
+  if (!path || !names || !fill || (!attrs && nattrs) || nlayers < 1 || nattrs < 0)
     return pc_errf(e, PC_EINVAL, "pc_exr_write: bad arguments");
   if (w <= 0 || h <= 0 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
     return pc_errf(e, PC_ELIMIT, "%s: EXR size %dx%d outside 1..%d", path, w, h, PC_IMAGE_MAX_DIM);
-  int rc = check_layers(path, layers, nlayers, e);
+  int rc = check_layers(path, names, nlayers, e);
   if (rc) return rc;
   char tmp[4096];
   if ((rc = pc_file_tmp_path(path, tmp, sizeof tmp, e))) return rc;
@@ -170,9 +184,10 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
   for (int i = 0; i < nlayers; i++) {
     for (int c = 0; c < 3; c++) {
       out_channel *o = &ch[3 * i + c];
-      if (layers[i].name[0]) snprintf(o->name, sizeof o->name, "%s.%c", layers[i].name, comp[c]);
+      if (names[i][0]) snprintf(o->name, sizeof o->name, "%s.%c", names[i], comp[c]);
       else snprintf(o->name, sizeof o->name, "%c", comp[c]);
-      o->plane = layers[i].rgb + c;
+      o->layer = i;
+      o->comp = c;
     }
   }
   /* EXR stores channel lists sorted by name. */
@@ -183,7 +198,7 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
   exr_context_t ctx = NULL;
   exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
   if (rv) rc = exr_fail(e, tmp, "cannot create", rv, &m);
-  else rc = exr_encode(ctx, path, w, h, ch, nch, attrs, nattrs, &m, e);
+  else rc = exr_encode(ctx, path, w, h, ch, nch, nlayers, fill, user, attrs, nattrs, &m, e);
   if (ctx) {
     /* exr_finish writes the chunk offset table, so its failure is a failed write. */
     rv = exr_finish(&ctx);
@@ -192,6 +207,37 @@ int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int
   free(ch);
   if (rc == PC_OK) return pc_file_commit(tmp, path, e);
   unlink(tmp);
+  return rc;
+}
+
+/* pc_exr_write's bands: copies of the whole images' rows. */
+typedef struct whole_images {
+  int w, nlayers;
+  const pc_exr_layer *layers;
+} whole_images;
+
+static int copy_rows(void *user, int y0, int ny, float *const *rows, pc_err *e) {
+  (void)e;
+  const whole_images *im = user;
+  size_t row = (size_t)im->w * 3;
+  for (int l = 0; l < im->nlayers; l++)
+    memcpy(rows[l], im->layers[l].rgb + (size_t)y0 * row, (size_t)ny * row * sizeof(float));
+  return PC_OK;
+}
+
+int pc_exr_write(const char *path, int w, int h, const pc_exr_layer *layers, int nlayers,
+                 const pc_exr_attr *attrs, int nattrs, pc_err *e) {
+  if (!path || !layers || nlayers < 1) return pc_errf(e, PC_EINVAL, "pc_exr_write: bad arguments");
+  const char **names = calloc((size_t)nlayers, sizeof *names);
+  if (!names) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
+  int rc = PC_OK;
+  for (int i = 0; i < nlayers && rc == PC_OK; i++) {
+    names[i] = layers[i].name;
+    if (!layers[i].name || !layers[i].rgb) rc = pc_errf(e, PC_EINVAL, "%s: layer %d has no name or no pixels", path, i);
+  }
+  whole_images im = {w, nlayers, layers};
+  if (rc == PC_OK) rc = pc_exr_write_rows(path, w, h, names, nlayers, copy_rows, &im, attrs, nattrs, e);
+  free(names);
   return rc;
 }
 

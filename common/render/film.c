@@ -130,23 +130,27 @@ double pc_film_layer_scale(const pc_film *f, const pc_film_layer *l) {
   return l->norm == PC_NORM_LIGHT ? (double)f->w * f->h / (double)l->count : 1.0 / (double)l->count;
 }
 
-void pc_film_layer_image(const pc_film *f, int i, float *out) {
+void pc_film_layer_rows(const pc_film *f, int i, int y0, int ny, float *out) {
   const pc_film_layer *l = &f->layers[i];
-  size_t n = (size_t)f->w * f->h * 3;
+  size_t j0 = (size_t)y0 * f->w * 3, n = (size_t)ny * f->w * 3;
   double scale = pc_film_layer_scale(f, l);
-  for (size_t j = 0; j < n; j++) out[j] = l->sum ? (float)(l->sum[j] * scale) : 0.f;
+  for (size_t j = 0; j < n; j++) out[j] = l->sum ? (float)(l->sum[j0 + j] * scale) : 0.f;
 }
 
-void pc_film_beauty(const pc_film *f, float *out) {
-  size_t n = (size_t)f->w * f->h * 3;
+void pc_film_layer_image(const pc_film *f, int i, float *out) { pc_film_layer_rows(f, i, 0, f->h, out); }
+
+void pc_film_beauty_rows(const pc_film *f, int y0, int ny, float *out) {
+  size_t j0 = (size_t)y0 * f->w * 3, n = (size_t)ny * f->w * 3;
   memset(out, 0, n * sizeof(float));
   for (int i = 0; i < PC_LAYER_STD_COUNT && i < f->nlayers; i++) {
     const pc_film_layer *l = &f->layers[i];
     if (l->count == 0) continue;
     double scale = pc_film_layer_scale(f, l);
-    for (size_t j = 0; j < n; j++) out[j] += (float)(l->sum[j] * scale);
+    for (size_t j = 0; j < n; j++) out[j] += (float)(l->sum[j0 + j] * scale);
   }
 }
+
+void pc_film_beauty(const pc_film *f, float *out) { pc_film_beauty_rows(f, 0, f->h, out); }
 
 void pc_film_queue_flush(pc_film_queue *q) {
   enum { AHEAD = 8 };
@@ -170,12 +174,14 @@ static bool variance_known(const pc_film *f) {
   return f->layers[q].count >= 2 && f->layers[q].count == f->layers[PC_LAYER_PT].count;
 }
 
-/* Calls fn(user, j, variance of the mean, mean) for every value j of the beauty of the mix of
- * the parts with a weight (independent estimates: mean sum w m, variance sum w^2 v), in double
- * precision, and returns how many values there are; 0 when there is no such part or one of
- * them cannot tell (see pc_film_variance). One part of weight 1 is its film: multiplying by 1
+/* Calls fn(user, j, variance of the mean, mean) for every value of rows [y0, y0 + ny) (ny < 0:
+ * every row) of the beauty of the mix of the parts with a weight (independent estimates: mean
+ * sum w m, variance sum w^2 v), in double precision, j counted from the first row's first
+ * value, and returns how many values there are; 0 when there is no such part or one of them
+ * cannot tell (see pc_film_variance). One part of weight 1 is its film: multiplying by 1
  * and adding to 0 are exact. */
-static size_t each_variance(const pc_film_part *parts, int n, void (*fn)(void *, size_t, double, double), void *user) {
+static size_t each_variance(const pc_film_part *parts, int n, int y0, int ny, void (*fn)(void *, size_t, double, double),
+                            void *user) {
   if (n < 1 || n > PC_FILM_MIX_MAX_PARTS) return 0;
   const pc_film *shape = NULL;
   double scale[PC_FILM_MIX_MAX_PARTS][PC_LAYER_STD_COUNT], inv_n[PC_FILM_MIX_MAX_PARTS], inv_n1[PC_FILM_MIX_MAX_PARTS];
@@ -192,8 +198,9 @@ static size_t each_variance(const pc_film_part *parts, int n, void (*fn)(void *,
     sq[i] = f->layers[pc_film_square_layer(f)].sum;
   }
   if (!shape) return 0;
-  size_t nv = (size_t)shape->w * shape->h * 3;
-  for (size_t j = 0; j < nv; j++) {
+  if (ny < 0) ny = shape->h; /* every row */
+  size_t j0 = (size_t)y0 * shape->w * 3, nv = (size_t)ny * shape->w * 3;
+  for (size_t j = j0; j < j0 + nv; j++) {
     double m = 0.0, v = 0.0;
     for (int i = 0; i < n; i++) {
       double w = parts[i].weight;
@@ -206,7 +213,7 @@ static size_t each_variance(const pc_film_part *parts, int n, void (*fn)(void *,
       m += w * mi;
       v += w * w * (vi > 0.0 ? vi : 0.0);
     }
-    fn(user, j, v, m);
+    fn(user, j - j0, v, m);
   }
   return nv;
 }
@@ -216,10 +223,12 @@ static void put_variance(void *user, size_t j, double v, double m) {
   ((float *)user)[j] = (float)v;
 }
 
-bool pc_film_variance(const pc_film *f, float *out) {
+bool pc_film_variance_rows(const pc_film *f, int y0, int ny, float *out) {
   pc_film_part whole = {f, 1.0};
-  return each_variance(&whole, 1, put_variance, out) > 0;
+  return each_variance(&whole, 1, y0, ny, put_variance, out) > 0;
 }
+
+bool pc_film_variance(const pc_film *f, float *out) { return pc_film_variance_rows(f, 0, f->h, out); }
 
 /* E[m^2] = exact^2 + v, so the denominator subtracts v (docs/variance.md). */
 static void add_relative(void *user, size_t j, double v, double m) {
@@ -230,7 +239,7 @@ static void add_relative(void *user, size_t j, double v, double m) {
 bool pc_film_mix_relmse_estimate(const pc_film_part *parts, int n, double *out) {
   double sum = 0.0;
   *out = NAN;
-  size_t nv = each_variance(parts, n, add_relative, &sum);
+  size_t nv = each_variance(parts, n, 0, -1, add_relative, &sum);
   if (nv == 0) return false;
   *out = sum / (double)nv;
   return true;
@@ -305,7 +314,7 @@ int pc_film_mix(pc_film *out, const pc_film_part *parts, int n, pc_err *e) {
   if (q < 0) return PC_OK;
   uint64_t it = out->layers[PC_LAYER_PT].count;
   double *sq = out->layers[q].sum, nn = (double)it;
-  if (it < 2 || !each_variance(parts, n, put_double, sq)) {
+  if (it < 2 || !each_variance(parts, n, 0, -1, put_double, sq)) {
     out->layers[q].count = 0; /* the mix cannot tell its variance either */
     return PC_OK;
   }

@@ -103,6 +103,11 @@ double pc_film_layer_scale(const pc_film *f, const pc_film_layer *l);
 void pc_film_layer_image(const pc_film *f, int i, float *out);
 /* Beauty = sum of the normalized standard layers. */
 void pc_film_beauty(const pc_film *f, float *out);
+/* The same (and pc_film_variance below) for rows [y0, y0 + ny) only, into out (ny*w*3): what a
+ * writer needs a band at a time, so no whole image is held in floats beside the film. */
+void pc_film_layer_rows(const pc_film *f, int i, int y0, int ny, float *out);
+void pc_film_beauty_rows(const pc_film *f, int y0, int ny, float *out);
+bool pc_film_variance_rows(const pc_film *f, int y0, int ny, float *out);
 /* Per-pixel unbiased estimate of the variance of the beauty's mean into out (w*h*3), from the
  * spread of the iterations: (sum_sq/N - mean^2) / (N - 1). Returns false (out untouched) when
  * the film cannot tell: fewer than 2 iterations, or beauty_sq has not seen every iteration the

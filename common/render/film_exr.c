@@ -8,42 +8,55 @@
 #include <string.h>
 #include <stdlib.h>
 
-#include "big_alloc.h"
 #include "film.h"
 
+/* What each layer of the file is made from, a band of rows at a time (pc_exr_write_rows): at
+ * 3840x2160 the images in floats would be ~0.8 GB beside the film, their pages cleared by
+ * the kernel at every checkpoint. */
+enum { FROM_BEAUTY = -1, FROM_VARIANCE = -2 };
+typedef struct film_bands {
+  const pc_film *f;
+  int n;
+  int from[PC_FILM_MAX_LAYERS + 2]; /* a film layer, or FROM_* */
+} film_bands;
+
+static int fill_bands(void *user, int y0, int ny, float *const *rows, pc_err *e) {
+  (void)e;
+  const film_bands *b = user;
+  for (int k = 0; k < b->n; k++) {
+    if (b->from[k] == FROM_BEAUTY) pc_film_beauty_rows(b->f, y0, ny, rows[k]);
+    else if (b->from[k] == FROM_VARIANCE) pc_film_variance_rows(b->f, y0, ny, rows[k]);
+    else pc_film_layer_rows(b->f, b->from[k], y0, ny, rows[k]);
+  }
+  return PC_OK;
+}
+
 int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *extra, int nextra, pc_err *e) {
-  size_t n = (size_t)f->w * f->h * 3;
-  int nl = f->nlayers + 1; /* the beauty, every layer but beauty_sq, and the variance */
-  float *pix = pc_big_alloc(sizeof(float) * n * (size_t)nl); /* a 512x512 film's layers: 14k faults in 4 KiB pages */
-  pc_exr_layer *layers = calloc((size_t)nl, sizeof *layers);
   enum { ITER_ATTRS = 9 };
   pc_exr_attr *attrs = calloc((size_t)(f->nlayers + 2 + ITER_ATTRS + nextra), sizeof *attrs);
   char(*names)[40] = calloc((size_t)f->nlayers, sizeof *names);
+  const char *layer_names[PC_FILM_MAX_LAYERS + 2];
+  film_bands b = {.f = f};
   int rc;
-  if (!pix || !layers || !attrs || !names) {
+  if (!attrs || !names) {
     rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for the image", path);
     goto done;
   }
-  pc_film_beauty(f, pix);
-  layers[0].name = "";
-  layers[0].rgb = pix;
-  int na = 0, k = 1;
+  layer_names[b.n] = "";
+  b.from[b.n++] = FROM_BEAUTY;
+  int na = 0;
   for (int i = 0; i < f->nlayers; i++) {
     snprintf(names[i], sizeof names[i], "pcbpt.count.%s", f->layers[i].name);
     attrs[na++] = (pc_exr_attr){.name = names[i], .type = PC_ATTR_DOUBLE, .d = (double)f->layers[i].count};
     if (f->layers[i].norm == PC_NORM_SQUARE) continue; /* a means to the variance, not an image */
     if (f->layers[i].norm == PC_NORM_MAX && !pc_film_max_complete(f)) continue; /* cannot tell */
-    float *dst = pix + n * (size_t)k;
-    pc_film_layer_image(f, i, dst);
-    layers[k].name = f->layers[i].name;
-    layers[k++].rgb = dst;
+    layer_names[b.n] = f->layers[i].name;
+    b.from[b.n++] = i;
   }
   double relmse;
-  if (pc_film_variance(f, pix + n * (size_t)k)) {
-    layers[k].name = "variance";
-    layers[k].rgb = pix + n * (size_t)k;
-    k++;
-    pc_film_relmse_estimate(f, &relmse);
+  if (pc_film_relmse_estimate(f, &relmse)) { /* known exactly when the variance is */
+    layer_names[b.n] = "variance";
+    b.from[b.n++] = FROM_VARIANCE;
     attrs[na++] = (pc_exr_attr){.name = "pcbpt.relmse_estimate", .type = PC_ATTR_DOUBLE, .d = relmse};
   }
   attrs[na++] = (pc_exr_attr){.name = "pcbpt.dropped_nonfinite", .type = PC_ATTR_DOUBLE, .d = (double)f->dropped_nonfinite};
@@ -59,10 +72,8 @@ int pc_film_write_exr(const pc_film *f, const char *path, const pc_exr_attr *ext
     attrs[na++] = (pc_exr_attr){.name = "pcbpt.iteration_error.tail", .type = PC_ATTR_STRING, .s = tail};
   }
   for (int i = 0; i < nextra; i++) attrs[na++] = extra[i];
-  rc = pc_exr_write(path, f->w, f->h, layers, k, attrs, na, e);
+  rc = pc_exr_write_rows(path, f->w, f->h, layer_names, b.n, fill_bands, &b, attrs, na, e);
 done:
-  free(pix);
-  free(layers);
   free(attrs);
   free(names);
   return rc;

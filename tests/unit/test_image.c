@@ -211,6 +211,45 @@ static void test_exr_write_errors(void **state) {
   free(a);
 }
 
+/* pc_exr_write_rows asks for every row once, in order, and writes what it is given; a fill
+ * that fails ends the write with its error and leaves no file. */
+typedef struct band_log {
+  int w, next_row, calls, fail_at;
+} band_log;
+
+static int fill_pattern(void *user, int y0, int ny, float *const *rows, pc_err *e) {
+  band_log *b = user;
+  if (y0 != b->next_row || ny < 1) return pc_errf(e, PC_EINVAL, "band at row %d (%d rows), expected row %d", y0, ny, b->next_row);
+  if (b->calls++ == b->fail_at) return pc_errf(e, PC_EIO, "fill failed on purpose");
+  b->next_row = y0 + ny;
+  for (int l = 0; l < 2; l++)
+    for (int i = 0; i < ny * b->w * 3; i++) rows[l][i] = (float)(l * 1000 + y0 * b->w * 3 + i);
+  return PC_OK;
+}
+
+static void test_exr_write_rows(void **state) {
+  enum { W = 7, H = 300 }; /* more rows than any compression's chunk */
+  const char *names[] = {"", "other"};
+  const char *path = path_in(state, "rows.exr");
+  band_log b = {W, 0, 0, -1};
+  pc_err e = {0};
+  assert_int_equal(pc_exr_write_rows(path, W, H, names, 2, fill_pattern, &b, NULL, 0, &e), PC_OK);
+  assert_int_equal(b.next_row, H);
+  pc_exr_file f;
+  assert_int_equal(pc_exr_read_layers(path, &f, &e), PC_OK);
+  assert_int_equal(f.nlayers, 2);
+  for (int l = 0; l < 2; l++) {
+    int k = strcmp(f.names[l], "other") == 0 ? 1 : 0;
+    for (int i = 0; i < W * H * 3; i++) assert_true(f.layers[l].rgb[i] == (float)(k * 1000 + i));
+  }
+  pc_exr_file_free(&f);
+  band_log bad = {W, 0, 0, 3};
+  assert_int_equal(pc_exr_write_rows(path_in(state, "fail.exr"), W, H, names, 2, fill_pattern, &bad, NULL, 0, &e), PC_EIO);
+  assert_non_null(strstr(e.msg, "on purpose"));
+  assert_int_equal(access(path_in(state, "fail.exr"), F_OK), -1);
+  assert_true(no_temp_files(state));
+}
+
 /* Writes channels of one pixel type with the Core API, as other software would. data[c] is a
  * planar w*h array of that type for channel c. */
 static void write_raw_exr_at(const char *path, int ox, int oy, int w, int h,
@@ -778,6 +817,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_exr_roundtrip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_no_beauty_gives_first_triplet, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_errors, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_exr_write_rows, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_half_uint_tiled, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_data_window, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_preview_roundtrip, setup, teardown),
