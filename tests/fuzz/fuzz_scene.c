@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fuzz_dir.h"
 #include "scene.h"
 
 static void ignore(void *ud, const char *line) { (void)ud, (void)line; }
@@ -46,17 +47,7 @@ static int put(const char *name, const void *data, size_t size) {
 
 int LLVMFuzzerInitialize(int *argc, char ***argv) {
   (void)argc, (void)argv;
-  const char *tmp = getenv("TMPDIR");
-  int n = snprintf(dir, sizeof dir, "%s/pcbpt-fuzz-scene-XXXXXX", tmp && *tmp ? tmp : "/tmp");
-  if (n < 0 || (size_t)n >= sizeof dir || !mkdtemp(dir)) {
-    fprintf(stderr, "fuzz_scene: cannot make a folder for the inputs under %s\n", tmp && *tmp ? tmp : "/tmp");
-    abort();
-  }
-  if (atexit(remove_dir) != 0) {
-    remove_dir();
-    fprintf(stderr, "fuzz_scene: cannot register the folder's removal\n");
-    abort();
-  }
+  fuzz_make_dir("fuzz-scene", dir, sizeof dir, remove_dir);
   return 0;
 }
 

@@ -1,0 +1,75 @@
+/* fuzz_files.c: libFuzzer target for the binary files a scene names besides its XML and OBJ
+ * (which fuzz_scene covers): textures and environment maps (PNG, JPEG, EXR, Radiance RGBE, told
+ * apart by content), the EXR reader of `compare` and references, and the PLY and Mitsuba
+ * `serialized` meshes. Whatever the bytes: a clean return, no crash, no leak. The first byte
+ * picks the reader, the second its option; the rest is the file:
+ *   0  pc_image_read, sRGB decoding when the option is odd;
+ *   1  pc_exr_read_layers (every RGB triplet and the header's attributes);
+ *   2  pc_mesh_load_ply;
+ *   3  pc_mesh_load_serialized, shape index = option % 4.
+ * Seeds: tests/fuzz/seeds_files, small valid files of each kind with their two bytes. */
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "fuzz_dir.h"
+#include "image.h"
+#include "mesh.h"
+
+enum { IMAGE, EXR_LAYERS, PLY, SERIALIZED, NMODES };
+
+/* The input's file, in a folder of its own (fuzz_dir.h). */
+static char dir[4096], file[4200];
+
+static void remove_dir(void) {
+  unlink(file);
+  rmdir(dir);
+}
+
+int LLVMFuzzerInitialize(int *argc, char ***argv) {
+  (void)argc, (void)argv;
+  fuzz_make_dir("fuzz-files", dir, sizeof dir, remove_dir);
+  snprintf(file, sizeof file, "%s/input", dir);
+  return 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  if (size < 2) return 0;
+  FILE *f = fopen(file, "wb");
+  if (!f) return 0;
+  size_t w = fwrite(data + 2, 1, size - 2, f);
+  if (fclose(f) != 0 || w != size - 2) return 0;
+  pc_err e;
+  int option = data[1];
+  switch (data[0] % NMODES) { /* the results are irrelevant; only crashes and leaks matter */
+  case IMAGE: {
+    pc_image img = {0};
+    (void)pc_image_read(file, option & 1, &img, &e);
+    pc_image_free(&img);
+    break;
+  }
+  case EXR_LAYERS: {
+    pc_exr_file x = {0};
+    (void)pc_exr_read_layers(file, &x, &e);
+    pc_exr_file_free(&x);
+    break;
+  }
+  case PLY: {
+    pc_mesh m;
+    (void)pc_mesh_load_ply(file, &m, &e);
+    pc_mesh_free(&m);
+    break;
+  }
+  case SERIALIZED: {
+    pc_mesh m;
+    bool face_normals;
+    (void)pc_mesh_load_serialized(file, option % 4, &m, &face_normals, &e);
+    pc_mesh_free(&m);
+    break;
+  }
+  }
+  return 0;
+}
