@@ -6,25 +6,42 @@
  *   0  pc_image_read, sRGB decoding when the option is odd;
  *   1  pc_exr_read_layers (every RGB triplet and the header's attributes);
  *   2  pc_mesh_load_ply;
- *   3  pc_mesh_load_serialized, shape index = option % 4.
+ *   3  pc_mesh_load_serialized, shape index = option % 4;
+ *   4  pc_bundle_unpack of a scene bundle (as a worker unpacks what the coordinator took from a
+ *      client), given its own hash so that the fuzzer gets past the check to the archive's
+ *      parsing and the paths it writes; what it unpacks is removed after each input.
  * Seeds: tests/fuzz/seeds_files, small valid files of each kind with their two bytes. */
+#include <ftw.h>
+#include <sodium.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include "bundle.h"
 #include "fuzz_dir.h"
 #include "image.h"
 #include "mesh.h"
 
-enum { IMAGE, EXR_LAYERS, PLY, SERIALIZED, NMODES };
+enum { IMAGE, EXR_LAYERS, PLY, SERIALIZED, BUNDLE, NMODES };
 
 /* The input's file, in a folder of its own (fuzz_dir.h). */
-static char dir[4096], file[4200];
+static char dir[4096], file[4200], cache[4200];
+
+static int rm_entry(const char *path, const struct stat *st, int flag, struct FTW *ftw) {
+  (void)st, (void)flag;
+  return ftw->level > 0 ? remove(path) : 0;
+}
+
+/* Empties the bundle cache (keeps the folder itself). */
+static void empty_cache(void) { (void)nftw(cache, rm_entry, 16, FTW_DEPTH | FTW_PHYS); }
 
 static void remove_dir(void) {
+  empty_cache();
+  rmdir(cache);
   unlink(file);
   rmdir(dir);
 }
@@ -33,6 +50,11 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
   (void)argc, (void)argv;
   fuzz_make_dir("fuzz-files", dir, sizeof dir, remove_dir);
   snprintf(file, sizeof file, "%s/input", dir);
+  snprintf(cache, sizeof cache, "%s/cache", dir);
+  if (mkdir(cache, 0700) != 0 || sodium_init() < 0) {
+    fprintf(stderr, "fuzz_files: cannot set up the bundle cache %s\n", cache);
+    abort();
+  }
   return 0;
 }
 
@@ -68,6 +90,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     bool face_normals;
     (void)pc_mesh_load_serialized(file, option % 4, &m, &face_normals, &e);
     pc_mesh_free(&m);
+    break;
+  }
+  case BUNDLE: {
+    uint8_t hash[PC_BUNDLE_HASH];
+    char scene[4400];
+    if (pc_bundle_hash(data + 2, size - 2, hash, &e) == 0)
+      (void)pc_bundle_unpack(data + 2, size - 2, hash, cache, scene, sizeof scene, &e);
+    empty_cache();
     break;
   }
   }
