@@ -656,6 +656,29 @@ static void test_rgbe_read(void **state) {
     assert_true(img.w == 3 && img.h == 2 && img.rgb[0] == 1.f);
     pc_image_free(&img);
   }
+  /* stb_image would decode a header alone as zeros for every pixel it claims: one of 30000x30000
+   * pixels in 53 bytes took minutes (found by fuzz_files). Refused at once for its size. */
+  const char huge[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 30000 +X 30000\n";
+  spit(p, huge, sizeof huge - 1);
+  assert_int_equal(pc_image_read(p, 1, &img, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "cannot fit"));
+  /* The densest file stb decodes still reads: every scanline of 1016 pixels in 68 bytes, each
+   * component 8 runs of 127 (4 rows: 4064 pixels in 272 bytes and the header). */
+  enum { RW = 1016, RH = 4 };
+  const char rhead[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 1016\n";
+  unsigned char dense[sizeof rhead - 1 + RH * 68], *q = dense + sizeof rhead - 1;
+  memcpy(dense, rhead, sizeof rhead - 1);
+  for (int y = 0; y < RH; y++) {
+    *q++ = 2, *q++ = 2, *q++ = RW >> 8, *q++ = RW & 0xff;
+    for (int c = 0; c < 4; c++)
+      for (int k = 0; k < 8; k++) *q++ = 128 + 127, *q++ = c == 3 ? 129 : 128; /* 0.5 * 2^(129-136) * 256 */
+  }
+  assert_int_equal((int)(q - dense), (int)sizeof dense);
+  spit(p, dense, sizeof dense);
+  assert_int_equal(pc_image_read(p, 1, &img, &e), PC_OK);
+  assert_true(img.w == RW && img.h == RH);
+  for (int i = 0; i < RW * RH * 3; i++) assert_float_equal(img.rgb[i], 1.f, 1e-6f);
+  pc_image_free(&img);
 }
 
 /* ---------------------------------------------------------------------------------------- */
