@@ -112,10 +112,8 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
 
   int32_t lines = 1;
   rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
-  if (rv || lines < 1 || lines > h) {
-    if (!rv) lines = h; /* (a chunk is at most 256 lines in every compression) */
-    else return exr_fail(e, path, "cannot query the chunk size", rv, m);
-  }
+  if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
+  if (lines > h) lines = h; /* a short image's one chunk */
   size_t band = (size_t)lines * (size_t)w * 3;
   float *rows = malloc(band * (size_t)nlayers * sizeof *rows);
   float **bands = malloc((size_t)nlayers * sizeof *bands);

@@ -16,8 +16,8 @@ int pc_rgbe_read(const char *path, pc_image *out, pc_err *e) {
     return pc_errf(e, PC_EPARSE, "%s: not a readable Radiance RGBE file: %s", path, stbi_failure_reason());
   if (w < 1 || h < 1 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
     return pc_errf(e, PC_ELIMIT, "%s: %dx%d pixels (at most %d on a side)", path, w, h, PC_IMAGE_MAX_DIM);
-  /* stb_image decodes a file that ends early as if zeros followed, so a 70-byte header that
-   * claims 32768x32768 pixels took minutes and 12 GB. What stb decodes packs at most 127 pixels'
+  /* stb_image decodes a file that ends early as if zeros followed, so a 53-byte header that
+   * claims 30000x30000 pixels took minutes and 12 GB. What stb decodes packs at most 127 pixels'
    * component in 2 bytes (a run of its scanline encoding): under 16 pixels a byte. */
   struct stat st;
   if (stat(path, &st) != 0) return pc_errf(e, PC_EIO, "%s: %s", path, strerror(errno));
