@@ -285,16 +285,55 @@ static int group_layers(const exr_attr_chlist_t *chl, in_layer *lay) {
   return kept;
 }
 
-/* Decodes every chunk of part 0, channel i into dst[i] (interleaved RGB, NULL = skip). */
-static int exr_decode(exr_context_t ctx, const char *path, exr_storage_t storage,
-                      exr_attr_box2i_t dw, float **dst, int nchan, exr_msg *m, pc_err *e) {
-  int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
-  int32_t step_x = w, step_y = 1;
-  exr_result_t rv;
-  if (storage == EXR_STORAGE_TILED) rv = exr_get_tile_sizes(ctx, 0, 0, 0, &step_x, &step_y);
-  else rv = exr_get_scanlines_per_chunk(ctx, 0, &step_y);
-  if (rv || step_x < 1 || step_y < 1) return exr_fail(e, path, "bad chunk layout", rv, m);
+/* Part 0's chunks: its storage, data window and chunk size in pixels. */
+typedef struct chunk_grid {
+  exr_storage_t storage;
+  exr_attr_box2i_t dw;
+  int w, h;
+  int32_t step_x, step_y;
+} chunk_grid;
 
+static int chunk_grid_of(exr_context_t ctx, const char *path, exr_storage_t storage, exr_attr_box2i_t dw,
+                         chunk_grid *g, exr_msg *m, pc_err *e) {
+  g->storage = storage;
+  g->dw = dw;
+  g->w = dw.max.x - dw.min.x + 1;
+  g->h = dw.max.y - dw.min.y + 1;
+  g->step_x = g->w;
+  g->step_y = 1;
+  exr_result_t rv;
+  if (storage == EXR_STORAGE_TILED) rv = exr_get_tile_sizes(ctx, 0, 0, 0, &g->step_x, &g->step_y);
+  else rv = exr_get_scanlines_per_chunk(ctx, 0, &g->step_y);
+  if (rv || g->step_x < 1 || g->step_y < 1) return exr_fail(e, path, "bad chunk layout", rv, m);
+  return PC_OK;
+}
+
+static exr_result_t chunk_info_at(exr_context_t ctx, const chunk_grid *g, int tx, int ty, exr_chunk_info_t *ci) {
+  if (g->storage == EXR_STORAGE_TILED) return exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0, ci);
+  return exr_read_scanline_chunk_info(ctx, 0, g->dw.min.y + ty * g->step_y, ci);
+}
+
+/* Reads every chunk's offset and header before the layers are allocated: a header may claim
+ * any data window up to PC_IMAGE_MAX_DIM squared, and a file that holds no chunks for it must
+ * fail without an allocation of that size (fuzz_files met a 292-byte file claiming 3 GB). */
+static int check_chunks(exr_context_t ctx, const char *path, const chunk_grid *g, exr_msg *m, pc_err *e) {
+  exr_result_t rv = EXR_ERR_SUCCESS;
+  for (int ty = 0; ty * (int64_t)g->step_y < g->h && !rv; ty++)
+    for (int tx = 0; tx * (int64_t)g->step_x < g->w && !rv; tx++) {
+      exr_chunk_info_t ci;
+      rv = chunk_info_at(ctx, g, tx, ty, &ci);
+    }
+  if (rv) return exr_fail(e, path, "missing or bad pixel chunks", rv, m);
+  return PC_OK;
+}
+
+/* Decodes every chunk of part 0, channel i into dst[i] (interleaved RGB, NULL = skip). */
+static int exr_decode(exr_context_t ctx, const char *path, const chunk_grid *g, float **dst, int nchan,
+                      exr_msg *m, pc_err *e) {
+  int w = g->w, h = g->h;
+  int32_t step_x = g->step_x, step_y = g->step_y;
+  exr_attr_box2i_t dw = g->dw;
+  exr_result_t rv = EXR_ERR_SUCCESS;
   const exr_attr_chlist_t *chl = NULL;
   if ((rv = exr_get_channels(ctx, 0, &chl))) return exr_fail(e, path, "no channel list", rv, m);
   exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
@@ -302,16 +341,14 @@ static int exr_decode(exr_context_t ctx, const char *path, exr_storage_t storage
   for (int ty = 0; ty * (int64_t)step_y < h && !rv && !rc; ty++) {
     for (int tx = 0; tx * (int64_t)step_x < w && !rv && !rc; tx++) {
       exr_chunk_info_t ci;
-      if (storage == EXR_STORAGE_TILED) rv = exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0, &ci);
-      else rv = exr_read_scanline_chunk_info(ctx, 0, dw.min.y + ty * step_y, &ci);
-      if (rv) break;
+      if ((rv = chunk_info_at(ctx, g, tx, ty, &ci))) break;
       rv = inited ? exr_decoding_update(ctx, 0, &ci, &dec)
                   : exr_decoding_initialize(ctx, 0, &ci, &dec);
       if (rv) break;
       inited = 1;
       /* For tiles the library reports tile indices in start_x/start_y, not pixels. */
       int64_t x0 = (int64_t)tx * step_x, y0 = (int64_t)ty * step_y;
-      if (storage != EXR_STORAGE_TILED) {
+      if (g->storage != EXR_STORAGE_TILED) {
         x0 = (int64_t)ci.start_x - dw.min.x;
         y0 = (int64_t)ci.start_y - dw.min.y;
       }
@@ -417,11 +454,14 @@ static int exr_read_part(exr_context_t ctx, const char *path, int what, pc_exr_f
                    (long long)w, (long long)h, PC_IMAGE_MAX_DIM);
   out->w = (int)w;
   out->h = (int)h;
+  chunk_grid grid;
+  int rc = chunk_grid_of(ctx, path, storage, dw, &grid, m, e);
+  if (!rc) rc = check_chunks(ctx, path, &grid, m, e);
+  if (rc) return rc;
 
   int nchan = chl->num_channels;
   in_layer *lay = calloc((size_t)nchan + 1, sizeof *lay);
   float **dst = calloc((size_t)nchan + 1, sizeof *dst);
-  int rc = PC_OK;
   if (!lay || !dst) {
     rc = pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
     goto done;
@@ -451,7 +491,7 @@ static int exr_read_part(exr_context_t ctx, const char *path, int what, pc_exr_f
     out->layers[k].h = (int)h;
     for (int c = 0; c < 3; c++) dst[lay[k].chan[c]] = out->layers[k].rgb + c;
   }
-  rc = exr_decode(ctx, path, storage, dw, dst, nchan, m, e);
+  rc = exr_decode(ctx, path, &grid, dst, nchan, m, e);
   if (!rc && (what & READ_ATTRS)) rc = collect_attrs(ctx, path, out, m, e);
 done:
   free(lay);

@@ -765,6 +765,30 @@ static void test_truncated_and_corrupt_files(void **state) {
   free(rgb);
 }
 
+/* A header that claims a large data window over a file with no chunks for it fails when its
+ * chunks are looked up, before the layers (here 30000x30000, 10.8 GB) are allocated. */
+static void test_exr_huge_window_without_chunks(void **state) {
+  float rgb[4 * 3 * 3] = {0};
+  pc_exr_layer layer = {"", rgb};
+  pc_err e;
+  const char *p = path_in(state, "claims.exr");
+  assert_int_equal(pc_exr_write(p, 4, 3, &layer, 1, NULL, 0, &e), PC_OK);
+  size_t n;
+  unsigned char *b = slurp(p, &n);
+  static const char key[] = "dataWindow\0box2i\0";
+  unsigned char *at = memmem(b, n, key, sizeof key - 1);
+  assert_non_null(at);
+  at += sizeof key - 1 + 4; /* the attribute's size, then xmin, ymin, xmax, ymax */
+  const int32_t box[4] = {0, 0, 29999, 29999};
+  memcpy(at, box, sizeof box); /* EXR is little-endian, as every machine we build on */
+  spit(p, b, n);
+  free(b);
+  pc_exr_file f;
+  assert_int_equal(pc_exr_read_layers(p, &f, &e), PC_EEXR);
+  assert_non_null(strstr(e.msg, "claims.exr"));
+  assert_non_null(strstr(e.msg, "chunks"));
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* Metrics */
 
@@ -850,6 +874,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_rgbe_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_missing_and_garbage, setup, teardown),
       cmocka_unit_test_setup_teardown(test_truncated_and_corrupt_files, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_exr_huge_window_without_chunks, setup, teardown),
       cmocka_unit_test(test_metrics_known_values),
       cmocka_unit_test(test_metrics_layers),
   };
