@@ -41,7 +41,7 @@ struct pc_op {
   uint64_t range_id, first, count, raw;
   bool final;
   uint8_t *buf;
-  size_t len;
+  size_t len, cap;
   int64_t light_per_iter;
   double relmse_est;         /* merge: the film's estimated relMSE after it (< 0: cannot tell) */
   uint64_t est_iterations;   /* ... over this many iterations */
@@ -517,7 +517,7 @@ static void op_after(uv_work_t *w, int status) {
       }
     }
     pc_peer_unref(op->peer);
-    free(op->buf);
+    pc_big_spare_keep(&c->spare_up, op->buf, op->cap);
     pc_coord_buffered(c, -(long long)op->len, true);
   } else {
     pc_err e = {0};
@@ -577,7 +577,7 @@ static void op_start(pc_job *j) {
   }
 }
 
-void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, uint64_t raw,
+void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf, size_t len, size_t cap, uint64_t raw,
                   uint64_t first, uint64_t count, bool final, const pc_render_stats *stats) {
   pc_op *op = calloc(1, sizeof *op);
   if (!op) {
@@ -598,6 +598,7 @@ void pc_job_merge(pc_coord *c, pc_job *j, pc_peer *p, pc_range *r, uint8_t *buf,
   op->final = final;
   op->buf = buf;
   op->len = len;
+  op->cap = cap;
   op->raw = raw;
   op->wall = j->elapsed;
   r->merging = true;

@@ -353,7 +353,9 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     size_t whole = (size_t)u->nchunks * PC_WIRE_CHUNK;
     size_t cap = p->up_cap ? p->up_cap : (whole < limit ? whole : limit);
     while (cap < p->up_len + u->data.len) cap *= 2;
-    uint8_t *nb = p->up_buf ? realloc(p->up_buf, cap) : pc_big_alloc(cap);
+    if (!p->up_buf && (p->up_buf = pc_big_spare_take(&c->spare_up, &p->up_cap)) != NULL && cap < p->up_cap)
+      cap = p->up_cap; /* the spare's written pages are kept, also where it has to grow (realloc) */
+    uint8_t *nb = cap == p->up_cap ? p->up_buf : p->up_buf ? realloc(p->up_buf, cap) : pc_big_alloc(cap);
     if (!nb) { drop(p, "out of memory for an upload"); return; }
     p->up_buf = nb;
     p->up_cap = cap;
@@ -436,11 +438,11 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
   pc_sched_progress(j, r, p, p->up_count);
   /* the bytes stay accounted in c->buffered, and now in c->merging, until the merge frees them */
   uint8_t *buf = p->up_buf;
-  size_t len = p->up_len;
+  size_t len = p->up_len, cap = p->up_cap;
   c->merging += len;
   p->up_buf = NULL;
   p->up_len = p->up_cap = 0;
-  pc_job_merge(c, j, p, r, buf, len, p->up_raw, p->up_first, p->up_count, p->up_final, &p->up_stats);
+  pc_job_merge(c, j, p, r, buf, len, cap, p->up_raw, p->up_first, p->up_count, p->up_final, &p->up_stats);
 }
 
 /* ---- client messages ---- */
@@ -808,9 +810,15 @@ static void on_tick(uv_timer_t *t) {
       pc_conn_close(&p->conn, why);
     }
   }
+  bool running = false;
   for (pc_job *j = c->jobs; j; j = j->next) {
     pc_sched_check_progress(c, j);
     pc_job_tick(c, j, dt);
+    running = running || j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING;
+  }
+  if (!running) {
+    size_t cap;
+    free(pc_big_spare_take(&c->spare_up, &cap));
   }
   if (c->trim_due) {
     c->trim_due = false;
@@ -911,6 +919,8 @@ void pc_coord_free(pc_coord *c) {
     pc_job_free(j);
   }
   pc_prior_free_all(c);
+  size_t cap;
+  free(pc_big_spare_take(&c->spare_up, &cap));
   pc_store_close(c);
   sodium_memzero(c->key, sizeof c->key);
 }

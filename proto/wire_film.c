@@ -492,20 +492,36 @@ static int grow_sink(void *user, const uint8_t *p, size_t n, pc_err *e) {
   return 0;
 }
 
-int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn, pc_err *e) {
+int pc_wire_film_zip_reuse(const pc_film *f, int threads, uint8_t **buf, size_t *cap, size_t *outn, pc_err *e) {
   /* Room for the worst case at once: grown by doubling, the buffer was copied at every step
    * and each new one faulted in page by page (a tenth of a 16-spp render's page faults).
    * Pages the output does not reach are never touched. */
-  grow_buf b = {0};
   size_t bound = ZSTD_compressBound(pc_wire_film_size(f));
-  if (!ZSTD_isError(bound) && (b.p = pc_big_alloc(bound)) != NULL) b.cap = bound;
+  if (!ZSTD_isError(bound) && *cap < bound) {
+    uint8_t *p = pc_big_alloc(bound);
+    if (p) {
+      free(*buf);
+      *buf = p;
+      *cap = bound;
+    }
+  }
+  grow_buf b = {*buf, 0, *cap};
   int rc = pc_wire_film_compress(f, threads, grow_sink, &b, NULL, e);
+  *buf = b.p; /* grow_sink may have moved it */
+  *cap = b.cap;
+  *outn = rc ? 0 : b.n;
+  return rc;
+}
+
+int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn, pc_err *e) {
+  uint8_t *buf = NULL;
+  size_t cap = 0;
+  int rc = pc_wire_film_zip_reuse(f, threads, &buf, &cap, outn, e);
   if (rc) {
-    free(b.p);
+    free(buf);
     return rc;
   }
-  *out = b.p;
-  *outn = b.n;
+  *out = buf;
   return 0;
 }
 

@@ -63,6 +63,10 @@ typedef int (*pc_wire_sink)(void *user, const uint8_t *p, size_t n, pc_err *e);
 int pc_wire_film_compress(const pc_film *f, int threads, pc_wire_sink sink, void *user, size_t *zn, pc_err *e);
 /* The same into a malloc'd buffer (an upload). */
 int pc_wire_film_zip(const pc_film *f, int threads, uint8_t **out, size_t *outn, pc_err *e);
+/* The same into *buf, a buffer of *cap bytes the caller keeps from one upload to the next
+ * (NULL, 0 at first), replaced by a new one when it cannot hold the worst case: a fresh
+ * buffer's pages are each cleared by the kernel at their first write. *outn: bytes written. */
+int pc_wire_film_zip_reuse(const pc_film *f, int threads, uint8_t **buf, size_t *cap, size_t *outn, pc_err *e);
 
 /* zstd one-shot compression (a fast level) into a malloc'd buffer. */
 int pc_wire_compress(const uint8_t *in, size_t n, uint8_t **out, size_t *outn, pc_err *e);

@@ -169,9 +169,9 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   uv_mutex_lock(&w->mu);
   uint64_t range = w->range_id, first = w->pend_first, count = w->pend_count;
   pc_render_stats st = w->pend_stats;
+  size_t zcap, zn = 0;
+  uint8_t *z = pc_big_spare_take(&w->spare, &zcap);
   uv_mutex_unlock(&w->mu);
-  uint8_t *z = NULL;
-  size_t zn = 0;
   pc_err e = {0};
   double t0 = now_s();
   job_rend *r = c->loaded ? c->cur : NULL;
@@ -180,17 +180,19 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
     /* zstd's threads start inside the call and inherit the name: the upload's CPU time is
      * told apart from the render's */
     pc_thread_set_name("pc-upload");
-    rc = pc_wire_film_zip(&r->pending, pool_threads(w), &z, &zn, &e);
+    rc = pc_wire_film_zip_reuse(&r->pending, pool_threads(w), &z, &zcap, &zn, &e);
     pc_thread_set_name("pc-render");
   }
   double dt = now_s() - t0;
   if (rc) pc_wire_log("upload: %s", e.msg);
+  bool zipped = count && r && !rc;
   uv_mutex_lock(&w->mu);
   w->take = false;
-  if (z) w->zip_seconds = dt;
-  if (z && w->range_id == range && w->pend_count == count) {
+  if (zipped) w->zip_seconds = dt;
+  if (zipped && w->range_id == range && w->pend_count == count) {
     w->zip = z;
     w->zip_len = zn;
+    w->zip_cap = zcap;
     w->zip_raw = pc_wire_film_size(&r->pending);
     w->zip_range = range;
     w->zip_first = first;
@@ -202,8 +204,8 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
     memset(&w->pend_stats, 0, sizeof w->pend_stats);
     z = NULL;
   }
+  pc_big_spare_keep(&w->spare, z, zcap);
   uv_mutex_unlock(&w->mu);
-  free(z);
   if (!rc && count && r) {
     pc_film_clear(&r->pending);
     r->pending_dirty = false;
@@ -307,6 +309,8 @@ void pc_wrender_stop(pc_wrender *w) {
   uv_mutex_unlock(&w->mu);
   uv_thread_join(&w->thread);
   free(w->zip);
+  size_t cap;
+  free(pc_big_spare_take(&w->spare, &cap));
   uv_cond_destroy(&w->cv);
   uv_mutex_destroy(&w->mu);
 }

@@ -51,7 +51,7 @@ struct pc_worker {
    * not yet acknowledged (re-sent whole after a reconnect). in_unwanted: a dropped range's, sent
    * to its end only because the coordinator takes an upload's chunks in order on a connection,
    * then freed (or freed with the connection). */
-  uint8_t *inflight; size_t inflight_len;
+  uint8_t *inflight; size_t inflight_len, inflight_cap;
   uint32_t in_next; bool in_unwanted;
   uint64_t in_job, in_range, in_first, in_count, in_raw; bool in_final;
   pc_render_stats in_stats;
@@ -110,7 +110,9 @@ static uint32_t upload_chunks(const worker *w) {
 }
 
 static void free_inflight(worker *w) {
-  free(w->inflight);
+  uv_mutex_lock(&w->r.mu);
+  pc_big_spare_keep(&w->r.spare, w->inflight, w->inflight_cap);
+  uv_mutex_unlock(&w->r.mu);
   w->inflight = NULL;
   w->in_unwanted = false;
 }
@@ -236,7 +238,7 @@ static void pump(worker *w) {
   uv_mutex_lock(&w->r.mu);
   /* an upload compressed for a range that ended without it (dropped) goes */
   if (w->r.zip_ready && (!w->busy || w->drop || w->r.zip_range != w->range)) {
-    free(w->r.zip);
+    pc_big_spare_keep(&w->r.spare, w->r.zip, w->r.zip_cap);
     w->r.zip = NULL;
     w->r.zip_ready = false;
   }
@@ -264,6 +266,7 @@ static void pump(worker *w) {
     bool all = done && w->r.pend_count == 0 && (rendered == w->count || w->stopping || atomic_load(&w->r.cancel));
     w->inflight = w->r.zip;
     w->inflight_len = w->r.zip_len;
+    w->inflight_cap = w->r.zip_cap;
     w->in_first = w->r.zip_first;
     w->in_count = w->r.zip_count;
     w->in_stats = w->r.zip_stats;

@@ -12,6 +12,7 @@
 #include <stdint.h>
 #include <uv.h>
 
+#include "big_alloc.h"
 #include "film.h"
 #include "render.h"
 
@@ -39,10 +40,11 @@ typedef struct pc_wrender {
   bool take;
   bool zip_ready;
   uint8_t *zip;
-  size_t zip_len, zip_raw;
+  size_t zip_len, zip_cap, zip_raw;
   double zip_seconds;      /* the last compression's wall time */
   uint64_t zip_range, zip_first, zip_count;
   pc_render_stats zip_stats;
+  pc_big_spare spare; /* an upload's buffer the loop is done with, for the next */
 } pc_wrender;
 
 int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
@@ -54,6 +56,7 @@ void pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t fir
 /* Asks the thread to compress what is pending into zip (zip_ready under mu, then notify),
  * between batches or at once when idle; nothing if an upload is already asked or waiting. */
 void pc_wrender_take(pc_wrender *w);
+
 
 /* A worker connected to one coordinator (reconnecting with backoff while it is away). */
 typedef struct pc_worker pc_worker;

@@ -30,3 +30,22 @@ void *pc_big_zalloc(size_t n) {
   if (p) memset(p, 0, n);
   return p;
 }
+
+void pc_big_spare_keep(pc_big_spare *s, void *buf, size_t cap) {
+  if (!buf) return;
+  if (cap > s->cap) {
+    free(s->p);
+    s->p = buf;
+    s->cap = cap;
+  } else {
+    free(buf);
+  }
+}
+
+void *pc_big_spare_take(pc_big_spare *s, size_t *cap) {
+  void *p = s->p;
+  *cap = p ? s->cap : 0;
+  s->p = NULL;
+  s->cap = 0;
+  return p;
+}

@@ -22,4 +22,15 @@ void *pc_big_alloc(size_t n);
  * page by page). */
 void *pc_big_zalloc(size_t n);
 
+/* A buffer kept from one use to the next (an upload's: a fresh one's pages are each cleared by
+ * the kernel at their first write). */
+typedef struct pc_big_spare {
+  void *p;
+  size_t cap;
+} pc_big_spare;
+/* Keeps buf (cap bytes; NULL: nothing) as the spare when it is the larger, freeing the other. */
+void pc_big_spare_keep(pc_big_spare *s, void *buf, size_t cap);
+/* The spare, which the caller now owns (NULL when there is none), and its size in *cap. */
+void *pc_big_spare_take(pc_big_spare *s, size_t *cap);
+
 #endif

@@ -216,6 +216,26 @@ static void film_streamed(void **st) {
   assert_true(films_equal(&a, &t));
   free(zt);
   free_film(&t);
+  /* into a kept buffer: the same bytes; the buffer is kept while it holds the worst case,
+   * and one too small is replaced */
+  uint8_t *kept = NULL;
+  size_t cap = 0, kn;
+  assert_int_equal(pc_wire_film_zip_reuse(&a, 1, &kept, &cap, &kn, &e), 0);
+  assert_true(kn == zn && cap >= kn);
+  assert_memory_equal(kept, z, zn);
+  uint8_t *first = kept;
+  memset(kept, 0xa5, kn);
+  assert_int_equal(pc_wire_film_zip_reuse(&a, 1, &kept, &cap, &kn, &e), 0);
+  assert_ptr_equal(kept, first);
+  assert_true(kn == zn);
+  assert_memory_equal(kept, z, zn);
+  free(kept);
+  kept = malloc(16);
+  cap = 16;
+  assert_int_equal(pc_wire_film_zip_reuse(&a, 1, &kept, &cap, &kn, &e), 0);
+  assert_true(kn == zn && cap >= kn);
+  assert_memory_equal(kept, z, zn);
+  free(kept);
   assert_int_equal(pc_wire_film_add_z(z, zn, &b, NULL, NULL, &e), 0);
   assert_int_equal(b.layers[0].count, 10);
   assert_true(b.layers[0].sum[n - 1] == 2 * a.layers[0].sum[n - 1] && b.dropped_nonfinite == 4);
