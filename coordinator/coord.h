@@ -181,8 +181,8 @@ struct pc_coord {
   size_t buffered, max_buffered;
   size_t merging;            /* of which complete uploads waiting for (or in) their merge */
   /* The buffer of the last merged upload, for the next one: a fresh buffer's pages are each
-   * cleared by the kernel at their first write, on the coordinator's loop (0.3% of a 32-spp
-   * render's CPU on the embedded farm, measured on this project's VMs). Freed once no job runs. */
+   * cleared by the kernel at their first write, on the coordinator's loop (docs/performance.md,
+   * "An upload's buffer kept for the next"). Freed once no job runs. */
   pc_big_spare spare_up;
   /* tunables */
   double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;

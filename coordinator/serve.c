@@ -353,8 +353,11 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     size_t whole = (size_t)u->nchunks * PC_WIRE_CHUNK;
     size_t cap = p->up_cap ? p->up_cap : (whole < limit ? whole : limit);
     while (cap < p->up_len + u->data.len) cap *= 2;
-    if (!p->up_buf && (p->up_buf = pc_big_spare_take(&c->spare_up, &p->up_cap)) != NULL && cap < p->up_cap)
-      cap = p->up_cap; /* the spare's written pages are kept, also where it has to grow (realloc) */
+    if (!p->up_buf) {
+      /* the last merged upload's buffer: its written pages are kept, also where it has to grow */
+      p->up_buf = pc_big_spare_take(&c->spare_up, &p->up_cap);
+      if (cap < p->up_cap) cap = p->up_cap;
+    }
     uint8_t *nb = cap == p->up_cap ? p->up_buf : p->up_buf ? realloc(p->up_buf, cap) : pc_big_alloc(cap);
     if (!nb) { drop(p, "out of memory for an upload"); return; }
     p->up_buf = nb;
@@ -816,10 +819,7 @@ static void on_tick(uv_timer_t *t) {
     pc_job_tick(c, j, dt);
     running = running || j->state == PC_JOB_RUNNING || j->state == PC_JOB_STOPPING;
   }
-  if (!running) {
-    size_t cap;
-    free(pc_big_spare_take(&c->spare_up, &cap));
-  }
+  if (!running) pc_big_spare_free(&c->spare_up);
   if (c->trim_due) {
     c->trim_due = false;
     malloc_trim(0);
@@ -919,8 +919,7 @@ void pc_coord_free(pc_coord *c) {
     pc_job_free(j);
   }
   pc_prior_free_all(c);
-  size_t cap;
-  free(pc_big_spare_take(&c->spare_up, &cap));
+  pc_big_spare_free(&c->spare_up);
   pc_store_close(c);
   sodium_memzero(c->key, sizeof c->key);
 }

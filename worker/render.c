@@ -206,7 +206,7 @@ static void take_pending(pc_wrender *w, job_ctx *c) {
   }
   pc_big_spare_keep(&w->spare, z, zcap);
   uv_mutex_unlock(&w->mu);
-  if (!rc && count && r) {
+  if (zipped) {
     pc_film_clear(&r->pending);
     r->pending_dirty = false;
   }
@@ -309,8 +309,7 @@ void pc_wrender_stop(pc_wrender *w) {
   uv_mutex_unlock(&w->mu);
   uv_thread_join(&w->thread);
   free(w->zip);
-  size_t cap;
-  free(pc_big_spare_take(&w->spare, &cap));
+  pc_big_spare_free(&w->spare);
   uv_cond_destroy(&w->cv);
   uv_mutex_destroy(&w->mu);
 }

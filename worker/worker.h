@@ -57,7 +57,6 @@ void pc_wrender_assign(pc_wrender *w, uint64_t job, uint64_t range, uint64_t fir
  * between batches or at once when idle; nothing if an upload is already asked or waiting. */
 void pc_wrender_take(pc_wrender *w);
 
-
 /* A worker connected to one coordinator (reconnecting with backoff while it is away). */
 typedef struct pc_worker pc_worker;
 typedef struct pc_worker_opts {

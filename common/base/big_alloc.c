@@ -49,3 +49,9 @@ void *pc_big_spare_take(pc_big_spare *s, size_t *cap) {
   s->cap = 0;
   return p;
 }
+
+void pc_big_spare_free(pc_big_spare *s) {
+  free(s->p);
+  s->p = NULL;
+  s->cap = 0;
+}

@@ -32,5 +32,7 @@ typedef struct pc_big_spare {
 void pc_big_spare_keep(pc_big_spare *s, void *buf, size_t cap);
 /* The spare, which the caller now owns (NULL when there is none), and its size in *cap. */
 void *pc_big_spare_take(pc_big_spare *s, size_t *cap);
+/* Frees the spare, if any. */
+void pc_big_spare_free(pc_big_spare *s);
 
 #endif

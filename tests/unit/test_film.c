@@ -414,7 +414,7 @@ static void test_stored_norms(void **state) {
 }
 
 /* The spare buffer keeps the larger of what it is given (the other freed: ASan and LSan see a
- * leak or a double free), ignores NULL, and is empty once taken. */
+ * leak or a double free), ignores NULL, and is empty once taken or freed. */
 static void test_big_spare(void **state) {
   (void)state;
   pc_big_spare s = {0};
@@ -430,7 +430,10 @@ static void test_big_spare(void **state) {
   assert_ptr_equal(pc_big_spare_take(&s, &cap), c);
   assert_int_equal(cap, 200);
   assert_null(pc_big_spare_take(&s, &cap));
-  free(c);
+  pc_big_spare_keep(&s, c, 200);
+  pc_big_spare_free(&s); /* c freed */
+  assert_true(s.p == NULL && s.cap == 0);
+  pc_big_spare_free(&s); /* and nothing twice */
 }
 
 /* The films' big buffers: zeroed, whole, PC_BIG_ALLOC_SLACK bytes readable past the end,
