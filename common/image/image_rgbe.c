@@ -1,7 +1,9 @@
 /* image_rgbe.c: Radiance RGBE (.hdr) images through Debian's stb_image (libstb-dev): the size
- * is checked from the header, and against what the file can hold, before any pixel is
- * decoded. */
+ * is checked from the header, and against what the file can hold, and the run-length
+ * scanlines' structure is walked, before any pixel is decoded. */
 #include <errno.h>
+#include <stdbool.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -9,6 +11,51 @@
 #include <stb_image.h>
 
 #include "image_internal.h"
+
+/* Skips the header: lines up to the empty one, then the resolution line (as stb reads them). */
+static bool skip_header(FILE *f) {
+  int c, len = 0;
+  bool empty_seen = false;
+  while ((c = getc(f)) != EOF) {
+    if (c != '\n') {
+      len++;
+      continue;
+    }
+    if (empty_seen) return true; /* the end of the resolution line */
+    empty_seen = len == 0;
+    len = 0;
+  }
+  return false;
+}
+
+/* stb_image (Debian 12's) loops forever on a run-length scanline where a count byte is 0, and
+ * reads zeros past the end of the file, so a corrupt or truncated file of a few bytes hangs it
+ * (fuzz_files: 67 bytes). This walks the scanlines as stbi__hdr_load does and returns the
+ * first (from 1) where it would hang, 0 where stb ends on its own: a complete image, one of
+ * flat pixels (bounded by the size check), or an error stb reports itself. */
+static int rle_hang_line(FILE *f, int w, int h) {
+  if (!skip_header(f) || w < 8 || w >= 32768) return 0;
+  for (int j = 0; j < h; j++) {
+    int c1 = getc(f), c2 = getc(f), len = getc(f);
+    if (c1 != 2 || c2 != 2 || len == EOF || (len & 0x80)) return 0; /* flat from here on */
+    int lo = getc(f);
+    if (lo == EOF || (len << 8 | lo) != w) return 0; /* stb: "invalid decoded scanline length" */
+    for (int k = 0; k < 4; k++)
+      for (int i = 0; i < w;) {
+        int count = getc(f);
+        if (count == EOF || count == 0) return j + 1;
+        if (count > 128) {
+          count -= 128;
+          if (getc(f) == EOF) return j + 1;
+        } else if (count <= w - i && fseek(f, count, SEEK_CUR) != 0) {
+          return j + 1;
+        }
+        if (count > w - i) return 0; /* stb: "bad RLE data" */
+        i += count;
+      }
+  }
+  return 0;
+}
 
 int pc_rgbe_read(const char *path, pc_image *out, pc_err *e) {
   int w, h, comp;
@@ -24,6 +71,11 @@ int pc_rgbe_read(const char *path, pc_image *out, pc_err *e) {
   if ((double)w * (double)h > 16.0 * (double)st.st_size)
     return pc_errf(e, PC_EPARSE, "%s: a %dx%d Radiance RGBE image cannot fit in %lld bytes (truncated?)", path, w, h,
                    (long long)st.st_size);
+  FILE *f = fopen(path, "rb");
+  if (!f) return pc_errf(e, PC_EIO, "%s: %s", path, strerror(errno));
+  int bad = rle_hang_line(f, w, h);
+  fclose(f);
+  if (bad) return pc_errf(e, PC_EPARSE, "%s: corrupt or truncated run-length data in scanline %d", path, bad);
   float *px = stbi_loadf(path, &w, &h, &comp, 3);
   if (!px) return pc_errf(e, PC_EPARSE, "%s: cannot decode the Radiance RGBE file: %s", path, stbi_failure_reason());
   size_t n = (size_t)w * (size_t)h * 3;
