@@ -40,6 +40,22 @@ typedef struct png_reader {
   pc_image img;
 } png_reader;
 
+/* One decoded row of `channels` samples of `bytes` bytes into w linear RGB floats. */
+static void png_row_to_rgb(const png_byte *src, float *dst, png_uint_32 w, int channels, int bytes,
+                           const float *lut, int srgb_to_linear) {
+  for (png_uint_32 x = 0; x < w; x++, src += channels * bytes, dst += 3) {
+    for (int c = 0; c < 3; c++) {
+      if (bytes == 1) {
+        dst[c] = lut[src[c]];
+      } else {
+        /* PNG samples are big-endian on disk and libpng keeps them so. */
+        float v = (float)((src[2 * c] << 8) | src[2 * c + 1]) / 65535.0f;
+        dst[c] = srgb_to_linear ? pc_srgb_to_linear(v) : v;
+      }
+    }
+  }
+}
+
 /* Runs under the caller's setjmp: returns a code for errors found here, longjmps for
  * errors libpng finds. */
 static int png_decode(png_reader *r) {
@@ -55,7 +71,7 @@ static int png_decode(png_reader *r) {
   if (ctype == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(r->png);
   if (ctype == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(r->png);
   if (!(ctype & PNG_COLOR_MASK_COLOR)) png_set_gray_to_rgb(r->png);
-  png_set_interlace_handling(r->png);
+  int passes = png_set_interlace_handling(r->png);
   png_read_update_info(r->png, r->info);
 
   int channels = png_get_channels(r->png, r->info);
@@ -64,49 +80,79 @@ static int png_decode(png_reader *r) {
   if ((channels != 3 && channels != 4) || rowbytes != (size_t)w * channels * bytes)
     return pc_errf(r->e, PC_EIMAGE, "%s: unexpected PNG pixel layout", r->path);
 
-  r->pixels = malloc(rowbytes * h);
-  r->rows = malloc(sizeof *r->rows * h);
+  /* An interlaced image's rows are complete only after its last pass, so it is decoded whole;
+   * any other row by row, without a second copy of the image in its file's samples. */
+  size_t buffered = passes > 1 ? h : 1;
+  r->pixels = malloc(rowbytes * buffered);
+  r->rows = malloc(sizeof *r->rows * buffered);
   r->img.rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
   if (!r->pixels || !r->rows || !r->img.rgb)
     return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %lux%lu PNG", r->path,
                    (unsigned long)w, (unsigned long)h);
-  for (png_uint_32 y = 0; y < h; y++) r->rows[y] = r->pixels + rowbytes * y;
-  png_read_image(r->png, r->rows);
-  png_read_end(r->png, NULL);
-
-  r->img.w = (int)w;
-  r->img.h = (int)h;
+  for (size_t y = 0; y < buffered; y++) r->rows[y] = r->pixels + rowbytes * y;
   float lut[256];
   for (int i = 0; i < 256; i++)
     lut[i] = r->srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
+  if (passes > 1) png_read_image(r->png, r->rows);
   for (png_uint_32 y = 0; y < h; y++) {
-    const png_byte *src = r->rows[y];
-    float *dst = r->img.rgb + (size_t)y * w * 3;
-    for (png_uint_32 x = 0; x < w; x++, src += channels * bytes, dst += 3) {
-      for (int c = 0; c < 3; c++) {
-        if (bytes == 1) {
-          dst[c] = lut[src[c]];
-        } else {
-          /* PNG samples are big-endian on disk and libpng keeps them so. */
-          float v = (float)((src[2 * c] << 8) | src[2 * c + 1]) / 65535.0f;
-          dst[c] = r->srgb_to_linear ? pc_srgb_to_linear(v) : v;
-        }
-      }
-    }
+    if (passes == 1) png_read_row(r->png, r->rows[0], NULL);
+    png_row_to_rgb(r->rows[passes > 1 ? y : 0], r->img.rgb + (size_t)y * w * 3, w, channels, bytes, lut,
+                   r->srgb_to_linear);
   }
+  png_read_end(r->png, NULL);
+  r->img.w = (int)w;
+  r->img.h = (int)h;
   return PC_OK;
 }
 
+static uint32_t be32(const unsigned char *b) {
+  return (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3];
+}
+
+/* The bytes of image data the file holds: its IDAT chunks' lengths, each cut at the end of
+ * the file. Walks the chunk headers from the signature (ending at IEND, the file's end or a
+ * header that cannot be one; libpng reports what is wrong with the file). */
+static uint64_t png_idat_bytes(FILE *f) {
+  if (fseek(f, 0, SEEK_END) != 0) return 0;
+  long size = ftell(f);
+  uint64_t sum = 0;
+  for (long pos = 8; size >= 0 && pos + 8 <= size;) {
+    unsigned char hdr[8];
+    if (fseek(f, pos, SEEK_SET) != 0 || fread(hdr, 1, sizeof hdr, f) != sizeof hdr) break;
+    uint32_t len = be32(hdr);
+    if (len > 0x7fffffffu) break; /* PNG's limit: not a chunk */
+    long data = pos + 8, left = size - data;
+    if (memcmp(hdr + 4, "IDAT", 4) == 0) sum += (uint64_t)(len < (uint64_t)left ? len : left);
+    if (memcmp(hdr + 4, "IEND", 4) == 0) break;
+    pos = data + (long)len + 4;
+  }
+  return sum;
+}
+
 /* libpng's png_read_info parses every chunk up to the first IDAT before returning the size,
- * so the size limit is first checked here on the IHDR, which PNG requires at a fixed place. */
+ * so the size limit is first checked here on the IHDR, which PNG requires at a fixed place.
+ * And a header may claim far more pixels than the file's data holds (a cut file, or a
+ * forged one): deflate expands at most 1032:1, so the rows (their filter bytes left out)
+ * must fit in 1032 times the IDAT bytes, or the file is refused before its image is
+ * allocated. */
 static int png_precheck_size(FILE *f, const char *path, pc_err *e) {
-  unsigned char b[24];
+  unsigned char b[26];
   if (fread(b, 1, sizeof b, f) == sizeof b && memcmp(b + 12, "IHDR", 4) == 0) {
-    uint32_t w = (uint32_t)b[16] << 24 | (uint32_t)b[17] << 16 | (uint32_t)b[18] << 8 | b[19];
-    uint32_t h = (uint32_t)b[20] << 24 | (uint32_t)b[21] << 16 | (uint32_t)b[22] << 8 | b[23];
+    uint32_t w = be32(b + 16), h = be32(b + 20);
     if (w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
       return pc_errf(e, PC_ELIMIT, "%s: PNG size %lux%lu exceeds %d", path, (unsigned long)w,
                      (unsigned long)h, PC_IMAGE_MAX_DIM);
+    static const int samples[7] = {1, 0, 3, 1, 2, 0, 4}; /* per colour type; 0: not one */
+    int depth = b[24], ctype = b[25];
+    if (ctype < 7 && samples[ctype] > 0 && depth >= 1 && depth <= 16) {
+      uint64_t row = ((uint64_t)w * (uint64_t)(samples[ctype] * depth) + 7) / 8;
+      uint64_t idat = png_idat_bytes(f);
+      if (row * h > 1032 * idat)
+        return pc_errf(e, PC_EIMAGE,
+                       "%s: bad PNG: its header claims %lux%lu pixels, more than its %llu bytes of "
+                       "image data can hold (a cut or damaged file)",
+                       path, (unsigned long)w, (unsigned long)h, (unsigned long long)idat);
+    }
   }
   if (fseek(f, 0, SEEK_SET) != 0) return pc_errf(e, PC_EIO, "%s: cannot seek", path);
   return PC_OK;

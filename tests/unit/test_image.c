@@ -572,6 +572,35 @@ static void test_png_huge_header_refused(void **state) {
   assert_non_null(strstr(e.msg, "huge.png"));
 }
 
+/* A PNG cut inside its image data, whose header claims far more pixels than the rest can hold
+ * (deflate expands at most 1032:1), is refused before its image is allocated; the whole file,
+ * as compressible as PNG gets (zeros), reads. Interlaced and not. */
+static void test_png_cut_data_refused(void **state) {
+  const int w = 2048, h = 2048;
+  unsigned char *zeros = calloc((size_t)w * h, 1);
+  const char *p = path_in(state, "zeros.png"), *cut = path_in(state, "cut.png");
+  for (int interlace = 0; interlace < 2; interlace++) {
+    write_png(p, w, h, 8, PNG_COLOR_TYPE_GRAY, interlace ? PNG_INTERLACE_ADAM7 : PNG_INTERLACE_NONE, zeros, w);
+    pc_image img;
+    pc_err e;
+    assert_int_equal(pc_image_read(p, 1, &img, &e), PC_OK);
+    assert_int_equal(img.w, w);
+    assert_int_equal(img.h, h);
+    assert_true(img.rgb[0] == 0.0f && img.rgb[3 * ((size_t)w * h - 1) + 2] == 0.0f);
+    pc_image_free(&img);
+    size_t n;
+    unsigned char *b = slurp(p, &n);
+    assert_true(n > 2000); /* 4 MiB of zeros: ~4 KB */
+    spit(cut, b, 200);
+    assert_int_equal(pc_image_read(cut, 1, &img, &e), PC_EIMAGE);
+    assert_non_null(strstr(e.msg, "cut.png"));
+    assert_non_null(strstr(e.msg, "2048x2048"));
+    assert_non_null(strstr(e.msg, "image data can hold"));
+    free(b);
+  }
+  free(zeros);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* JPEG */
 
@@ -894,6 +923,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_exr_data_window, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_preview_roundtrip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_formats, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_png_cut_data_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_huge_header_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_jpeg_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_rgbe_read, setup, teardown),
