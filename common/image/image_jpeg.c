@@ -1,12 +1,16 @@
 /* image_jpeg.c: JPEG reading through libjpeg into a linear float raster. libjpeg's default
  * error handler calls exit(); ours longjmps back instead, and treats libjpeg's warnings
  * (premature end of data, corrupt entropy data) as errors, because libjpeg would otherwise
- * pad a truncated file with gray and report success. */
+ * pad a truncated file with gray and report success. A header's size is not trusted with
+ * memory: the image grows as its scanlines decode, and a progressive image, whose coefficients
+ * libjpeg holds whole, is refused where they would outweigh its file past any real image's
+ * ratio (a forged or damaged header). */
 #include "image_internal.h"
 
 #include <errno.h>
 #include <jpeglib.h>
 #include <setjmp.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,6 +24,7 @@ typedef struct jpeg_reader {
   int srgb_to_linear;
   pc_err *e;
   FILE *f;
+  long file_bytes;
   JSAMPLE *row;
   pc_image img;
 } jpeg_reader;
@@ -44,6 +49,17 @@ static int jpeg_decode(jpeg_reader *r) {
   if (w == 0 || h == 0 || w > PC_IMAGE_MAX_DIM || h > PC_IMAGE_MAX_DIM)
     return pc_errf(r->e, PC_ELIMIT, "%s: JPEG size %ux%u outside 1..%d", r->path, (unsigned)w,
                    (unsigned)h, PC_IMAGE_MAX_DIM);
+  if (r->cinfo.progressive_mode) {
+    /* 128 bytes per 8x8 block of every component (at most full resolution each); the file
+     * holds at least a byte per 1024 of them, or the image is far flatter than any texture */
+    uint64_t blocks = ((uint64_t)w + 7) / 8 * (((uint64_t)h + 7) / 8) * (uint64_t)r->cinfo.num_components;
+    uint64_t need = 128 * blocks, allowed = ((uint64_t)64 << 20) + 1024 * (uint64_t)r->file_bytes;
+    if (need > allowed)
+      return pc_errf(r->e, PC_EIMAGE,
+                     "%s: bad JPEG: a progressive %ux%u image in %ld bytes (decoding it would take "
+                     "%llu MB; a damaged or forged header)",
+                     r->path, (unsigned)w, (unsigned)h, r->file_bytes, (unsigned long long)(need >> 20));
+  }
   r->cinfo.out_color_space = JCS_RGB;
   jpeg_start_decompress(&r->cinfo);
   if (r->cinfo.output_components != 3 || r->cinfo.output_width != w ||
@@ -51,19 +67,30 @@ static int jpeg_decode(jpeg_reader *r) {
     return pc_errf(r->e, PC_EIMAGE, "%s: unexpected JPEG output layout", r->path);
 
   r->row = malloc((size_t)w * 3);
-  r->img.rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
-  if (!r->row || !r->img.rgb)
-    return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w,
-                   (unsigned)h);
+  if (!r->row) return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w, (unsigned)h);
   float lut[256];
   for (int i = 0; i < 256; i++)
     lut[i] = r->srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
+  size_t rows_held = 0, row_floats = (size_t)w * 3;
   while (r->cinfo.output_scanline < h) {
-    float *dst = r->img.rgb + (size_t)r->cinfo.output_scanline * w * 3;
+    size_t y = r->cinfo.output_scanline;
+    if (y == rows_held) {
+      /* doubling from ~1 MB: a file cut short fails at its first missing data, having taken at
+       * most twice what it decoded */
+      size_t more = rows_held ? rows_held : (1u << 18) / row_floats + 1;
+      if (more > h - rows_held) more = h - rows_held;
+      float *grown = realloc(r->img.rgb, sizeof(float) * row_floats * (rows_held + more));
+      if (!grown)
+        return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w,
+                       (unsigned)h);
+      r->img.rgb = grown;
+      rows_held += more;
+    }
     JSAMPROW rows[1] = {r->row};
     if (jpeg_read_scanlines(&r->cinfo, rows, 1) != 1)
       return pc_errf(r->e, PC_EIMAGE, "%s: JPEG data ends early", r->path);
-    for (size_t i = 0; i < (size_t)w * 3; i++) dst[i] = lut[r->row[i]];
+    float *dst = r->img.rgb + y * row_floats;
+    for (size_t i = 0; i < row_floats; i++) dst[i] = lut[r->row[i]];
   }
   jpeg_finish_decompress(&r->cinfo);
   r->img.w = (int)w;
@@ -81,6 +108,10 @@ int pc_jpeg_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e)
   r->f = fopen(path, "rb");
   if (!r->f) {
     rc = pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
+    goto done;
+  }
+  if (fseek(r->f, 0, SEEK_END) != 0 || (r->file_bytes = ftell(r->f)) < 0 || fseek(r->f, 0, SEEK_SET) != 0) {
+    rc = pc_errf(e, PC_EIO, "%s: cannot seek: %s", path, strerror(errno));
     goto done;
   }
   r->cinfo.err = jpeg_std_error(&r->jerr);

@@ -2,6 +2,7 @@
  * image metrics. Every file goes into a fresh mkdtemp directory. */
 #include <setjmp.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -604,7 +605,7 @@ static void test_png_cut_data_refused(void **state) {
 /* ---------------------------------------------------------------------------------------- */
 /* JPEG */
 
-static void write_jpeg(const char *path, int w, int h, int comps, const unsigned char *px) {
+static void write_jpeg(const char *path, int w, int h, int comps, const unsigned char *px, bool progressive) {
   struct jpeg_compress_struct ci;
   struct jpeg_error_mgr jerr;
   ci.err = jpeg_std_error(&jerr);
@@ -618,6 +619,7 @@ static void write_jpeg(const char *path, int w, int h, int comps, const unsigned
   ci.in_color_space = comps == 3 ? JCS_RGB : JCS_GRAYSCALE;
   jpeg_set_defaults(&ci);
   jpeg_set_quality(&ci, 100, TRUE);
+  if (progressive) jpeg_simple_progression(&ci);
   jpeg_start_compress(&ci, TRUE);
   while (ci.next_scanline < ci.image_height) {
     JSAMPROW row = (JSAMPROW)(px + (size_t)ci.next_scanline * w * comps);
@@ -637,7 +639,7 @@ static void test_jpeg_read(void **state) {
     px[3 * i + 2] = 50;
   }
   const char *p = path_in(state, "a.jpg");
-  write_jpeg(p, w, h, 3, px);
+  write_jpeg(p, w, h, 3, px, false);
   pc_image img;
   pc_err e;
   assert_int_equal(pc_image_read(p, 0, &img, &e), PC_OK);
@@ -651,10 +653,48 @@ static void test_jpeg_read(void **state) {
   pc_image_free(&img);
 
   memset(px, 128, sizeof px);
-  write_jpeg(p, w, h, 1, px);
+  write_jpeg(p, w, h, 1, px, false);
   assert_int_equal(pc_image_read(p, 1, &img, &e), PC_OK);
   for (int i = 0; i < w * h * 3; i++) assert_float_equal(img.rgb[i], 0.2158605f, 0.01f);
   pc_image_free(&img);
+}
+
+/* The image grows as its scanlines decode (a 512x1200 image takes four steps), progressive or
+ * not; a header whose size is forged larger than the file can hold fails without the image
+ * being allocated first: a baseline file at its first missing data, a progressive one (whose
+ * coefficients libjpeg would hold whole) before decoding. */
+static void test_jpeg_sizes_not_trusted(void **state) {
+  const int w = 512, h = 1200;
+  unsigned char *px = malloc((size_t)w * h);
+  for (int y = 0; y < h; y++) memset(px + (size_t)y * w, (y / 8) % 2 ? 200 : 40, (size_t)w);
+  const char *p = path_in(state, "rows.jpg"), *forged = path_in(state, "forged.jpg");
+  for (int progressive = 0; progressive < 2; progressive++) {
+    write_jpeg(p, w, h, 1, px, progressive);
+    pc_image img;
+    pc_err e;
+    assert_int_equal(pc_image_read(p, 0, &img, &e), PC_OK);
+    assert_int_equal(img.w, w);
+    assert_int_equal(img.h, h);
+    for (int y = 0; y < h; y += 7)
+      for (int x = 0; x < w; x += 13)
+        assert_float_equal(img.rgb[3 * ((size_t)y * w + x) + 1] * 255.0f, ((y / 8) % 2 ? 200.0f : 40.0f), 3.0f);
+    pc_image_free(&img);
+
+    size_t n;
+    unsigned char *b = slurp(p, &n);
+    size_t sof = 0;
+    for (size_t i = 2; i + 9 < n && !sof; i++)
+      if (b[i] == 0xff && (b[i + 1] == 0xc0 || b[i + 1] == 0xc2)) sof = i;
+    assert_true(sof > 0);
+    b[sof + 5] = b[sof + 7] = 0x75; /* 30000 x 30000 */
+    b[sof + 6] = b[sof + 8] = 0x30;
+    spit(forged, b, n);
+    assert_int_equal(pc_image_read(forged, 0, &img, &e), PC_EIMAGE);
+    assert_non_null(strstr(e.msg, "forged.jpg"));
+    if (progressive) assert_non_null(strstr(e.msg, "progressive 30000x30000"));
+    free(b);
+  }
+  free(px);
 }
 
 /* Radiance RGBE: flat scanlines (width < 8), value = mantissa * 2^(E - 136). */
@@ -814,7 +854,7 @@ static void test_truncated_and_corrupt_files(void **state) {
   unsigned char px[37 * 23 * 3];
   for (size_t i = 0; i < sizeof px; i++) px[i] = (unsigned char)(i * 7);
   const char *jpg = path_in(state, "t.jpg");
-  write_jpeg(jpg, w, h, 3, px);
+  write_jpeg(jpg, w, h, 3, px, false);
   truncate_and_corrupt(state, jpg, 3);
   free(rgb);
 }
@@ -926,6 +966,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_png_cut_data_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_png_huge_header_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_jpeg_read, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_jpeg_sizes_not_trusted, setup, teardown),
       cmocka_unit_test_setup_teardown(test_rgbe_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_missing_and_garbage, setup, teardown),
       cmocka_unit_test_setup_teardown(test_truncated_and_corrupt_files, setup, teardown),
