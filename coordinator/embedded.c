@@ -13,6 +13,9 @@
 #include <unistd.h>
 
 #include "auth.h"
+#include "big_alloc.h"
+#include "film.h"
+#include "render.h"
 #include "serve.h"
 #include "thread_pool.h"
 #include "wire_log.h"
@@ -130,6 +133,22 @@ int pc_embedded_start_worker(pc_embedded *f, int threads, double upload_share, p
   if (r) return pc_errf(e, PC_EIO, "embedded farm: worker thread: %s", uv_strerror(r));
   f->worker_running = true;
   return 0;
+}
+
+int pc_embedded_check_memory(const pc_render_settings *set, int threads, int jobs, pc_err *e) {
+  size_t limit = pc_big_memory_limit(), job = pc_film_bytes(set->width, set->height, set->strategy_layers);
+  size_t need = (size_t)jobs * job + job + pc_renderer_film_bytes(set, threads);
+  if (!limit || need <= limit) return PC_OK;
+  int nthreads = threads ? threads : pc_cpu_count();
+  if (jobs == 1)
+    return pc_errf(e, PC_ELIMIT,
+                   "a %dx%d render on %d thread%s takes %zu MB of films (the coordinator's and the worker's), more than "
+                   "this machine's %zu MB of memory",
+                   set->width, set->height, nthreads, nthreads == 1 ? "" : "s", pc_big_mb(need), pc_big_mb(limit));
+  return pc_errf(e, PC_ELIMIT,
+                 "%d jobs of %dx%d on %d thread%s take at least %zu MB of films (the coordinator's and the worker's), "
+                 "more than this machine's %zu MB of memory",
+                 jobs, set->width, set->height, nthreads, nthreads == 1 ? "" : "s", pc_big_mb(need), pc_big_mb(limit));
 }
 
 void pc_embedded_stop(pc_embedded *f) {

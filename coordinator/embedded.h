@@ -41,6 +41,12 @@ int pc_embedded_start(pc_embedded *f, pc_err *e);
  * Started after the job is submitted, its first work request gets the job at once instead of
  * a retry later. */
 int pc_embedded_start_worker(pc_embedded *f, int threads, double upload_share, pc_err *e);
+/* Whether `jobs` jobs of `set` fit this machine's memory on the one-process farm: each job's
+ * film on the coordinator, and at least one job's films on the worker (its pending film and
+ * the renderer's, on `threads` threads). Where the kernel overcommits, films that do not fit
+ * are allocated and the process is killed while they are zeroed; this is one line before any
+ * farm starts instead. PC_ELIMIT when they do not fit. */
+int pc_embedded_check_memory(const pc_render_settings *set, int threads, int jobs, pc_err *e);
 /* Stops both, restores stderr and removes the temporary directory. */
 void pc_embedded_stop(pc_embedded *f);
 

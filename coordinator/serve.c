@@ -513,6 +513,10 @@ static void on_submit(pc_peer *p, const Pcbpt__Submit *s) {
   if (access(path, R_OK) != 0) pc_errf(&e, PC_EINVAL, "submit: scene bundle %.16s... was not uploaded", hex);
   else if (pc_wire_settings_from_proto(s->settings, &j->set, &e) != 0) {}
   else if (j->set.width < 1 || j->set.height < 1) pc_errf(&e, PC_EINVAL, "submit: film size missing");
+  else if (c->max_film && pc_film_bytes(j->set.width, j->set.height, j->set.strategy_layers) > c->max_film)
+    pc_errf(&e, PC_ELIMIT, "submit: the film of a %dx%d job takes %zu MB on the coordinator, more than its %zu MB (its memory, or --max-film-mb)",
+            j->set.width, j->set.height, pc_big_mb(pc_film_bytes(j->set.width, j->set.height, j->set.strategy_layers)),
+            pc_big_mb(c->max_film));
   else if (s->halt_iterations == 0 && !(s->halt_seconds > 0) && !(s->settings->halt_noise > 0) &&
            !(s->settings->halt_worker_seconds > 0))
     pc_errf(&e, PC_EINVAL, "submit: needs --spp, --time or --halt-noise");
@@ -864,6 +868,7 @@ int pc_coord_start(pc_coord *c, uv_loop_t *loop, const char *host, int port, con
   if (!c->tick_ms) c->tick_ms = 250;
   if (!c->progress_timeout) c->progress_timeout = 60;
   if (!c->max_buffered) c->max_buffered = MAX_BUFFERED;
+  if (!c->max_film) c->max_film = pc_big_memory_limit();
   if ((size_t)snprintf(c->data_dir, sizeof c->data_dir, "%s", data_dir) >= sizeof c->data_dir)
     return pc_errf(e, PC_ELIMIT, "--data-dir: path too long");
   if (mkdir(data_dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", data_dir, strerror(errno));
@@ -937,6 +942,8 @@ static const char serve_help[] =
     "                         ignores that loses the range to others\n"
     "  --max-buffered-mb N    upload bytes held before senders are paused (64); one upload\n"
     "                         always proceeds, so a film's upload may exceed it\n"
+    "  --max-film-mb N        largest job film a submit may ask for (default: the machine's\n"
+    "                         memory); a larger job is refused at submit\n"
     "  --port-file F          write the bound port to F (for --listen HOST:0)\n";
 
 int pc_cmd_serve(int argc, char **argv) {
@@ -965,6 +972,13 @@ int pc_cmd_serve(int argc, char **argv) {
         return 2;
       }
       c.max_buffered = (size_t)(mb * 1048576);
+    } else if (strcmp(a, "--max-film-mb") == 0) {
+      double mb;
+      if (!pc_parse_f64(argv[++i], 1, 1 << 30, &mb)) {
+        fprintf(stderr, "pcbpt-coord serve: --max-film-mb: expected megabytes in [1, 2^30]\n");
+        return 2;
+      }
+      c.max_film = (size_t)(mb * 1048576);
     } else { fprintf(stderr, "pcbpt-coord serve: unknown argument '%s' (see --help)\n", a); return 2; }
   }
   if (!listen || !dir || !token) { fprintf(stderr, "pcbpt-coord serve: --listen, --data-dir and --token-file are required\n"); return 2; }

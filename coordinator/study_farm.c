@@ -239,6 +239,8 @@ int pc_study_farm_group(pc_study_farm *f, const pc_study_group *g, pc_study_run 
   uint64_t jobs[PC_STUDY_MAX_METHODS] = {0}, group;
   uint32_t rerun[PC_STUDY_MAX_METHODS] = {0};
   if (g->nmethods < 1 || g->nmethods > PC_STUDY_MAX_METHODS) return pc_errf(e, PC_EINVAL, "study: bad method count");
+  /* the group's jobs run at once, each with its film */
+  if (f->embedded && pc_embedded_check_memory(&g->req->set, f->threads, g->nmethods, e) != PC_OK) return e->code;
   pc_client cl;
   int rc = pc_client_connect(f->hostport, f->token, &cl, e); /* (initialises libsodium) */
   if (rc) return rc;

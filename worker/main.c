@@ -15,13 +15,17 @@
 
 static const char help[] =
     "usage: pcbpt-worker --connect HOST[:PORT] --token-file F [--threads N] [--name NAME] [--cache-dir DIR]\n"
-    "Renders iteration ranges for a pcbpt coordinator (default port 7878). --threads 0 uses every core.\n";
+    "                    [--max-film-mb N]\n"
+    "Renders iteration ranges for a pcbpt coordinator (default port 7878). --threads 0 uses every core.\n"
+    "--max-film-mb: the films it may make for one job (default: the machine's memory); a job that\n"
+    "needs more fails its ranges on this worker with one line instead of being killed.\n";
 
 int main(int argc, char **argv) {
   /* a peer that goes away mid-write must be an error return, not a fatal signal */
   if (signal(SIGPIPE, SIG_IGN) == SIG_ERR) perror("signal");
   const char *connect = NULL, *token = NULL, *cache = NULL, *name = NULL;
   long long threads = 0;
+  double max_film_mb = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (strcmp(a, "--help") == 0) { fputs(help, stdout); return 0; }
@@ -32,6 +36,11 @@ int main(int argc, char **argv) {
     else if (strcmp(a, "--name") == 0) name = argv[++i];
     else if (strcmp(a, "--threads") == 0) {
       if (!pc_parse_i64(argv[++i], 0, 1024, &threads)) { fprintf(stderr, "pcbpt-worker: --threads: expected 0..1024\n"); return 2; }
+    } else if (strcmp(a, "--max-film-mb") == 0) {
+      if (!pc_parse_f64(argv[++i], 1, 1 << 30, &max_film_mb)) {
+        fprintf(stderr, "pcbpt-worker: --max-film-mb: expected megabytes in [1, 2^30]\n");
+        return 2;
+      }
     } else { fprintf(stderr, "pcbpt-worker: unknown argument '%s'\n", a); return 2; }
   }
   if (!connect || !token) { fprintf(stderr, "pcbpt-worker: --connect and --token-file are required\n%s", help); return 2; }
@@ -45,7 +54,8 @@ int main(int argc, char **argv) {
   else if (getenv("XDG_CACHE_HOME")) snprintf(cache_dir, sizeof cache_dir, "%s/pcbpt", getenv("XDG_CACHE_HOME"));
   else snprintf(cache_dir, sizeof cache_dir, "/tmp/pcbpt-cache-%ld", (long)getuid());
   pc_worker_opts o = {.host = host, .port = port, .key = key, .threads = (int)threads, .name = name,
-                      .cache_dir = cache_dir, .handle_signals = true, .upload_share = PC_WIRE_UPLOAD_SHARE};
+                      .cache_dir = cache_dir, .handle_signals = true, .upload_share = PC_WIRE_UPLOAD_SHARE,
+                      .max_film = (size_t)(max_film_mb * 1048576)};
   pc_worker *w = NULL;
   int rc = pc_worker_create(&o, &w, &e);
   sodium_memzero(key, sizeof key);

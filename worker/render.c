@@ -100,6 +100,14 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
   if (!r) {
     /* the job's pending film, and the renderer's scratch and light-splat films */
     size_t bytes = pc_film_bytes(set->width, set->height, set->strategy_layers) + pc_renderer_film_bytes(set, w->threads);
+    if (w->max_film && bytes > w->max_film) {
+      int nthreads = w->threads ? w->threads : pc_cpu_count();
+      ctx_free(c, w);
+      return pc_errf(e, PC_ELIMIT,
+                     "the films of a %dx%d render on %d thread%s take %zu MB, more than this worker's %zu MB "
+                     "(its memory, or --max-film-mb)",
+                     set->width, set->height, nthreads, nthreads == 1 ? "" : "s", pc_big_mb(bytes), pc_big_mb(w->max_film));
+    }
     for (;;) { /* room for one more: drop the least recently used while over a bound */
       size_t held = bytes;
       int lru = -1;
@@ -291,9 +299,10 @@ static void thread_main(void *arg) {
   ctx_free(&ctx, w);
 }
 
-int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e) {
+int pc_wrender_start(pc_wrender *w, int threads, size_t max_film, uv_async_t *notify, pc_err *e) {
   memset(w, 0, sizeof *w);
   w->threads = threads;
+  w->max_film = max_film ? max_film : pc_big_memory_limit();
   w->notify = notify;
   atomic_init(&w->cancel, false);
   if (uv_mutex_init(&w->mu) != 0 || uv_cond_init(&w->cv) != 0) return pc_errf(e, PC_EIO, "worker: mutex init failed");

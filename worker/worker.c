@@ -672,7 +672,7 @@ int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e) {
       ((r = uv_signal_init(w->loop, &w->sigint)) != 0 || (r = uv_signal_init(w->loop, &w->sigterm)) != 0 ||
        (r = uv_signal_start(&w->sigint, on_signal, SIGINT)) != 0 || (r = uv_signal_start(&w->sigterm, on_signal, SIGTERM)) != 0))
     goto uv_fail;
-  if ((r = pc_wrender_start(&w->r, w->threads, &w->notify, e)) != 0) {
+  if ((r = pc_wrender_start(&w->r, w->threads, o->max_film, &w->notify, e)) != 0) {
     shut_down(w);
     close_handle((uv_handle_t *)&w->notify);
     uv_run(w->loop, UV_RUN_DEFAULT);

@@ -22,6 +22,7 @@ typedef struct pc_wrender {
   uv_thread_t thread;
   uv_async_t *notify;      /* woken on the loop after each batch and at the end of a range */
   int threads;
+  size_t max_film;         /* pc_worker_opts.max_film, 0 resolved */
   /* the assignment (written by the loop while the thread is idle) */
   bool have_range, range_done, failed, quit;
   uint64_t job_id, range_id, first, count;
@@ -47,7 +48,7 @@ typedef struct pc_wrender {
   pc_big_spare spare; /* an upload's buffer the loop is done with, for the next */
 } pc_wrender;
 
-int pc_wrender_start(pc_wrender *w, int threads, uv_async_t *notify, pc_err *e);
+int pc_wrender_start(pc_wrender *w, int threads, size_t max_film, uv_async_t *notify, pc_err *e);
 void pc_wrender_stop(pc_wrender *w);
 /* Starts a range (the thread must be idle: no range, possibly compressing an upload of the
  * last one, which it then drops). */
@@ -75,6 +76,10 @@ typedef struct pc_worker_opts {
    * sealing, decompression and merge are the render's own cost too, and a crash loses the
    * whole render anyway. */
   double upload_share;
+  /* Bytes of films the worker may make for one job (its pending film and the renderer's);
+   * 0: what pc_big_memory_limit says the machine has. A job needing more fails its ranges
+   * here with one line, where making the films would get the process killed. */
+  size_t max_film;
 } pc_worker_opts;
 
 int pc_worker_create(const pc_worker_opts *o, pc_worker **out, pc_err *e);

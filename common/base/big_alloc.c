@@ -3,9 +3,11 @@
 #include "big_alloc.h"
 
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #define HUGE_PAGE ((size_t)2 << 20)
 
@@ -29,6 +31,18 @@ void *pc_big_zalloc(size_t n) {
   void *p = pc_big_alloc(n);
   if (p) memset(p, 0, n);
   return p;
+}
+
+size_t pc_big_memory_limit(void) {
+  long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  size_t limit = pages > 0 && page > 0 && (unsigned long)pages <= SIZE_MAX / (unsigned long)page
+                     ? (size_t)pages * (size_t)page
+                     : 0;
+  FILE *f = fopen("/sys/fs/cgroup/memory.max", "r"); /* "max" when unlimited */
+  unsigned long long cg;
+  if (f && fscanf(f, "%llu", &cg) == 1 && cg > 0 && cg <= SIZE_MAX && (limit == 0 || cg < limit)) limit = (size_t)cg;
+  if (f) fclose(f);
+  return limit;
 }
 
 void pc_big_spare_keep(pc_big_spare *s, void *buf, size_t cap) {

@@ -22,6 +22,14 @@ void *pc_big_alloc(size_t n);
  * page by page). */
 void *pc_big_zalloc(size_t n);
 
+/* The memory this process can ever have: the machine's RAM, or its cgroup's limit (v2's
+ * memory.max) where that is lower; 0 when neither can be read. What a render's films need is
+ * known before they are made, and films larger than this cannot be filled: where the kernel
+ * overcommits, allocating them succeeds and the process is killed while they are zeroed. */
+size_t pc_big_memory_limit(void);
+/* Megabytes (MiB), rounded up: sizes in messages. */
+static inline size_t pc_big_mb(size_t bytes) { return bytes / 1048576 + (bytes % 1048576 != 0); }
+
 /* A buffer kept from one use to the next (an upload's: a fresh one's pages are each cleared by
  * the kernel at their first write). */
 typedef struct pc_big_spare {

@@ -124,4 +124,13 @@ XML
 check refused-film 1 "render failed on worker local: its film of iterations .* was refused [0-9]* times in a row: film: a sum in layer" -- \
   timeout 120 "$bin" render "$tmp/blinding.xml" --method bdpt --spp 2 --width 8 --height 8 --threads 1 --out "$tmp/bl.exr"
 [ -e "$tmp/bl.exr" ] && { echo "FAIL refused-film: wrote an image"; fail=1; }
+# A render whose films do not fit the machine's memory is one line before any farm starts (where
+# the kernel overcommits, making them got the process killed). 16384x16384 takes 108 GiB of
+# films; on a machine that has that much, the render would run, so the check is skipped there.
+mem_kb=$(awk '/^MemTotal:/ {print $2}' /proc/meminfo)
+if [ "${mem_kb:-0}" -lt 100000000 ]; then
+  check films-too-large 1 "a 16384x16384 render on 2 threads takes 110592 MB of films (the coordinator's and the worker's), more than this machine's" -- \
+    "$bin" render "$scene" --spp 1 --width 16384 --height 16384 --threads 2 --out "$tmp/huge.exr"
+  [ -e "$tmp/huge.exr" ] && { echo "FAIL films-too-large: wrote an image"; fail=1; }
+fi
 exit $fail

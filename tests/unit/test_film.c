@@ -436,6 +436,19 @@ static void test_big_spare(void **state) {
   pc_big_spare_free(&s); /* and nothing twice */
 }
 
+/* The memory limit is the machine's RAM or less (its cgroup's), and sizes in messages round up. */
+static void test_big_memory_limit(void **state) {
+  (void)state;
+  size_t limit = pc_big_memory_limit();
+  long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  assert_true(limit > 0);
+  assert_true(limit <= (size_t)pages * (size_t)page);
+  assert_int_equal(pc_big_mb(0), 0);
+  assert_int_equal(pc_big_mb(1), 1);
+  assert_int_equal(pc_big_mb(1048576), 1);
+  assert_int_equal(pc_big_mb(1048577), 2);
+}
+
 /* The films' big buffers: zeroed, whole, PC_BIG_ALLOC_SLACK bytes readable past the end,
  * 2 MiB-aligned from 2 MiB on, NULL for sizes that cannot be rounded up to a whole huge page,
  * and a pointer to free for 0 bytes. */
@@ -481,6 +494,7 @@ int main(void) {
       cmocka_unit_test(test_stored_norms),
       cmocka_unit_test(test_big_alloc),
       cmocka_unit_test(test_big_spare),
+      cmocka_unit_test(test_big_memory_limit),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
