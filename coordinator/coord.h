@@ -87,6 +87,7 @@ typedef struct pc_job {
   char storage_error[300];   /* the last checkpoint could not be written: retried (not stored) */
   double storage_retry;      /* ... at this time */
   bool film_ready;
+  bool film_waits;           /* its film did not fit beside the others' yet (logged once) */
   pc_film film;
   pc_range *ranges;          /* open ranges */
   bool busy;                 /* a background op runs on the film */

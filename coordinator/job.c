@@ -450,6 +450,18 @@ static uint64_t reason_hash(const char *s) {
   return h;
 }
 
+/* An ended job's films, once no background operation uses them (a pilot candidate's goes to
+ * its group: pc_prior_keep takes it). Jobs waiting for memory may fit now. */
+static void release_films(pc_coord *c, pc_job *j) {
+  if (j->busy || j->ops || !j->film_ready || job_live(j) || j->state == PC_JOB_QUEUED) return;
+  pc_prior_keep(c, j);
+  if (j->film_ready) pc_film_free(&j->film);
+  j->film_ready = false;
+  if (j->prior_ready) pc_film_free(&j->prior);
+  j->prior_ready = false;
+  pc_sched_nudge(c);
+}
+
 static void op_after(uv_work_t *w, int status) {
   pc_op *op = w->data;
   pc_coord *c = op->c;
@@ -553,14 +565,7 @@ static void op_after(uv_work_t *w, int status) {
     maybe_ckpt(c, j);
     check_finished(c, j);
   }
-  if (!j->busy && !j->ops && (j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED) &&
-      j->film_ready) {
-    pc_prior_keep(c, j); /* a pilot candidate's film goes to its group (pc_prior_keep takes it) */
-    if (j->film_ready) pc_film_free(&j->film);
-    j->film_ready = false;
-    if (j->prior_ready) pc_film_free(&j->prior);
-    j->prior_ready = false;
-  }
+  release_films(c, j);
 }
 
 static void op_start(pc_job *j) {
@@ -745,6 +750,7 @@ void pc_job_fail(pc_coord *c, pc_job *j, const char *why) {
     if (r->owner && !r->owner->closed) pc_peer_send_cancel(r->owner, j->id, 0, false);
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
+  release_films(c, j);
 }
 
 void pc_job_range_failed(pc_coord *c, pc_job *j, pc_range *r, const char *worker, const char *why) {
@@ -773,6 +779,7 @@ void pc_job_cancel(pc_coord *c, pc_job *j) {
   pc_err e;
   if (pc_store_update_job(c, j, &e) != 0) pc_wire_log("job %llu: %s", (unsigned long long)j->id, e.msg);
   pc_wire_log("job %llu: cancelled", (unsigned long long)j->id);
+  release_films(c, j);
 }
 
 void pc_job_halt(pc_coord *c, pc_job *j) {

@@ -184,9 +184,30 @@ static uint64_t fresh_size(pc_coord *c, pc_peer *p, pc_job *j, double now) {
   return pc_range_size(&in);
 }
 
+/* Whether j's film fits beside the films the coordinator holds, under max_film. A job that
+ * does not fit stays queued until a running job's film is freed (submit refused the jobs that
+ * could never fit, so one always fits once the others are done). */
+static bool film_fits(pc_coord *c, pc_job *j) {
+  if (!c->max_film) return true;
+  size_t held = 0;
+  for (const pc_job *k = c->jobs; k; k = k->next) {
+    if (k->film_ready) held += pc_film_held_bytes(&k->film);
+    if (k->prior_ready) held += pc_film_held_bytes(&k->prior);
+  }
+  for (const pc_pilot_films *g = c->pilot_films; g; g = g->next) held += pc_film_held_bytes(&g->film);
+  size_t need = pc_film_bytes(j->set.width, j->set.height, j->set.strategy_layers);
+  if (held <= c->max_film && need <= c->max_film - held) return true;
+  if (!j->film_waits)
+    pc_wire_log("job %llu: waits for memory: its film takes %zu MB, and the running jobs' hold %zu of %zu MB",
+                (unsigned long long)j->id, pc_big_mb(need), pc_big_mb(held), pc_big_mb(c->max_film));
+  j->film_waits = true;
+  return false;
+}
+
 static bool try_job(pc_coord *c, pc_peer *p, pc_job *j) {
   double now = pc_coord_now();
   pc_err e = {0};
+  if (!j->film_ready && !film_fits(c, j)) return false;
   if (!j->film_ready && pc_job_activate(c, j, &e) != 0) { pc_job_fail(c, j, e.msg); return false; }
   for (pc_range *r = j->ranges; r; r = r->next) {
     if (r->owner || r->merging || r->final || r->merged != r->acked || r->acked == r->count) continue;

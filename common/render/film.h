@@ -71,6 +71,13 @@ int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned s
 static inline int pc_film_layer_count(int strategy_depth) {
   return PC_LAYER_STD_COUNT + strategy_depth * (strategy_depth + 3) / 2 + 2;
 }
+/* Bytes of the sums f holds (its layers with storage). */
+static inline size_t pc_film_held_bytes(const pc_film *f) {
+  size_t n = 0;
+  for (int i = 0; i < f->nlayers; i++)
+    if (f->layers[i].sum) n += (size_t)f->w * (size_t)f->h * 3 * sizeof(double);
+  return n;
+}
 /* Bytes of the sums of a w x h film with every layer (pc_film_init's). */
 static inline size_t pc_film_bytes(int w, int h, int strategy_depth) {
   return (size_t)w * (size_t)h * 3 * sizeof(double) * (size_t)pc_film_layer_count(strategy_depth);

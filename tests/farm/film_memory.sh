@@ -1,7 +1,9 @@
 # film_memory.sh: a job whose film is larger than the coordinator may hold (--max-film-mb, by
 # default the machine's memory) is refused at submit in one line and never becomes a job; a
 # worker whose films for a job would be larger than it may make fails the job's ranges with
-# that reason (and is not killed making them), so the job fails naming it.
+# that reason (and is not killed making them), so the job fails naming it; and jobs whose films
+# do not fit together run as films are freed: a study's three interleaved 256x256 jobs under
+# --max-film-mb 20 (two films at a time) all reach their budgets.
 . "$(dirname "$0")/lib.inc"
 COORD_ARGS="--max-film-mb 20" start_coord
 jobs_before=$("$B/pcbpt-coord" list $H | wc -l)
@@ -22,4 +24,11 @@ for _ in $(seq 150); do [ "$(job_field "$J" state)" = failed ] && break; sleep 0
 job_field "$J" error | grep -q "the films of a 256x256 render on 1 thread take 17 MB, more than this worker's 10 MB" ||
   fail "job error: $(job_field "$J" error)"
 kill -0 "${PIDS[-1]}" 2>/dev/null || fail "the worker exited"
+kill "${PIDS[-1]}"
+start_worker w1
+"$B/pcbpt-coord" study "$S/scenes/furnace/scene.xml" --methods pt,bdpt,lt --seconds 0.5 --width 256 --height 256 \
+  --out "$T/study" $H >"$T/study.out" 2>&1 || fail "study: $(tail -3 "$T/study.out")"
+grep -q "waits for memory: its film takes 9 MB, and the running jobs' hold 18 of 20 MB" "$T/coord.log" ||
+  fail "no job waited for memory"
+for m in pt bdpt lt; do grep -q "^$m," "$T/study/furnace/study.csv" || fail "no $m row in study.csv"; done
 echo PASS
