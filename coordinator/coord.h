@@ -88,6 +88,10 @@ typedef struct pc_job {
   double storage_retry;      /* ... at this time */
   bool film_ready;
   bool film_waits;           /* its film did not fit beside the others' yet (logged once) */
+  /* the most one upload may hold: a compressed film of the job with its trace (from the first
+   * activation on; kept when an ended job's film is freed, so an upload in flight is received
+   * to its end and refused rather than its worker dropped) */
+  size_t upload_limit;
   pc_film film;
   pc_range *ranges;          /* open ranges */
   bool busy;                 /* a background op runs on the film */

@@ -16,6 +16,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zstd.h>
 
 #include "coord.h"
 #include "render_flags.h"
@@ -724,6 +725,7 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
     free(z);
     if (rc) { pc_film_free(&j->film); return rc; }
   }
+  j->upload_limit = ZSTD_compressBound(pc_wire_film_size_traced(&j->film, PC_TRACE_ITERATIONS));
   pc_prior_attach(c, j);
   uint64_t n;
   /* the checkpoint's film holds the committed uploads: their worker-seconds are stored */

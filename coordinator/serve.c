@@ -12,7 +12,6 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
-#include <zstd.h>
 
 #include "big_alloc.h"
 #include "coord.h"
@@ -342,7 +341,7 @@ static void on_upload(pc_peer *p, const Pcbpt__UploadChunk *u) {
     return;
   }
   /* bound what one peer can make the coordinator hold: one compressed film of the job */
-  size_t limit = j && j->film_ready ? ZSTD_compressBound(pc_wire_film_size_traced(&j->film, PC_TRACE_ITERATIONS)) : PC_WIRE_CHUNK;
+  size_t limit = j && j->upload_limit ? j->upload_limit : PC_WIRE_CHUNK;
   if (p->up_len + u->data.len > limit) {
     drop(p, "upload for job %llu exceeds %zu bytes", (unsigned long long)u->job_id, limit);
     return;
