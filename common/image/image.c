@@ -2,20 +2,28 @@
 #include "image_internal.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
 void pc_image_free(pc_image *img) {
   if (!img) return;
   free(img->rgb);
+  free(img->rgb8);
+  free(img->lut8);
   img->rgb = NULL;
+  img->rgb8 = NULL;
+  img->lut8 = NULL;
   img->w = img->h = 0;
 }
 
-int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+void pc_image_lut8(int srgb_to_linear, float lut[256]) {
+  for (int i = 0; i < 256; i++) lut[i] = srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
+}
+
+static int read_image(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e) {
   if (!path || !out) return pc_errf(e, PC_EINVAL, "pc_image_read: NULL argument");
-  out->w = out->h = 0;
-  out->rgb = NULL;
+  memset(out, 0, sizeof *out);
   FILE *f = fopen(path, "rb");
   if (!f) return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
   unsigned char m[8];
@@ -26,10 +34,18 @@ int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e
 
   static const unsigned char png_magic[8] = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
   static const unsigned char exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
-  if (n >= 8 && memcmp(m, png_magic, 8) == 0) return pc_png_read(path, srgb_to_linear, out, e);
+  if (n >= 8 && memcmp(m, png_magic, 8) == 0) return pc_png_read(path, srgb_to_linear, bytes, out, e);
   if (n >= 3 && m[0] == 0xff && m[1] == 0xd8 && m[2] == 0xff)
-    return pc_jpeg_read(path, srgb_to_linear, out, e);
+    return pc_jpeg_read(path, srgb_to_linear, bytes, out, e);
   if (n >= 4 && memcmp(m, exr_magic, 4) == 0) return pc_exr_read_beauty(path, out, e);
   if ((n >= 7 && memcmp(m, "#?RADIA", 7) == 0) || (n >= 6 && memcmp(m, "#?RGBE", 6) == 0)) return pc_rgbe_read(path, out, e);
   return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG, OpenEXR or Radiance RGBE file", path);
+}
+
+int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+  return read_image(path, srgb_to_linear, false, out, e);
+}
+
+int pc_image_read_bytes(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+  return read_image(path, srgb_to_linear, true, out, e);
 }

@@ -13,14 +13,26 @@
 typedef struct pc_image {
   int w, h;
   float *rgb; /* w*h*3, row-major from the top-left; linear radiance/reflectance */
+  /* Only from pc_image_read_bytes, for an 8-bit file (rgb then NULL): its samples as stored,
+   * w*h*3, and lut8[b], the linear value of sample b. A quarter of the floats' memory. */
+  uint8_t *rgb8;
+  float *lut8;
 } pc_image;
 
 void pc_image_free(pc_image *img);
+/* Sample k (0 .. 3*w*h-1) of either form. */
+static inline float pc_image_sample(const pc_image *img, size_t k) {
+  return img->rgb8 ? img->lut8[img->rgb8[k]] : img->rgb[k];
+}
 
 /* Reads a PNG, JPEG, EXR or Radiance RGBE .hdr (chosen by content, not extension). 8-bit formats
  * are converted from sRGB to linear when `srgb_to_linear`; EXR and RGBE are linear. For EXR the beauty R,G,B channels
  * are read. */
 int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+/* The same, but an 8-bit PNG or a JPEG is kept in its bytes (rgb8 and lut8, rgb NULL); every
+ * sample's value is the float pc_image_read gives for it. For textures, which may be many and
+ * large. */
+int pc_image_read_bytes(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
 
 /* One named RGB layer of a multi-layer EXR. Name "" is the beauty (channels R,G,B). */
 typedef struct pc_exr_layer {

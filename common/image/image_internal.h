@@ -4,13 +4,17 @@
 #define PC_IMAGE_INTERNAL_H
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 
 #include "file_replace.h"
 #include "image.h"
 
-int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
-int pc_jpeg_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
+/* bytes: an 8-bit image is kept in rgb8/lut8 (pc_image_read_bytes). */
+int pc_png_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e);
+int pc_jpeg_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e);
+/* The linear value of each 8-bit sample: lut[i] = i / 255, through the sRGB EOTF when asked. */
+void pc_image_lut8(int srgb_to_linear, float lut[256]);
 /* Radiance RGBE (.hdr, "#?RADIANCE" or "#?RGBE"): linear. */
 int pc_rgbe_read(const char *path, pc_image *out, pc_err *e);
 /* The beauty R,G,B, or the first RGB triplet when the file has no plain R,G,B. */

@@ -22,6 +22,7 @@ typedef struct jpeg_reader {
   int created;
   const char *path;
   int srgb_to_linear;
+  bool keep8; /* the samples in rgb8/lut8 */
   pc_err *e;
   FILE *f;
   long file_bytes;
@@ -69,28 +70,37 @@ static int jpeg_decode(jpeg_reader *r) {
   r->row = malloc((size_t)w * 3);
   if (!r->row) return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w, (unsigned)h);
   float lut[256];
-  for (int i = 0; i < 256; i++)
-    lut[i] = r->srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
-  size_t rows_held = 0, row_floats = (size_t)w * 3;
+  pc_image_lut8(r->srgb_to_linear, lut);
+  if (r->keep8) {
+    if (!(r->img.lut8 = malloc(sizeof lut)))
+      return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w, (unsigned)h);
+    memcpy(r->img.lut8, lut, sizeof lut);
+  }
+  size_t rows_held = 0, row_samples = (size_t)w * 3, sample = r->keep8 ? 1 : sizeof(float);
+  void **held = r->keep8 ? (void **)&r->img.rgb8 : (void **)&r->img.rgb;
   while (r->cinfo.output_scanline < h) {
     size_t y = r->cinfo.output_scanline;
     if (y == rows_held) {
       /* doubling from ~1 MB: a file cut short fails at its first missing data, having taken at
        * most twice what it decoded */
-      size_t more = rows_held ? rows_held : (1u << 18) / row_floats + 1;
+      size_t more = rows_held ? rows_held : (1u << 20) / (sample * row_samples) + 1;
       if (more > h - rows_held) more = h - rows_held;
-      float *grown = realloc(r->img.rgb, sizeof(float) * row_floats * (rows_held + more));
+      void *grown = realloc(*held, sample * row_samples * (rows_held + more));
       if (!grown)
         return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %ux%u JPEG", r->path, (unsigned)w,
                        (unsigned)h);
-      r->img.rgb = grown;
+      *held = grown;
       rows_held += more;
     }
     JSAMPROW rows[1] = {r->row};
     if (jpeg_read_scanlines(&r->cinfo, rows, 1) != 1)
       return pc_errf(r->e, PC_EIMAGE, "%s: JPEG data ends early", r->path);
-    float *dst = r->img.rgb + y * row_floats;
-    for (size_t i = 0; i < row_floats; i++) dst[i] = lut[r->row[i]];
+    if (r->keep8) {
+      memcpy(r->img.rgb8 + y * row_samples, r->row, row_samples);
+    } else {
+      float *dst = r->img.rgb + y * row_samples;
+      for (size_t i = 0; i < row_samples; i++) dst[i] = lut[r->row[i]];
+    }
   }
   jpeg_finish_decompress(&r->cinfo);
   r->img.w = (int)w;
@@ -98,11 +108,12 @@ static int jpeg_decode(jpeg_reader *r) {
   return PC_OK;
 }
 
-int pc_jpeg_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+int pc_jpeg_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e) {
   jpeg_reader *r = calloc(1, sizeof *r);
   if (!r) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   r->path = path;
   r->srgb_to_linear = srgb_to_linear;
+  r->keep8 = bytes;
   r->e = e;
   int rc;
   r->f = fopen(path, "rb");

@@ -30,6 +30,7 @@ static void on_png_warning(png_structp png, png_const_charp msg) {
 typedef struct png_reader {
   const char *path;
   int srgb_to_linear;
+  bool keep8; /* an 8-bit image in rgb8/lut8 */
   pc_err *e;
   png_msg msg;
   FILE *f;
@@ -54,6 +55,11 @@ static void png_row_to_rgb(const png_byte *src, float *dst, png_uint_32 w, int c
       }
     }
   }
+}
+
+/* One decoded row of 8-bit samples, its first three channels as they are. */
+static void png_row_to_bytes(const png_byte *src, uint8_t *dst, png_uint_32 w, int channels) {
+  for (png_uint_32 x = 0; x < w; x++, src += channels, dst += 3) memcpy(dst, src, 3);
 }
 
 /* Runs under the caller's setjmp: returns a code for errors found here, longjmps for
@@ -83,21 +89,28 @@ static int png_decode(png_reader *r) {
   /* An interlaced image's rows are complete only after its last pass, so it is decoded whole;
    * any other row by row, without a second copy of the image in its file's samples. */
   size_t buffered = passes > 1 ? h : 1;
+  bool keep8 = r->keep8 && bytes == 1;
   r->pixels = malloc(rowbytes * buffered);
   r->rows = malloc(sizeof *r->rows * buffered);
-  r->img.rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
-  if (!r->pixels || !r->rows || !r->img.rgb)
+  if (keep8) {
+    r->img.rgb8 = malloc(3 * (size_t)w * h);
+    r->img.lut8 = malloc(256 * sizeof *r->img.lut8);
+  } else {
+    r->img.rgb = malloc(sizeof(float) * 3 * (size_t)w * h);
+  }
+  if (!r->pixels || !r->rows || !(keep8 ? r->img.rgb8 && r->img.lut8 : r->img.rgb != NULL))
     return pc_errf(r->e, PC_ENOMEM, "%s: out of memory for a %lux%lu PNG", r->path,
                    (unsigned long)w, (unsigned long)h);
   for (size_t y = 0; y < buffered; y++) r->rows[y] = r->pixels + rowbytes * y;
   float lut[256];
-  for (int i = 0; i < 256; i++)
-    lut[i] = r->srgb_to_linear ? pc_srgb_to_linear(i / 255.0f) : i / 255.0f;
+  pc_image_lut8(r->srgb_to_linear, lut);
+  if (keep8) memcpy(r->img.lut8, lut, sizeof lut);
   if (passes > 1) png_read_image(r->png, r->rows);
   for (png_uint_32 y = 0; y < h; y++) {
     if (passes == 1) png_read_row(r->png, r->rows[0], NULL);
-    png_row_to_rgb(r->rows[passes > 1 ? y : 0], r->img.rgb + (size_t)y * w * 3, w, channels, bytes, lut,
-                   r->srgb_to_linear);
+    const png_byte *src = r->rows[passes > 1 ? y : 0];
+    if (keep8) png_row_to_bytes(src, r->img.rgb8 + (size_t)y * w * 3, w, channels);
+    else png_row_to_rgb(src, r->img.rgb + (size_t)y * w * 3, w, channels, bytes, lut, r->srgb_to_linear);
   }
   png_read_end(r->png, NULL);
   r->img.w = (int)w;
@@ -158,11 +171,12 @@ static int png_precheck_size(FILE *f, const char *path, pc_err *e) {
   return PC_OK;
 }
 
-int pc_png_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {
+int pc_png_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e) {
   png_reader *r = calloc(1, sizeof *r);
   if (!r) return pc_errf(e, PC_ENOMEM, "%s: out of memory", path);
   r->path = path;
   r->srgb_to_linear = srgb_to_linear;
+  r->keep8 = bytes;
   r->e = e;
   int rc;
   r->f = fopen(path, "rb");

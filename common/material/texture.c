@@ -7,9 +7,16 @@
 #include <string.h>
 
 static vec3 texel(const pc_image *img, int x, int y) {
-  const float *p = img->rgb + 3 * ((size_t)y * (size_t)img->w + (size_t)x);
+  size_t k = 3 * ((size_t)y * (size_t)img->w + (size_t)x);
+  if (img->rgb8) {
+    const uint8_t *b = img->rgb8 + k;
+    return v3(img->lut8[b[0]], img->lut8[b[1]], img->lut8[b[2]]);
+  }
+  const float *p = img->rgb + k;
   return v3(p[0], p[1], p[2]);
 }
+
+static bool has_pixels(const pc_image *img) { return (img->rgb || img->rgb8) && img->w > 0 && img->h > 0; }
 
 static int wrap(int i, int n) {
   int r = i % n;
@@ -17,7 +24,7 @@ static int wrap(int i, int n) {
 }
 
 bool pc_bitmap_footprint(const pc_image *img, float u, float v, vec3 px[4], float *dx, float *dy) {
-  if (!img->rgb || img->w <= 0 || img->h <= 0) return false;
+  if (!has_pixels(img)) return false;
   /* Repeat wrap first, so huge coordinates cannot overflow the integer conversion. */
   u -= floorf(u);
   v -= floorf(v);
@@ -73,11 +80,11 @@ static vec3 unscaled_average(const pc_texture *t) {
   if (t->type == PC_TEX_CONST) return t->value;
   if (t->type == PC_TEX_CHECKER) return v3_scale(v3_add(t->color0, t->color1), 0.5f);
   const pc_image *img = &t->img;
-  if (!img->rgb || img->w <= 0 || img->h <= 0) return v3s(0.f);
+  if (!has_pixels(img)) return v3s(0.f);
   double s[3] = {0, 0, 0};
   size_t n = (size_t)img->w * (size_t)img->h;
   for (size_t i = 0; i < n; i++)
-    for (int c = 0; c < 3; c++) s[c] += img->rgb[3 * i + c];
+    for (int c = 0; c < 3; c++) s[c] += pc_image_sample(img, 3 * i + c);
   return v3((float)(s[0] / n), (float)(s[1] / n), (float)(s[2] / n));
 }
 
@@ -88,8 +95,23 @@ vec3 pc_texture_average(const pc_texture *t) {
 
 bool pc_texture_copy(const pc_texture *t, pc_texture *out) {
   *out = *t;
-  if (t->type != PC_TEX_BITMAP || !t->img.rgb) return true;
+  if (t->type != PC_TEX_BITMAP) return true;
+  out->img.rgb = NULL;
+  out->img.rgb8 = NULL;
+  out->img.lut8 = NULL;
   size_t n = 3 * (size_t)t->img.w * (size_t)t->img.h;
+  if (t->img.rgb8) {
+    out->img.rgb8 = malloc(n);
+    out->img.lut8 = malloc(256 * sizeof *out->img.lut8);
+    if (!out->img.rgb8 || !out->img.lut8) {
+      pc_image_free(&out->img);
+      return false;
+    }
+    memcpy(out->img.rgb8, t->img.rgb8, n);
+    memcpy(out->img.lut8, t->img.lut8, 256 * sizeof *out->img.lut8);
+    return true;
+  }
+  if (!t->img.rgb) return true;
   out->img.rgb = malloc(n * sizeof *out->img.rgb);
   if (!out->img.rgb) return false;
   memcpy(out->img.rgb, t->img.rgb, n * sizeof *out->img.rgb);
@@ -101,8 +123,8 @@ static vec3 unscaled_maximum(const pc_texture *t) {
   if (t->type == PC_TEX_CHECKER) return v3_max(t->color0, t->color1);
   const pc_image *img = &t->img;
   vec3 m = v3s(0.f);
-  for (size_t i = 0; img->rgb && i < (size_t)img->w * (size_t)img->h; i++)
-    m = v3_max(m, v3(img->rgb[3 * i], img->rgb[3 * i + 1], img->rgb[3 * i + 2]));
+  for (size_t i = 0; has_pixels(img) && i < (size_t)img->w * (size_t)img->h; i++)
+    m = v3_max(m, v3(pc_image_sample(img, 3 * i), pc_image_sample(img, 3 * i + 1), pc_image_sample(img, 3 * i + 2)));
   return m;
 }
 

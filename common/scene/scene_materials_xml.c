@@ -290,11 +290,15 @@ int pc_sx_texture(pc_sx *c, const pc_xml_node *n, int *index) {
     t.type = PC_TEX_BITMAP;
     t.nearest = strcmp(filter, "nearest") == 0;
     /* 8-bit images are sRGB-encoded as Mitsuba assumes; the reader ignores the flag for EXR. */
-    rc = pc_image_read(path, gamma <= 0, &t.img, c->e);
+    /* 8-bit files stay in their bytes: a quarter of the memory, the same values */
+    rc = pc_image_read_bytes(path, gamma <= 0, &t.img, c->e);
     free(path);
     if (rc) return pc_sx_wrap(c, n, what, rc);
-    if (gamma > 0) /* the file's values are v^(1/gamma)-encoded, whatever its format */
-      for (size_t i = 0; i < 3 * (size_t)t.img.w * (size_t)t.img.h; i++) t.img.rgb[i] = powf(fmaxf(t.img.rgb[i], 0.f), gamma);
+    if (gamma > 0) { /* the file's values are v^(1/gamma)-encoded, whatever its format */
+      float *v = t.img.rgb8 ? t.img.lut8 : t.img.rgb;
+      size_t nv = t.img.rgb8 ? 256 : 3 * (size_t)t.img.w * (size_t)t.img.h;
+      for (size_t i = 0; i < nv; i++) v[i] = powf(fmaxf(v[i], 0.f), gamma);
+    }
   } else if (strcmp(type, "checkerboard") == 0) {
     t.type = PC_TEX_CHECKER;
     t.color0 = v3s(0.4f);

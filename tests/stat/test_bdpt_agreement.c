@@ -259,7 +259,7 @@ static void layered_cornell(pc_scene *s) {
   memset(&t, 0, sizeof t);
   t.type = PC_TEX_BITMAP;
   t.uscale = t.vscale = 1.f;
-  t.img = (pc_image){N, N, malloc(sizeof(float) * 3 * N * N)};
+  t.img = (pc_image){.w = N, .h = N, .rgb = malloc(sizeof(float) * 3 * N * N)};
   assert_non_null(t.img.rgb);
   for (int y = 0; y < N; y++)
     for (int x = 0; x < N; x++)

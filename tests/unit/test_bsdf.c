@@ -1056,7 +1056,7 @@ static void test_bitmap(void **state) {
   pc_texture t;
   memset(&t, 0, sizeof t);
   t.type = PC_TEX_BITMAP;
-  t.img = (pc_image){W, H, px};
+  t.img = (pc_image){.w = W, .h = H, .rgb = px};
   t.uscale = t.vscale = 1;
   for (int y = 0; y < H; y++)
     for (int x = 0; x < W; x++) {
@@ -1167,12 +1167,12 @@ static void test_bumpmap_frame(void **state) {
   texs[0].type = PC_TEX_CONST;
   texs[0].value = v3s(0.8f);
   texs[1].type = PC_TEX_BITMAP;
-  texs[1].img = (pc_image){4, 3, flat_px};
+  texs[1].img = (pc_image){.w = 4, .h = 3, .rgb = flat_px};
   texs[1].uscale = texs[1].vscale = 2;
   /* A ramp along x, 4 texels of 1 apart (grey, so luminance = value): d/du = 4 per unit u. */
   float ramp[4 * 1 * 3] = {0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3};
   texs[2].type = PC_TEX_BITMAP;
-  texs[2].img = (pc_image){4, 1, ramp};
+  texs[2].img = (pc_image){.w = 4, .h = 1, .rgb = ramp};
   texs[2].uscale = texs[2].vscale = 1;
   pc_material inner = mk_plastic(0.2f, false);
   pc_material bump = mk_bumpmap(&inner);
@@ -1207,10 +1207,10 @@ static void test_bumpmap_frame(void **state) {
   assert_true(close3(sh.sh.n, v3_norm(v3(-4, 0, 1)), 0, 1e-5f));
   assert_true(close3(sh.nb, z, 0, 0));
   /* The same ramp down the image's rows: v grows downward (Mitsuba's uv), so dh/dv = +4. */
-  texs[2].img = (pc_image){1, 4, ramp};
+  texs[2].img = (pc_image){.w = 1, .h = 4, .rgb = ramp};
   pc_shading_make(&sh, &bump, texs, z, z, v3(1, 0, 0), v3(0, 1, 0), (vec2){0.5f, 0.45f}, z);
   assert_true(close3(sh.sh.n, v3_norm(v3(0, -4, 1)), 0, 1e-5f));
-  texs[2].img = (pc_image){4, 1, ramp};
+  texs[2].img = (pc_image){.w = 4, .h = 1, .rgb = ramp};
   /* Mitsuba's `scale` texture scales the slope; filterType nearest has none. */
   texs[2].scaled = true;
   texs[2].scale = v3s(0.25f);

@@ -106,7 +106,7 @@ static float *pattern(int w, int h, float seed) {
 
 /* Expects a failing read to leave no image and give a message. */
 static void expect_read_fails(const char *path) {
-  pc_image img = {7, 7, (float *)&img};
+  pc_image img = {.w = 7, .h = 7, .rgb = (float *)&img};
   pc_err e = {0};
   int rc = pc_image_read(path, 1, &img, &e);
   assert_true(rc < 0);
@@ -697,6 +697,42 @@ static void test_jpeg_sizes_not_trusted(void **state) {
   free(px);
 }
 
+/* pc_image_read_bytes keeps an 8-bit PNG (RGB, RGBA, grey, palette, interlaced) or a JPEG in its
+ * bytes, every sample's value exactly the float pc_image_read gives, sRGB or not; a 16-bit PNG
+ * stays in floats. */
+static void test_image_read_bytes(void **state) {
+  const int w = 7, h = 5;
+  unsigned char px[7 * 5 * 4];
+  for (size_t i = 0; i < sizeof px; i++) px[i] = (unsigned char)(i * 37 + 11);
+  const char *p = path_in(state, "b.png"), *j = path_in(state, "b.jpg");
+  struct { int ctype, interlace, per_px; } cases[] = {{PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, 3},
+                                                       {PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_ADAM7, 4},
+                                                       {PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, 1}};
+  for (int k = 0; k < 5; k++) {
+    if (k < 3) write_png(p, w, h, 8, cases[k].ctype, cases[k].interlace, px, (size_t)w * cases[k].per_px);
+    else if (k == 3) write_jpeg(j, w, h, 3, px, false);
+    else write_jpeg(j, w, h, 3, px, true);
+    for (int srgb = 0; srgb < 2; srgb++) {
+      pc_image f, b;
+      pc_err e;
+      assert_int_equal(pc_image_read(k < 3 ? p : j, srgb, &f, &e), PC_OK);
+      assert_int_equal(pc_image_read_bytes(k < 3 ? p : j, srgb, &b, &e), PC_OK);
+      assert_true(b.rgb == NULL && b.rgb8 != NULL && b.lut8 != NULL && f.rgb8 == NULL);
+      assert_true(b.w == w && b.h == h);
+      for (size_t i = 0; i < 3 * (size_t)w * h; i++) assert_true(pc_image_sample(&b, i) == f.rgb[i]);
+      pc_image_free(&f);
+      pc_image_free(&b);
+    }
+  }
+  unsigned char px16[7 * 5 * 6] = {0};
+  write_png(p, w, h, 16, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, px16, (size_t)w * 6);
+  pc_image b;
+  pc_err e;
+  assert_int_equal(pc_image_read_bytes(p, 1, &b, &e), PC_OK);
+  assert_true(b.rgb != NULL && b.rgb8 == NULL);
+  pc_image_free(&b);
+}
+
 /* Radiance RGBE: flat scanlines (width < 8), value = mantissa * 2^(E - 136). */
 static void test_rgbe_read(void **state) {
   const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n";
@@ -918,7 +954,7 @@ static void test_metrics_known_values(void **state) {
   assert_int_equal(m.nonfinite, 1);
   assert_float_equal(m.rmse, 0.5, 1e-12);
 
-  pc_image ia = {2, 1, a}, ib = {1, 2, (float *)b};
+  pc_image ia = {.w = 2, .h = 1, .rgb = a}, ib = {.w = 1, .h = 2, .rgb = (float *)b};
   assert_int_equal(pc_metrics_image(&ia, &ib, &m, &e), PC_EINVAL);
   assert_non_null(strstr(e.msg, "2x1"));
 }
@@ -928,8 +964,8 @@ static void test_metrics_layers(void **state) {
   float z[3] = {0, 0, 0}, one[3] = {1, 1, 1}, two[3] = {2, 2, 2};
   char n0[] = "", n1[] = "pt", n2[] = "x", n3[] = "nee";
   char *an[] = {n0, n1, n2}, *bn[] = {n1, n3, n0};
-  pc_image al[] = {{1, 1, one}, {1, 1, two}, {1, 1, z}};
-  pc_image bl[] = {{1, 1, z}, {1, 1, z}, {1, 1, z}};
+  pc_image al[] = {{.w = 1, .h = 1, .rgb = one}, {.w = 1, .h = 1, .rgb = two}, {.w = 1, .h = 1, .rgb = z}};
+  pc_image bl[] = {{.w = 1, .h = 1, .rgb = z}, {.w = 1, .h = 1, .rgb = z}, {.w = 1, .h = 1, .rgb = z}};
   pc_exr_file a = {.w = 1, .h = 1, .nlayers = 3, .names = an, .layers = al};
   pc_exr_file b = {.w = 1, .h = 1, .nlayers = 3, .names = bn, .layers = bl};
   pc_layer_metrics *r;
@@ -967,6 +1003,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_png_huge_header_refused, setup, teardown),
       cmocka_unit_test_setup_teardown(test_jpeg_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_jpeg_sizes_not_trusted, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_image_read_bytes, setup, teardown),
       cmocka_unit_test_setup_teardown(test_rgbe_read, setup, teardown),
       cmocka_unit_test_setup_teardown(test_missing_and_garbage, setup, teardown),
       cmocka_unit_test_setup_teardown(test_truncated_and_corrupt_files, setup, teardown),
