@@ -3,7 +3,8 @@
  * apart by content), the EXR reader of `compare` and references, and the PLY and Mitsuba
  * `serialized` meshes. Whatever the bytes: a clean return, no crash, no leak. The first byte
  * picks the reader, the second its option; the rest is the file:
- *   0  pc_image_read, sRGB decoding when the option is odd;
+ *   0  pc_image_read, sRGB decoding when the option is odd; pc_image_read_bytes (textures)
+ *      when its bit 1 is set;
  *   1  pc_exr_read_layers (every RGB triplet and the header's attributes);
  *   2  pc_mesh_load_ply;
  *   3  pc_mesh_load_serialized, shape index = option % 4;
@@ -69,7 +70,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   switch (data[0] % NMODES) { /* the results are irrelevant; only crashes and leaks matter */
   case IMAGE: {
     pc_image img = {0};
-    (void)pc_image_read(file, option & 1, &img, &e);
+    if (option & 2) (void)pc_image_read_bytes(file, option & 1, &img, &e);
+    else (void)pc_image_read(file, option & 1, &img, &e);
     pc_image_free(&img);
     break;
   }
