@@ -192,7 +192,10 @@ struct pc_coord {
   /* tunables */
   double orphan_grace, heartbeat_timeout, range_seconds, ckpt_interval, exr_interval;
   double progress_timeout;   /* seconds a range of a worker not measured yet may go without an upload */
-  size_t max_film;           /* bytes of a job's film a submit may ask for (--max-film-mb; 0: the machine's memory) */
+  /* bytes of film the coordinator may hold (--max-film-mb, else the machine's memory; 0: no
+   * bound known): a larger job is refused at submit, one that does not fit beside the films
+   * held waits */
+  size_t max_film;
   int tick_ms;               /* period of liveness, halting and checkpoint checks (250) */
   bool volatile_store;       /* a throw-away data dir (embedded render): no fsync */
   bool one_worker;           /* only one worker will ever come (embedded render): ranges keep nothing back */

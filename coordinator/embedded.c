@@ -140,15 +140,14 @@ int pc_embedded_check_memory(const pc_render_settings *set, int threads, int job
   size_t need = (size_t)jobs * job + job + pc_renderer_film_bytes(set, threads);
   if (!limit || need <= limit) return PC_OK;
   int nthreads = threads ? threads : pc_cpu_count();
-  if (jobs == 1)
-    return pc_errf(e, PC_ELIMIT,
-                   "a %dx%d render on %d thread%s takes %zu MB of films (the coordinator's and the worker's), more than "
-                   "this machine's %zu MB of memory",
-                   set->width, set->height, nthreads, nthreads == 1 ? "" : "s", pc_big_mb(need), pc_big_mb(limit));
+  char what[64];
+  if (jobs == 1) snprintf(what, sizeof what, "a %dx%d render", set->width, set->height);
+  else snprintf(what, sizeof what, "%d jobs of %dx%d", jobs, set->width, set->height);
   return pc_errf(e, PC_ELIMIT,
-                 "%d jobs of %dx%d on %d thread%s take at least %zu MB of films (the coordinator's and the worker's), "
-                 "more than this machine's %zu MB of memory",
-                 jobs, set->width, set->height, nthreads, nthreads == 1 ? "" : "s", pc_big_mb(need), pc_big_mb(limit));
+                 "%s on %d thread%s take%s %zu MB of films (the coordinator's and the worker's), more than this "
+                 "machine's %zu MB of memory",
+                 what, nthreads, nthreads == 1 ? "" : "s", jobs == 1 ? "s" : " at least", pc_big_mb(need),
+                 pc_big_mb(limit));
 }
 
 void pc_embedded_stop(pc_embedded *f) {

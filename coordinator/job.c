@@ -454,7 +454,8 @@ static uint64_t reason_hash(const char *s) {
 /* An ended job's films, once no background operation uses them (a pilot candidate's goes to
  * its group: pc_prior_keep takes it). Jobs waiting for memory may fit now. */
 static void release_films(pc_coord *c, pc_job *j) {
-  if (j->busy || j->ops || !j->film_ready || job_live(j) || j->state == PC_JOB_QUEUED) return;
+  bool ended = j->state == PC_JOB_DONE || j->state == PC_JOB_FAILED || j->state == PC_JOB_CANCELLED;
+  if (j->busy || j->ops || !j->film_ready || !ended) return;
   pc_prior_keep(c, j);
   if (j->film_ready) pc_film_free(&j->film);
   j->film_ready = false;

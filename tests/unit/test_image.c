@@ -660,9 +660,10 @@ static void test_jpeg_read(void **state) {
 }
 
 /* The image grows as its scanlines decode (a 512x1200 image takes four steps), progressive or
- * not; a header whose size is forged larger than the file can hold fails without the image
- * being allocated first: a baseline file at its first missing data, a progressive one (whose
- * coefficients libjpeg would hold whole) before decoding. */
+ * not; a header whose size is forged larger than the file can hold fails in one line: a
+ * baseline file at its first missing data, a progressive one (whose coefficients libjpeg would
+ * hold whole) before decoding. That neither takes the claimed image's memory first is what the
+ * forged seeds of fuzz_files check, under libFuzzer's 1 GB limit. */
 static void test_jpeg_sizes_not_trusted(void **state) {
   const int w = 512, h = 1200;
   unsigned char *px = malloc((size_t)w * h);
