@@ -96,6 +96,7 @@ int pc_cmd_submit(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord submit: %s\n", e.msg);
     return 1;
   }
+  pc_cli_warn_backs("submit", &scene);
   uint8_t *blob, hash[PC_BUNDLE_HASH];
   size_t n;
   int brc = pc_cli_scene_bundle(&scene, &blob, &n, hash, &e);

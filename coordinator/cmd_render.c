@@ -283,6 +283,7 @@ int pc_cmd_render(int argc, char **argv) {
   /* settings the renderer refuses (e.g. a method not built in) are refused here too */
   if (pc_renderer_check(&scene, &req.set, &err) != PC_OK) goto fail;
   if (pc_embedded_check_memory(&req.set, (int)threads, 1, &err) != PC_OK) goto fail;
+  pc_cli_warn_backs("render", &scene);
   double pilot_s = 0;
   pc_scene_free(&scene);
   memset(&scene, 0, sizeof scene);

@@ -673,6 +673,7 @@ static int precheck(const study_args *a, pc_err *e) {
     if (!rc) rc = pc_scene_check(&scene, e);
     if (!rc) rc = check_methods(a, &req, &scene, e);
     for (int m = 0; !rc && m < a->nmethods; m++) pc_cli_warn_method("study", a->scenes[k], a->methods[m].method, &req);
+    if (!rc) pc_cli_warn_backs("study", &scene);
     pc_scene_free(&scene);
     if (!rc && a->nreferences) {
       pc_exr_file ref = {0};

@@ -86,6 +86,25 @@ bool pc_material_casts_caustics(const pc_material *materials, int n, int i) {
   return material_has(materials, n, i, caustic_surface);
 }
 
+static has_answer lit_behind(const pc_material *m) {
+  if (m->twosided) return HAS;
+  switch (m->type) {
+  case PC_MAT_DIELECTRIC:
+  case PC_MAT_ROUGHDIELECTRIC:
+  case PC_MAT_THINDIELECTRIC:
+  case PC_MAT_DIFFTRANS:
+  case PC_MAT_MASK: return HAS; /* what is behind shows through */
+  case PC_MAT_BUMPMAP:
+  case PC_MAT_COATING:
+  case PC_MAT_ROUGHCOATING: return HAS_IF_WRAPPED;
+  default: return HAS_NOT;
+  }
+}
+
+bool pc_material_shows_behind(const pc_material *materials, int n, int i) {
+  return material_has(materials, n, i, lit_behind);
+}
+
 static bool is_dielectric(const pc_material *m) {
   return m->type == PC_MAT_DIELECTRIC || m->type == PC_MAT_ROUGHDIELECTRIC || m->type == PC_MAT_THINDIELECTRIC;
 }

@@ -210,6 +210,11 @@ bool pc_material_has_delta(const pc_material *materials, int n, int i);
  * tracing samples best. A plastic's or a coating's smooth coat reflects a few per cent and does
  * not count. Reads the nested indices as pc_material_has_delta does. */
 bool pc_material_casts_caustics(const pc_material *materials, int n, int i);
+/* False if materials[i], seen from behind its shading frame, is black: it neither reflects
+ * there (Mitsuba's one-sided materials, unless wrapped in twosided) nor lets anything through. A
+ * mix shows what any of its materials shows. Reads the nested indices as pc_material_has_delta
+ * does. */
+bool pc_material_shows_behind(const pc_material *materials, int n, int i);
 /* Russian-roulette continuation probability in [0,1]: depends only on the material at this
  * point (not on depth or directions) so a reverse pdf can include it. */
 float pc_bsdf_continuation(const pc_material *m, const pc_texture *texs, const pc_shading *sh);

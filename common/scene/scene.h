@@ -47,6 +47,8 @@ typedef struct pc_shape {
   bool flip_normals;     /* PC_SHAPE_SPHERE: normals point inward */
   int material;          /* index into materials */
   int light;             /* index into lights if this shape is an area emitter, else -1 */
+  int xml_file, xml_line; /* the <shape> element it comes from: the scene file (0) or included
+                             file xml_includes[xml_file - 1], and its line (for messages) */
 } pc_shape;
 
 /* A shape whose toWorld is an <animation>: its shape in object space (the scene's shapes[shape]
@@ -89,6 +91,7 @@ typedef struct pc_scene {
    * bundle holds every name the scene uses) */
   char **files, **file_names; int nfiles;
   char *root;                 /* real path of the folder that confines those files */
+  char **xml_includes; int nxml_includes; /* included XML files as messages name them */
   /* built by pc_scene_build */
   void *rtc_device, *rtc_scene; /* RTCDevice, RTCScene (kept opaque to users of this header) */
   void *rtc_error;            /* where Embree's error callback records the first error */
@@ -145,6 +148,19 @@ int pc_scene_build(pc_scene *s, pc_err *e);
  * spheres) is the worker's to report. The scene can then be bundled, given to
  * pc_renderer_check and freed; it cannot be rendered. */
 int pc_scene_check(pc_scene *s, pc_err *e);
+/* Where the camera sees the back of a one-sided material (pc_material_shows_behind), which
+ * renders black as in Mitsuba 0.6: a scene whose walls face away from the room it encloses
+ * (published conversions from renderers whose materials are two-sided) renders nearly black,
+ * and a user is owed the reason. pc_scene_probe_backs traces grid x grid primary rays through
+ * the image of a checked scene (pc_scene_check, not built) on an Embree structure of its own,
+ * released before it returns. */
+#define PC_SCENE_BACKS_NAMED 3
+typedef struct pc_scene_backs {
+  int rays, backs;                  /* rays traced; of them, the first hits on such a back */
+  int nshapes;                      /* shapes whose backs were hit, the most hit first (at most 3) */
+  int shape[PC_SCENE_BACKS_NAMED], count[PC_SCENE_BACKS_NAMED];
+} pc_scene_backs;
+int pc_scene_probe_backs(pc_scene *s, int grid, pc_scene_backs *out, pc_err *e);
 /* Frees everything (safe on a zeroed or partially loaded scene). */
 void pc_scene_free(pc_scene *s);
 

@@ -244,7 +244,7 @@ static int build_tri_consts(pc_scene *s, pc_err *e) {
   return rc;
 }
 
-static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
+static int build_embree(pc_scene *s, embree_error *ee, enum RTCBuildQuality quality, pc_err *e) {
   RTCDevice dev = rtcNewDevice("verbose=0");
   if (!dev) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
   s->rtc_device = dev;
@@ -253,7 +253,7 @@ static int build_embree(pc_scene *s, embree_error *ee, pc_err *e) {
   if (!scn) return pc_errf(e, PC_EEMBREE, "%s: cannot create an Embree scene: %s", s->path, ee->msg);
   s->rtc_scene = scn;
   rtcSetSceneFlags(scn, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scn, RTC_BUILD_QUALITY_HIGH);
+  rtcSetSceneBuildQuality(scn, quality);
   int rc = PC_OK;
   for (int i = 0; i < s->nshapes && rc == PC_OK; i++) rc = pc_scene_attach_shape(s, scn, i, e);
   if (rc == PC_OK) rc = pc_scene_commit(s, scn, e);
@@ -342,16 +342,64 @@ int pc_scene_build(pc_scene *s, pc_err *e) {
   embree_error *ee = calloc(1, sizeof *ee);
   if (!ee) return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
   s->rtc_error = ee;
-  rc = build_embree(s, ee, e);
+  rc = build_embree(s, ee, RTC_BUILD_QUALITY_HIGH, e);
   if (rc == PC_OK) rc = build_tri_consts(s, e);
   /* After the geometry: the environment's light paths need the bounding sphere. */
   return rc != PC_OK ? rc : build_lights(s, e);
 }
 
-void pc_scene_free(pc_scene *s) {
+static void release_embree(pc_scene *s) {
   if (s->rtc_scene) rtcReleaseScene(s->rtc_scene);
   if (s->rtc_device) rtcReleaseDevice(s->rtc_device);
   free(s->rtc_error);
+  s->rtc_scene = s->rtc_device = s->rtc_error = NULL;
+}
+
+int pc_scene_probe_backs(pc_scene *s, int grid, pc_scene_backs *out, pc_err *e) {
+  memset(out, 0, sizeof *out);
+  if (s->rtc_scene) return pc_errf(e, PC_EINVAL, "%s: the scene is built already", s->path);
+  if (grid < 1 || grid > 1024) return pc_errf(e, PC_EINVAL, "%s: a probe grid of %d rays a side", s->path, grid);
+  if (s->nshapes < 1) return PC_OK;
+  int *hits = calloc((size_t)s->nshapes, sizeof *hits);
+  embree_error *ee = calloc(1, sizeof *ee);
+  if (!hits || !ee) {
+    free(hits);
+    free(ee);
+    return pc_errf(e, PC_ENOMEM, "%s: out of memory", s->path);
+  }
+  s->rtc_error = ee;
+  /* the quickest build Embree has: the probe traces a few thousand rays */
+  int rc = build_embree(s, ee, RTC_BUILD_QUALITY_LOW, e);
+  const pc_camera *cam = &s->camera;
+  for (int gy = 0; gy < grid && rc == PC_OK; gy++)
+    for (int gx = 0; gx < grid; gx++) {
+      vec3 d = pc_camera_ray_dir(cam, (gx + 0.5f) * (float)cam->width / (float)grid, (gy + 0.5f) * (float)cam->height / (float)grid);
+      pc_hit h;
+      out->rays++;
+      if (!pc_scene_intersect(s, cam->pos, d, INFINITY, &h)) continue;
+      int m = s->shapes[h.shape].material;
+      if (v3_dot(d, h.ns) < 0.f || pc_material_shows_behind(s->materials, s->nmaterials, m)) continue;
+      out->backs++;
+      hits[h.shape]++;
+    }
+  release_embree(s);
+  /* the most hit shapes, in order */
+  for (int k = 0; k < PC_SCENE_BACKS_NAMED && rc == PC_OK; k++) {
+    int best = -1;
+    for (int i = 0; i < s->nshapes; i++)
+      if (hits[i] > 0 && (best < 0 || hits[i] > hits[best])) best = i;
+    if (best < 0) break;
+    out->shape[k] = best;
+    out->count[k] = hits[best];
+    out->nshapes = k + 1;
+    hits[best] = 0;
+  }
+  free(hits);
+  return rc;
+}
+
+void pc_scene_free(pc_scene *s) {
+  release_embree(s);
   for (int i = 0; i < s->nshapes; i++) {
     pc_mesh_free(&s->shapes[i].mesh);
     free(s->shapes[i].tri);
@@ -381,6 +429,8 @@ void pc_scene_free(pc_scene *s) {
   free(s->files);
   free(s->file_names);
   free(s->root);
+  for (int i = 0; i < s->nxml_includes; i++) free(s->xml_includes[i]);
+  free(s->xml_includes);
   memset(s, 0, sizeof *s);
 }
 

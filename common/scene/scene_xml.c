@@ -265,6 +265,10 @@ int pc_sx_add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
     return pc_errf(c->e, PC_ELIMIT, "%s:%d: more than %d shapes", c->file, n->line, PC_SCENE_MAX_SHAPES);
   int rc = pc_sx_grow(c, (void **)&c->s->shapes, &c->cap_shapes, c->s->nshapes + 1, sizeof *sh);
   if (rc) return rc;
+  sh->xml_line = n->line;
+  sh->xml_file = 0;
+  for (int k = 0; n->file && k < c->nnames; k++)
+    if (c->names[k] == n->file) sh->xml_file = k + 1;
   c->s->shapes[c->s->nshapes++] = *sh;
   return 0;
 }
@@ -878,8 +882,9 @@ int pc_scene_load_with(const char *path, const pc_scene_load_opts *opts, pc_scen
     free(c.incl_names[c.incl_depth - 1]);
     free((char *)c.incl_stack[--c.incl_depth]);
   }
-  for (int i = 0; i < c.nnames; i++) free(c.names[i]);
-  free(c.names);
+  /* the shapes name their included files in messages (pc_shape.xml_file) */
+  out->xml_includes = c.names;
+  out->nxml_includes = c.nnames;
   for (int i = 0; i < c.nwarned; i++) free(c.warned[i]);
   free(c.warned);
   for (int i = 0; i < c.nids; i++) free(c.ids[i].id);

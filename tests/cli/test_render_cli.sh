@@ -107,6 +107,19 @@ check pt-incomplete 0 "pt never samples the light a point or spot light sends th
   "$bin" render "$tmp/point_glass.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 check bdpt-complete 0 "" -- "$bin" render "$tmp/point_glass.xml" --method bdpt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 if grep -q "pt never samples" "$tmp/err"; then echo "FAIL bdpt-complete: warned"; fail=1; fi
+if grep -q "one-sided" "$tmp/err"; then echo "FAIL bdpt-complete: warned of backs"; fail=1; fi
+
+# A room whose walls face out of it (published conversions from renderers with two-sided
+# materials): black as in Mitsuba, and render names the walls the camera sees from behind
+cat >"$tmp/walls_out.xml" <<'XML'
+<scene version="0.6.0">
+  <sensor type="perspective"><float name="fov" value="40"/></sensor>
+  <emitter type="point"><point name="position" x="0" y="0" z="2"/></emitter>
+  <shape type="rectangle"><transform name="toWorld"><scale value="5"/><translate z="4"/></transform></shape>
+</scene>
+XML
+check walls-out 0 "100% of the image is the back of one-sided materials, black as in Mitsuba 0.6 (they reflect only on the side their normals face): the shape at line 4 (100%)" -- \
+  "$bin" render "$tmp/walls_out.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/wo.exr"
 
 # An emitter so bright that a pixel's sum is beyond what a film upload may hold: every worker
 # renders the range's same refused film, so the range counts as one that could not be rendered

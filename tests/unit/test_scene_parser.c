@@ -1287,6 +1287,73 @@ static void test_check_without_bvh(void **state) {
   th_rm_rf(t.root);
 }
 
+/* pc_scene_probe_backs: the camera (at the origin, looking along +z) sees a wall 5 ahead. A
+ * rectangle's normal is +z, so unflipped the wall shows its back; what counts as black there is
+ * the one-sided materials, not twosided ones, glass or flipped normals; the shapes come most seen
+ * first with the line of their element, and a shape of an included file names that file. */
+static void test_probe_backs(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  const char *lit = "<emitter type=\"constant\"/>\n" SENSOR "\n";
+  struct {
+    const char *shapes;
+    int backs_pct, nshapes, line0;
+  } c[] = {
+      /* one wall over the whole view, its back to the camera */
+      {"<shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>", 100, 1, 4},
+      /* the same facing the camera */
+      {"<shape type=\"rectangle\"><boolean name=\"flipNormals\" value=\"true\"/><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>", 0, 0, 0},
+      /* twosided, glass, and a mix with a twosided part: nothing black behind */
+      {"<shape type=\"rectangle\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>", 0, 0, 0},
+      {"<shape type=\"rectangle\"><bsdf type=\"dielectric\"/><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>", 0, 0, 0},
+      {"<shape type=\"rectangle\"><bsdf type=\"roughconductor\"/><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>", 100, 1, 4},
+      /* two halves, the left one (+x is the image's left) turned away; a closed cube in front
+         of them shows no back, and hides 31% of the (768x576) image, half of it on the left */
+      {"<shape type=\"rectangle\"><boolean name=\"flipNormals\" value=\"true\"/><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate x=\"-9\" z=\"5\"/></transform></shape>\n"
+       "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate x=\"9\" z=\"5\"/></transform></shape>\n"
+       "<shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"0.5\"/><translate z=\"3\"/></transform></shape>", 34, 1, 5},
+      /* the back wall in an included file */
+      {"<include filename=\"wall.xml\"/>", 100, 1, 3},
+  };
+  assert_int_equal(th_write_str(t.dir, "wall.xml",
+                                "<scene version=\"0.6.0\">\n\n<shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/>"
+                                "<translate z=\"5\"/></transform></shape></scene>"),
+                   0);
+  for (size_t i = 0; i < sizeof c / sizeof *c; i++) {
+    char body[2048];
+    snprintf(body, sizeof body, "%s%s", lit, c[i].shapes);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (!rc) rc = pc_scene_check(&s, &e);
+    pc_scene_backs b;
+    if (!rc) rc = pc_scene_probe_backs(&s, 32, &b, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    assert_null(s.rtc_scene); /* the probe's structure is gone */
+    assert_int_equal(b.rays, 32 * 32);
+    int pct = (int)lround(100.0 * b.backs / b.rays);
+    if (abs(pct - c[i].backs_pct) > 3 || b.nshapes != c[i].nshapes) print_error("case %zu: %d%% in %d shapes\n", i, pct, b.nshapes);
+    assert_true(abs(pct - c[i].backs_pct) <= 3);
+    assert_int_equal(b.nshapes, c[i].nshapes);
+    if (b.nshapes) {
+      const pc_shape *sh = &s.shapes[b.shape[0]];
+      assert_int_equal(sh->xml_line, c[i].line0);
+      assert_int_equal(b.count[0], b.backs);
+      if (strstr(c[i].shapes, "include")) {
+        assert_int_equal(sh->xml_file, 1);
+        assert_int_equal(s.nxml_includes, 1);
+        assert_non_null(strstr(s.xml_includes[0], "wall.xml"));
+      } else {
+        assert_int_equal(sh->xml_file, 0);
+      }
+    }
+    pc_scene_free(&s);
+  }
+  th_rm_rf(t.root);
+}
+
 /* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
  * instance's toWorld after their own; the group itself is not rendered. */
 static void test_instances(void **state) {
@@ -1727,7 +1794,7 @@ int main(void) {
       cmocka_unit_test(test_default_sensor),   cmocka_unit_test(test_include_and_defines),
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
       cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_tri_consts),
-      cmocka_unit_test(test_check_without_bvh),
+      cmocka_unit_test(test_check_without_bvh), cmocka_unit_test(test_probe_backs),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
