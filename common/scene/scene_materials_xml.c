@@ -78,9 +78,14 @@ static int bsdf_value(pc_sx *c, const pc_xml_node *n, const char *type, pc_mater
   m->transmittance = konst(1.f);
   int rc;
   if (strcmp(type, "diffuse") == 0) {
-    pc_param p[] = {{"reflectance", PC_P_SLOT, &m->reflectance, 0, 0}};
+    pc_tex_slot other = m->reflectance;
+    pc_param p[] = {{"reflectance", PC_P_SLOT, &m->reflectance, 0, 0}, {"diffuseReflectance", PC_P_SLOT, &other, 0, 0}};
     m->type = PC_MAT_DIFFUSE;
-    if ((rc = pc_sx_params_only(c, n, what, p, 1)) || (rc = check_max1(c, &p[0], &m->reflectance, what))) return rc;
+    if ((rc = pc_sx_params_only(c, n, what, p, 2))) return rc;
+    if (p[0].set && p[1].set)
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give reflectance or diffuseReflectance, not both", c->file, n->line, what);
+    if (p[1].set) m->reflectance = other; /* Mitsuba takes either name */
+    if ((rc = check_max1(c, &p[p[1].set ? 1 : 0], &m->reflectance, what))) return rc;
   } else if (strcmp(type, "conductor") == 0 || strcmp(type, "roughconductor") == 0) {
     bool rough = type[0] == 'r';
     const char *material = "Cu", *dist = "beckmann";

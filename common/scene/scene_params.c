@@ -231,7 +231,7 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
  * plugins and their base classes). */
 static const char *ignored_as_mitsuba(const char *what, const char *name) {
   static const struct { const char *what, *params; } mitsuba[] = {
-      {"bsdf 'diffuse'", " reflectance "},
+      {"bsdf 'diffuse'", " reflectance diffuseReflectance "},
       {"bsdf 'conductor'", " material eta k extEta specularReflectance "},
       {"bsdf 'roughconductor'", " distribution alpha alphaU alphaV material eta k extEta specularReflectance sampleVisible "},
       {"bsdf 'plastic'", " intIOR extIOR specularReflectance diffuseReflectance nonlinear "},

@@ -813,6 +813,22 @@ static void test_known_values(void **state) {
     assert_true(close_rel(v3_get(fr, ch), ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk), 1e-5f, 0));
   }
   assert_false(pc_conductor_ior("Unobtainium", &eta, &k));
+  /* every material of Mitsuba 0.6's data/ior (its conductor accepts any of them) */
+  static const char *const mitsuba_ior[] = {
+      "a-C", "Ag", "Al", "AlAs", "AlAs_palik", "AlSb", "AlSb_palik", "Au", "Be", "Be_palik", "Cr", "CsI", "CsI_palik",
+      "Cu", "Cu_palik", "Cu2O", "Cu2O_palik", "CuO", "CuO_palik", "d-C", "d-C_palik", "Hg", "Hg_palik", "HgTe",
+      "HgTe_palik", "Ir", "Ir_palik", "K", "K_palik", "Li", "Li_palik", "MgO", "MgO_palik", "Mo", "Mo_palik",
+      "Na_palik", "Nb", "Nb_palik", "Ni_palik", "Rh", "Rh_palik", "Se", "Se_palik", "Se-e", "Se-e_palik", "SiC",
+      "SiC_palik", "SnTe", "SnTe_palik", "Ta", "Ta_palik", "Te", "Te_palik", "Te-e", "Te-e_palik", "ThF4",
+      "ThF4_palik", "TiC", "TiC_palik", "TiN", "TiN_palik", "TiO2", "TiO2_palik", "TiO2-e", "TiO2-e_palik", "V_palik",
+      "VC", "VC_palik", "VN", "VN_palik", "W"};
+  for (size_t i = 0; i < sizeof mitsuba_ior / sizeof *mitsuba_ior; i++) {
+    if (!pc_conductor_ior(mitsuba_ior[i], &eta, &k)) print_error("conductor '%s' unknown\n", mitsuba_ior[i]);
+    assert_true(pc_conductor_ior(mitsuba_ior[i], &eta, &k));
+    /* a reflectance at normal incidence in (0, 1) */
+    fr = pc_fresnel_conductor(1.f, eta, k);
+    for (int ch = 0; ch < 3; ch++) assert_true(v3_get(fr, ch) > 0.f && v3_get(fr, ch) < 1.f);
+  }
 
   /* Dielectric: reflection probability at normal incidence, both sides; TIR beyond the
    * critical angle from inside. */

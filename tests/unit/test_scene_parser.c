@@ -990,6 +990,27 @@ static void test_phong_roughdiffuse(void **state) {
                 "<spectrum name=\"diffuseReflectance\" value=\"0.5\"/></bsdf></shape>\n";
   assert_int_not_equal(load_body(&t, body, &s, &e), 0);
   assert_non_null(strstr(e.msg, "not both"));
+  /* diffuse takes diffuseReflectance too (Mitsuba 0.6's diffuse.cpp reads either name), a
+     value or a texture; above 1 is refused by that name; not both */
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"diffuse\"><rgb name=\"diffuseReflectance\" value=\"0.3 0.2 0.1\"/>"
+                "</bsdf></shape>\n<shape type=\"rectangle\"><bsdf type=\"diffuse\"><texture name=\"diffuseReflectance\" "
+                "type=\"checkerboard\"/></bsdf></shape>\n";
+  rc = load_body(&t, body, &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.materials[0].type, PC_MAT_DIFFUSE);
+  near3(s.materials[0].reflectance.value, v3(0.3f, 0.2f, 0.1f), 1e-6f);
+  assert_true(s.materials[0].reflectance.tex < 0);
+  assert_true(s.materials[1].reflectance.tex >= 0);
+  pc_scene_free(&s);
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"diffuse\"><spectrum name=\"diffuseReflectance\" value=\"1.5\"/>"
+                "</bsdf></shape>\n";
+  assert_int_not_equal(load_body(&t, body, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "'diffuseReflectance' above 1"));
+  body = SENSOR "\n<shape type=\"rectangle\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"0.5\"/>"
+                "<spectrum name=\"diffuseReflectance\" value=\"0.5\"/></bsdf></shape>\n";
+  assert_int_not_equal(load_body(&t, body, &s, &e), 0);
+  assert_non_null(strstr(e.msg, "not both"));
   th_rm_rf(t.root);
 }
 
