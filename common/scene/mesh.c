@@ -126,11 +126,15 @@ int pc_mesh_validate(const pc_mesh *m, const char *where, pc_err *e) {
     if (m->uv && !(isfinite(m->uv[i].x) && isfinite(m->uv[i].y)))
       return pc_errf(e, PC_ENUMERIC, "%s: vertex %u has non-finite texture coordinates", where, i);
   }
+  return 0;
+}
+
+bool pc_mesh_has_area(const pc_mesh *m) {
   for (uint32_t t = 0; t < m->ntris; t++) {
     vec3 a = m->p[m->idx[3 * t]], b = m->p[m->idx[3 * t + 1]], c = m->p[m->idx[3 * t + 2]];
-    if (v3_len2(v3_cross(v3_sub(b, a), v3_sub(c, a))) > 0) return 0;
+    if (v3_len2(v3_cross(v3_sub(b, a), v3_sub(c, a))) > 0) return true;
   }
-  return pc_errf(e, PC_EINVAL, "%s: every triangle of the mesh is degenerate (zero area)", where);
+  return false;
 }
 
 static int mesh_alloc(pc_mesh *m, uint32_t nverts, uint32_t ntris, bool uv) {

@@ -65,8 +65,10 @@ int pc_mesh_compute_normals(pc_mesh *m);
  * max_angle_deg of each other. 0, or a negative code (PC_ENOMEM, PC_ELIMIT, PC_ENUMERIC for
  * non-finite data, PC_EINVAL for a bad index or angle). */
 int pc_mesh_rebuild_topology(pc_mesh *m, float max_angle_deg);
-/* Fails unless every index is in range, every value is finite, normals have unit length and
- * some triangle has nonzero area. `where` prefixes the message ("scene.xml:12: shape obj"). */
+/* Fails unless every index is in range, every value is finite and normals have unit length.
+ * `where` prefixes the message ("scene.xml:12: shape obj"). */
 int pc_mesh_validate(const pc_mesh *m, const char *where, pc_err *e);
+/* Whether some triangle has nonzero area (a mesh without one is never hit). */
+bool pc_mesh_has_area(const pc_mesh *m);
 
 #endif

@@ -386,7 +386,15 @@ static int finish_mesh(pc_sx *c, const pc_xml_node *n, const char *what, const m
 
 /* Appends a shape (taking its mesh) and the area light it carries, if any. */
 static int add_shape_with_light(pc_sx *c, const pc_xml_node *n, pc_shape *sh, bool emits, vec3 radiance, float weight) {
-  int rc = pc_sx_add_shape(c, n, sh);
+  /* Mitsuba loads such a mesh and never hits it (a published staircase has one); as an
+     emitter it would have no area to emit from */
+  int rc = 0;
+  if (sh->kind == PC_SHAPE_MESH && !pc_mesh_has_area(&sh->mesh))
+    rc = emits ? pc_errf(c->e, PC_EINVAL, "%s:%d: shape '%s': an emitter whose every triangle is degenerate (zero area)",
+                         c->file, n->line, pc_xml_attr(n, "type") ? pc_xml_attr(n, "type") : "?")
+               : pc_sx_warn(c, n, "shape '%s': every triangle is degenerate (zero area), so nothing of it is ever hit",
+                            pc_xml_attr(n, "type") ? pc_xml_attr(n, "type") : "?");
+  if (!rc) rc = pc_sx_add_shape(c, n, sh);
   if (rc) {
     pc_mesh_free(&sh->mesh);
     return rc;
