@@ -1,4 +1,4 @@
-/* image.h: an RGB float raster and its files: PNG/JPEG/EXR read (textures, references),
+/* image.h: an RGB float raster and its files: PNG/JPEG/EXR/RGBE/BMP/TGA read (textures, references),
  * EXR write with named layers and header attributes, sRGB PNG preview. */
 #ifndef PC_IMAGE_H
 #define PC_IMAGE_H
@@ -25,11 +25,12 @@ static inline float pc_image_sample(const pc_image *img, size_t k) {
   return img->rgb8 ? img->lut8[img->rgb8[k]] : img->rgb[k];
 }
 
-/* Reads a PNG, JPEG, EXR or Radiance RGBE .hdr (chosen by content, not extension). 8-bit formats
+/* Reads a PNG, JPEG, EXR, Radiance RGBE .hdr or BMP (chosen by content, not extension), or a
+ * TGA (by its .tga name: the format has no magic number). 8-bit formats
  * are converted from sRGB to linear when `srgb_to_linear`; EXR and RGBE are linear. For EXR the beauty R,G,B channels
  * are read. */
 int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
-/* The same, but an 8-bit PNG or a JPEG is kept in its bytes (rgb8 and lut8, rgb NULL); every
+/* The same, but an 8-bit PNG, JPEG, BMP or TGA is kept in its bytes (rgb8 and lut8, rgb NULL); every
  * sample's value is the float pc_image_read gives for it. For textures, which may be many and
  * large. */
 int pc_image_read_bytes(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);

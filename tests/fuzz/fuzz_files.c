@@ -1,10 +1,10 @@
 /* fuzz_files.c: libFuzzer target for the binary files a scene names besides its XML and OBJ
- * (which fuzz_scene covers): textures and environment maps (PNG, JPEG, EXR, Radiance RGBE, told
- * apart by content), the EXR reader of `compare` and references, and the PLY and Mitsuba
+ * (which fuzz_scene covers): textures and environment maps (PNG, JPEG, EXR, Radiance RGBE, BMP,
+ * told apart by content, and TGA), the EXR reader of `compare` and references, and the PLY and Mitsuba
  * `serialized` meshes. Whatever the bytes: a clean return, no crash, no leak. The first byte
  * picks the reader, the second its option; the rest is the file:
  *   0  pc_image_read, sRGB decoding when the option is odd; pc_image_read_bytes (textures)
- *      when its bit 1 is set;
+ *      when its bit 1 is set; the file named .tga when its bit 2 is set (TGA is told by name);
  *   1  pc_exr_read_layers (every RGB triplet and the header's attributes);
  *   2  pc_mesh_load_ply;
  *   3  pc_mesh_load_serialized, shape index = option % 4;
@@ -30,7 +30,7 @@
 enum { IMAGE, EXR_LAYERS, PLY, SERIALIZED, BUNDLE, NMODES };
 
 /* The input's file, in a folder of its own (fuzz_dir.h). */
-static char dir[4096], file[4200], cache[4200];
+static char dir[4096], file[4200], tga[4200], cache[4200];
 
 static int rm_entry(const char *path, const struct stat *st, int flag, struct FTW *ftw) {
   (void)st, (void)flag;
@@ -44,6 +44,7 @@ static void remove_dir(void) {
   empty_cache();
   rmdir(cache);
   unlink(file);
+  unlink(tga);
   rmdir(dir);
 }
 
@@ -51,6 +52,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
   (void)argc, (void)argv;
   fuzz_make_dir("fuzz-files", dir, sizeof dir, remove_dir);
   snprintf(file, sizeof file, "%s/input", dir);
+  snprintf(tga, sizeof tga, "%s/input.tga", dir);
   snprintf(cache, sizeof cache, "%s/cache", dir);
   if (mkdir(cache, 0700) != 0 || sodium_init() < 0) {
     fprintf(stderr, "fuzz_files: cannot set up the bundle cache %s\n", cache);
@@ -61,7 +63,8 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (size < 2) return 0;
-  FILE *f = fopen(file, "wb");
+  const char *path = data[0] % NMODES == IMAGE && (data[1] & 4) ? tga : file;
+  FILE *f = fopen(path, "wb");
   if (!f) return 0;
   size_t w = fwrite(data + 2, 1, size - 2, f);
   if (fclose(f) != 0 || w != size - 2) return 0;
@@ -70,8 +73,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   switch (data[0] % NMODES) { /* the results are irrelevant; only crashes and leaks matter */
   case IMAGE: {
     pc_image img = {0};
-    if (option & 2) (void)pc_image_read_bytes(file, option & 1, &img, &e);
-    else (void)pc_image_read(file, option & 1, &img, &e);
+    if (option & 2) (void)pc_image_read_bytes(path, option & 1, &img, &e);
+    else (void)pc_image_read(path, option & 1, &img, &e);
     pc_image_free(&img);
     break;
   }

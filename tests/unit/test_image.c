@@ -19,6 +19,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <stb_image_write.h>
+
 #include "image.h"
 #include "metrics.h"
 
@@ -734,6 +736,62 @@ static void test_image_read_bytes(void **state) {
   pc_image_free(&b);
 }
 
+/* BMP and TGA (Mitsuba's bitmap reads both): 8-bit RGB, sRGB or not, the same samples through
+ * pc_image_read and pc_image_read_bytes, as the PNG reader gives them; a TGA by its name, also
+ * run-length coded; a header claiming more pixels than the file holds, or a file cut short, is
+ * refused before decoding. */
+static void test_bmp_tga(void **state) {
+  const int w = 9, h = 6;
+  unsigned char px[9 * 6 * 3];
+  for (size_t i = 0; i < sizeof px; i++) px[i] = (unsigned char)(i * 53 + 7);
+  const char *png = path_in(state, "ref.png"), *bmp = path_in(state, "t.bmp"), *tga = path_in(state, "t.TGA"),
+             *cut = path_in(state, "cut.bmp"), *forged = path_in(state, "forged.bmp");
+  write_png(png, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, px, (size_t)w * 3);
+  assert_true(stbi_write_bmp(bmp, w, h, 3, px));
+  for (int rle = 0; rle < 2; rle++) {
+    stbi_write_tga_with_rle = rle;
+    assert_true(stbi_write_tga(tga, w, h, 3, px));
+    for (int srgb = 0; srgb < 2; srgb++) {
+      pc_image ref, f, b;
+      pc_err e;
+      assert_int_equal(pc_image_read(png, srgb, &ref, &e), PC_OK);
+      for (int k = 0; k < 2; k++) {
+        const char *file = k ? tga : bmp;
+        if (pc_image_read(file, srgb, &f, &e) != PC_OK) print_error("%s\n", e.msg);
+        assert_int_equal(pc_image_read(file, srgb, &f, &e), PC_OK);
+        assert_int_equal(pc_image_read_bytes(file, srgb, &b, &e), PC_OK);
+        assert_true(f.w == w && f.h == h && b.w == w && b.h == h && b.rgb8 && !b.rgb);
+        for (size_t i = 0; i < 3 * (size_t)w * h; i++) {
+          assert_true(f.rgb[i] == ref.rgb[i]);
+          assert_true(pc_image_sample(&b, i) == ref.rgb[i]);
+        }
+        pc_image_free(&f);
+        pc_image_free(&b);
+      }
+      pc_image_free(&ref);
+    }
+  }
+  size_t n;
+  unsigned char *file = slurp(bmp, &n);
+  spit(cut, file, n - 20);
+  pc_image img;
+  pc_err e;
+  assert_int_equal(pc_image_read(cut, 1, &img, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "truncated"));
+  file[18] = 0x30, file[19] = 0x75, file[22] = 0x30, file[23] = 0x75; /* 30000 x 30000 */
+  spit(forged, file, n);
+  assert_int_equal(pc_image_read(forged, 1, &img, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "cannot fit"));
+  free(file);
+  stbi_write_tga_with_rle = 0;
+  assert_true(stbi_write_tga(tga, w, h, 3, px));
+  file = slurp(tga, &n);
+  spit(tga, file, n - 20);
+  assert_int_equal(pc_image_read(tga, 1, &img, &e), PC_EPARSE);
+  assert_non_null(strstr(e.msg, "truncated"));
+  free(file);
+}
+
 /* Radiance RGBE: flat scanlines (width < 8), value = mantissa * 2^(E - 136). */
 static void test_rgbe_read(void **state) {
   const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n";
@@ -993,6 +1051,7 @@ static void test_metrics_layers(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_exr_roundtrip, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_bmp_tga, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_no_beauty_gives_first_triplet, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_rows, setup, teardown),
