@@ -253,8 +253,9 @@ static int one_transform(const char *file, const pc_xml_node *c, mat4 *t, pc_err
     normalize3(dir);
     cross3(up, dir, left);
     double ll = sqrt(left[0] * left[0] + left[1] * left[1] + left[2] * left[2]);
-    double ul = sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
-    if (!(ll > 1e-6 * ul) || !isfinite(ll))
+    /* only an exactly parallel up is refused, as Mitsuba's normalizeStrict does: a scene
+       generator's up 4e-7 away from the view direction still gives a camera there */
+    if (!(ll > 0) || !isfinite(ll))
       return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> up is zero or parallel to the view direction", file, c->line);
     normalize3(left);
     cross3(dir, left, nup);

@@ -1379,6 +1379,31 @@ static void test_probe_backs(void **state) {
   th_rm_rf(t.root);
 }
 
+/* <lookat> with an up 4e-7 off the view direction (a published scene generator's camera):
+ * Mitsuba refuses only an exactly parallel up, and the camera is then a rigid frame. */
+static void test_lookat_near_parallel(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = load_body(&t,
+                     "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">"
+                     "<lookat origin=\"-0.005318722046727225,0.9891165271306032,6.845925144295989\" "
+                     "target=\"-0.005318579310501861,0.9891165818924574,5.914105333595855\" "
+                     "up=\"-1.365978749359233e-07,3.874228812786048e-07,0.9999999999999155\"/></transform></sensor>\n"
+                     "<shape type=\"cube\"/>",
+                     &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  pc_camera_prepare(&s.camera);
+  near3(s.camera.dir, v3(0, 0, -1), 1e-5f);
+  assert_true(fabsf(v3_dot(s.camera.right, s.camera.up)) < 1e-5f);
+  assert_true(fabsf(v3_len(s.camera.right) - 1.f) < 1e-5f && fabsf(v3_len(s.camera.up) - 1.f) < 1e-5f);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
  * instance's toWorld after their own; the group itself is not rendered. */
 static void test_instances(void **state) {
@@ -1820,6 +1845,7 @@ int main(void) {
       cmocka_unit_test(test_ward),             cmocka_unit_test(test_phong_roughdiffuse),
       cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_tri_consts),
       cmocka_unit_test(test_check_without_bvh), cmocka_unit_test(test_probe_backs),
+      cmocka_unit_test(test_lookat_near_parallel),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
