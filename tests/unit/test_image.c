@@ -757,8 +757,9 @@ static void test_bmp_tga(void **state) {
       assert_int_equal(pc_image_read(png, srgb, &ref, &e), PC_OK);
       for (int k = 0; k < 2; k++) {
         const char *file = k ? tga : bmp;
-        if (pc_image_read(file, srgb, &f, &e) != PC_OK) print_error("%s\n", e.msg);
-        assert_int_equal(pc_image_read(file, srgb, &f, &e), PC_OK);
+        int rc = pc_image_read(file, srgb, &f, &e);
+        if (rc != PC_OK) print_error("%s\n", e.msg);
+        assert_int_equal(rc, PC_OK);
         assert_int_equal(pc_image_read_bytes(file, srgb, &b, &e), PC_OK);
         assert_true(f.w == w && f.h == h && b.w == w && b.h == h && b.rgb8 && !b.rgb);
         for (size_t i = 0; i < 3 * (size_t)w * h; i++) {
