@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "big_alloc.h"
 #include "bundle.h"
 #include "cli_scene.h"
 
@@ -32,6 +33,15 @@ void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const p
 }
 
 void pc_cli_warn_backs(const char *verb, pc_scene *s) {
+  /* The probe's BVH (Embree's quickest build, under 128 bytes a triangle) must not be what
+     exhausts a client that only submits: past a quarter of the memory, the scene goes unchecked. */
+  double tris = 0;
+  for (int i = 0; i < s->nshapes; i++) tris += s->shapes[i].mesh.ntris;
+  if (128.0 * tris > 0.25 * (double)pc_big_memory_limit()) {
+    fprintf(stderr, "pcbpt-coord %s: warning: %s: %.0f triangles, too many to check here for surfaces seen from behind\n",
+            verb, s->path, tris);
+    return;
+  }
   pc_scene_backs b;
   pc_err e = {0};
   if (pc_scene_probe_backs(s, 64, &b, &e) != PC_OK) {
