@@ -50,27 +50,28 @@ void pc_cli_warn_backs(const char *verb, pc_scene *s) {
     return;
   }
   if (b.rays == 0 || b.backs * 100 < b.rays) return;
-  char named[3 * 320] = "";
+  char named[PC_SCENE_BACKS_NAMED * 320] = "";
   size_t used = 0;
+  int named_hits = 0;
   for (int k = 0; k < b.nshapes && used < sizeof named; k++) {
     const pc_shape *sh = &s->shapes[b.shape[k]];
     /* a shape of an included file is named with its file */
     bool included = sh->xml_file > 0 && sh->xml_file <= s->nxml_includes;
     double pct = 100.0 * b.count[k] / b.rays;
-    char share[16];
-    if (pct < 1) snprintf(share, sizeof share, "under 1%%");
-    else snprintf(share, sizeof share, "%.0f%%", pct);
-    int n = snprintf(named + used, sizeof named - used, "%s%s%s%s %d (%s)", k ? ", " : "", included ? s->xml_includes[sh->xml_file - 1] : "",
-                     included ? " " : "", "line", sh->xml_line, share);
+    char share[16] = "under 1%";
+    if (pct >= 1) snprintf(share, sizeof share, "%.0f%%", pct);
+    int n = snprintf(named + used, sizeof named - used, "%s%s%sline %d (%s)", k ? ", " : "",
+                     included ? s->xml_includes[sh->xml_file - 1] : "", included ? " " : "", sh->xml_line, share);
     if (n < 0) break;
     used += (size_t)n;
+    named_hits += b.count[k];
   }
   fprintf(stderr,
           "pcbpt-coord %s: warning: %s: %.0f%% of the image is the back of one-sided materials, black as in Mitsuba"
           " 0.6 (they reflect only on the side their normals face): the %s at %s%s; if light is meant to reach"
           " that side, wrap their bsdf in twosided or set flipNormals\n",
           verb, s->path, 100.0 * b.backs / b.rays, b.nshapes > 1 ? "shapes" : "shape", named,
-          b.backs > b.count[0] + b.count[1] + b.count[2] ? " and others" : "");
+          b.backs > named_hits ? " and others" : "");
 }
 
 int pc_cli_scene_bundle(const pc_scene *s, uint8_t **blob, size_t *n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e) {

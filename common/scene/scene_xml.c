@@ -267,7 +267,7 @@ int pc_sx_add_shape(pc_sx *c, const pc_xml_node *n, pc_shape *sh) {
   if (rc) return rc;
   sh->xml_line = n->line;
   sh->xml_file = 0;
-  for (int k = 0; n->file && k < c->nnames; k++)
+  for (int k = 0; n->file && k < c->nnames && !sh->xml_file; k++)
     if (c->names[k] == n->file) sh->xml_file = k + 1;
   c->s->shapes[c->s->nshapes++] = *sh;
   return 0;
@@ -389,11 +389,11 @@ static int add_shape_with_light(pc_sx *c, const pc_xml_node *n, pc_shape *sh, bo
   /* Mitsuba loads such a mesh and never hits it (a published staircase has one); as an
      emitter it would have no area to emit from */
   int rc = 0;
+  const char *type = pc_xml_attr(n, "type") ? pc_xml_attr(n, "type") : "?";
   if (sh->kind == PC_SHAPE_MESH && !pc_mesh_has_area(&sh->mesh))
     rc = emits ? pc_errf(c->e, PC_EINVAL, "%s:%d: shape '%s': an emitter whose every triangle is degenerate (zero area)",
-                         c->file, n->line, pc_xml_attr(n, "type") ? pc_xml_attr(n, "type") : "?")
-               : pc_sx_warn(c, n, "shape '%s': every triangle is degenerate (zero area), so nothing of it is ever hit",
-                            pc_xml_attr(n, "type") ? pc_xml_attr(n, "type") : "?");
+                         c->file, n->line, type)
+               : pc_sx_warn(c, n, "shape '%s': every triangle is degenerate (zero area), so nothing of it is ever hit", type);
   if (!rc) rc = pc_sx_add_shape(c, n, sh);
   if (rc) {
     pc_mesh_free(&sh->mesh);
