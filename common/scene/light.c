@@ -5,6 +5,7 @@
 #include <stdlib.h>
 
 #include "scene.h"
+#include "shape_cylinder.h"
 
 int pc_cdf_find(const float *cdf, int n, float u) {
   int lo = 0, hi = n - 1;
@@ -48,6 +49,11 @@ void pc_light_sample_point(const pc_scene *s, const pc_light *l, float u0, float
     out->p = v3_madd(sh->center, d, sh->radius);
     out->n = sh->flip_normals ? v3_neg(d) : d;
     out->eps = pc_sphere_eps(sh->center, sh->radius, out->p);
+    return;
+  }
+  if (sh->kind == PC_SHAPE_CYLINDER) {
+    pc_cylinder_sample(sh, u1, u2, &out->p, &out->n);
+    out->eps = pc_cylinder_eps(sh, out->p);
     return;
   }
   float target = u0 * l->tri_cdf[l->ntris];

@@ -24,7 +24,7 @@ typedef struct pc_light {
   vec3 intensity;     /* point, spot: radiant intensity (a spot's, at the centre of its beam) */
   vec3 position;      /* point, spot */
   int shape;          /* area: index of its shape in the scene */
-  /* area: triangles or an exact sphere, sampled uniformly by area */
+  /* area: triangles, an exact sphere or cylinder, sampled uniformly by area */
   float area;
   float *tri_cdf;     /* ntris+1 entries, area CDF over the shape's triangles */
   vec3 *tri_n;        /* ntris unit normals of its triangles (emitters do not move), bit for bit

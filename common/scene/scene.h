@@ -1,4 +1,4 @@
-/* scene.h: a loaded scene: shapes (world-space meshes or exact spheres), materials, textures,
+/* scene.h: a loaded scene: shapes (world-space meshes, exact spheres and cylinders), materials, textures,
  * lights, camera and the integrator element's defaults; plus its Embree acceleration structure
  * and ray queries. Loading (scene_xml.c) fills the plain data; pc_scene_build makes it
  * renderable. */
@@ -17,7 +17,7 @@
 #include "texture.h"
 #include "vecmath.h"
 
-typedef enum { PC_SHAPE_MESH, PC_SHAPE_SPHERE } pc_shape_kind;
+typedef enum { PC_SHAPE_MESH, PC_SHAPE_SPHERE, PC_SHAPE_CYLINDER } pc_shape_kind;
 
 /* What a hit on one triangle of a still mesh needs that depends on the triangle alone, taken
  * once by pc_scene_build instead of at every hit: the unit geometric normal and the texture
@@ -42,9 +42,12 @@ typedef struct pc_shape {
   pc_shape_kind kind;
   pc_mesh mesh;          /* PC_SHAPE_MESH, world space, flipNormals already applied */
   pc_tri_consts *tri;    /* per triangle of a still mesh, or NULL (scene_build.c, build_tri_consts) */
-  vec3 center;           /* PC_SHAPE_SPHERE, world space */
+  vec3 center;           /* PC_SHAPE_SPHERE: its centre; PC_SHAPE_CYLINDER: the start of its
+                            centreline (world space) */
   float radius;
-  bool flip_normals;     /* PC_SHAPE_SPHERE: normals point inward */
+  frame cyl_axes;        /* PC_SHAPE_CYLINDER: unit axes, n along the centreline (shape_cylinder.h) */
+  float length;          /* PC_SHAPE_CYLINDER: of the centreline */
+  bool flip_normals;     /* PC_SHAPE_SPHERE, PC_SHAPE_CYLINDER: normals point inward */
   int material;          /* index into materials */
   int light;             /* index into lights if this shape is an area emitter, else -1 */
   int xml_file, xml_line; /* the <shape> element it comes from: the scene file (0) or included
@@ -161,6 +164,8 @@ typedef struct pc_scene_backs {
   int shape[PC_SCENE_BACKS_NAMED], count[PC_SCENE_BACKS_NAMED];
 } pc_scene_backs;
 int pc_scene_probe_backs(pc_scene *s, int grid, pc_scene_backs *out, pc_err *e);
+/* Grows [lo, hi] to hold the shape as it is now. */
+void pc_shape_grow_bounds(const pc_shape *sh, vec3 *lo, vec3 *hi);
 /* Frees everything (safe on a zeroed or partially loaded scene). */
 void pc_scene_free(pc_scene *s);
 

@@ -13,6 +13,7 @@
 #include "big_alloc.h"
 #include "scene.h"
 #include "scene_embree.h"
+#include "shape_cylinder.h"
 
 typedef struct embree_error {
   int failed;
@@ -75,8 +76,8 @@ static int build_lights(pc_scene *s, pc_err *e) {
       if (l->shape < 0 || l->shape >= s->nshapes)
         return pc_errf(e, PC_EINVAL, "%s: area light %d has no shape", s->path, i);
       const pc_shape *sh = &s->shapes[l->shape];
-      if (sh->kind == PC_SHAPE_SPHERE) {
-        l->area = 4.f * PC_PI * sh->radius * sh->radius;
+      if (sh->kind == PC_SHAPE_SPHERE || sh->kind == PC_SHAPE_CYLINDER) {
+        l->area = sh->kind == PC_SHAPE_SPHERE ? 4.f * PC_PI * sh->radius * sh->radius : pc_cylinder_area(sh);
         l->ntris = 0;
       } else {
         const pc_mesh *m = &sh->mesh;
@@ -122,6 +123,9 @@ int pc_scene_attach_shape(const pc_scene *s, void *rtc_scene, int i, pc_err *e) 
     float *v = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, 1) : NULL;
     if (!v) goto fail;
     v[0] = sh->center.x; v[1] = sh->center.y; v[2] = sh->center.z; v[3] = sh->radius;
+  } else if (sh->kind == PC_SHAPE_CYLINDER) {
+    g = pc_cylinder_geometry(dev, sh);
+    if (!g) goto fail;
   } else {
     const pc_mesh *m = &sh->mesh;
     g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -309,21 +313,27 @@ static int prepare(pc_scene *s, pc_err *e) {
   return PC_OK;
 }
 
+void pc_shape_grow_bounds(const pc_shape *sh, vec3 *lo, vec3 *hi) {
+  if (sh->kind == PC_SHAPE_SPHERE) {
+    *lo = v3_min(*lo, v3_sub(sh->center, v3s(sh->radius)));
+    *hi = v3_max(*hi, v3_add(sh->center, v3s(sh->radius)));
+  } else if (sh->kind == PC_SHAPE_CYLINDER) {
+    vec3 a, b;
+    pc_cylinder_bounds(sh, &a, &b);
+    *lo = v3_min(*lo, a);
+    *hi = v3_max(*hi, b);
+  } else {
+    for (uint32_t v = 0; v < sh->mesh.nverts; v++) {
+      *lo = v3_min(*lo, sh->mesh.p[v]);
+      *hi = v3_max(*hi, sh->mesh.p[v]);
+    }
+  }
+}
+
 /* The bounding sphere from the shapes' own data (pc_scene_check: no Embree scene to ask). */
 static void bounds_from_shapes(pc_scene *s) {
   vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
-  for (int i = 0; i < s->nshapes; i++) {
-    const pc_shape *sh = &s->shapes[i];
-    if (sh->kind == PC_SHAPE_SPHERE) {
-      lo = v3_min(lo, v3_sub(sh->center, v3s(sh->radius)));
-      hi = v3_max(hi, v3_add(sh->center, v3s(sh->radius)));
-    } else {
-      for (uint32_t v = 0; v < sh->mesh.nverts; v++) {
-        lo = v3_min(lo, sh->mesh.p[v]);
-        hi = v3_max(hi, sh->mesh.p[v]);
-      }
-    }
-  }
+  for (int i = 0; i < s->nshapes; i++) pc_shape_grow_bounds(&s->shapes[i], &lo, &hi);
   set_bounding_sphere(s, lo, hi);
 }
 
@@ -456,6 +466,10 @@ static inline void fill_hit(const pc_scene *s, const struct RTCRayHit *rh, vec3 
     if (sh->flip_normals) n = v3_neg(n);
     hit->ng = hit->ns = n;
     hit->eps = pc_sphere_eps(sh->center, sh->radius, hit->p);
+    return;
+  }
+  if (sh->kind == PC_SHAPE_CYLINDER) {
+    pc_cylinder_hit(sh, hit->p, hit);
     return;
   }
   const pc_mesh *m = &sh->mesh;

@@ -9,6 +9,7 @@
 #include <strings.h>
 
 #include "scene_xml_ctx.h"
+#include "shape_cylinder.h"
 
 /* Triangles all instances together may copy (about 3 GB of positions, normals and indices). */
 #define PC_SX_MAX_INSTANCED_TRIS (64ull << 20)
@@ -70,6 +71,11 @@ static int place(pc_sx *c, const pc_xml_node *n, const pc_shape *src, const mat4
     sh.radius = (float)(s * sh.radius);
     if (!(sh.radius > 0.f) || !isfinite(sh.radius) || !v3_is_finite(sh.center))
       return pc_errf(c->e, PC_EINVAL, "%s:%d: shape 'instance': the sphere's radius becomes %g", c->file, n->line, sh.radius);
+    return pc_sx_add_shape(c, n, &sh);
+  }
+  if (sh.kind == PC_SHAPE_CYLINDER) {
+    const char *why = pc_cylinder_transform(&sh, xf);
+    if (why) return pc_errf(c->e, PC_EINVAL, "%s:%d: shape 'instance': %s (it holds a cylinder)", c->file, n->line, why);
     return pc_sx_add_shape(c, n, &sh);
   }
   c->instanced_tris += src->mesh.ntris;

@@ -12,6 +12,7 @@
 #include "rng.h"
 #include "scene.h"
 #include "scene_embree.h"
+#include "shape_cylinder.h"
 
 bool pc_scene_moves(const pc_scene *s) {
   return (s->nmotions > 0 || s->camera_anim.n > 0) && s->shutter_close > s->shutter_open;
@@ -30,6 +31,15 @@ static void place_shape(pc_shape *dst, const pc_motion *mo, double time) {
     /* the loader refused a motion that does not scale uniformly */
     dst->center = mat4_point(&m, o->center);
     dst->radius = o->radius * v3_len(mat4_vector(&m, v3(1, 0, 0)));
+    return;
+  }
+  if (o->kind == PC_SHAPE_CYLINDER) {
+    /* the same check: a uniform scale keeps it circular, so this cannot fail */
+    pc_shape moved = *o;
+    if (!pc_cylinder_transform(&moved, &m)) {
+      dst->center = moved.center, dst->cyl_axes = moved.cyl_axes;
+      dst->radius = moved.radius, dst->length = moved.length;
+    }
     return;
   }
   pc_mesh *w = &dst->mesh;
@@ -62,6 +72,8 @@ void pc_scene_motion_bounds(const pc_scene *s, vec3 *lo, vec3 *hi) {
     float r = 0.f;
     if (mo->object.kind == PC_SHAPE_SPHERE) {
       r = v3_len(mo->object.center) + mo->object.radius;
+    } else if (mo->object.kind == PC_SHAPE_CYLINDER) {
+      r = v3_len(mo->object.center) + mo->object.length + mo->object.radius;
     } else {
       for (uint32_t v = 0; v < mo->object.mesh.nverts; v++) r = fmaxf(r, v3_len(mo->object.mesh.p[v]));
     }

@@ -263,6 +263,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"shape 'cube'", " toWorld flipNormals "},
       {"shape 'disk'", " toWorld flipNormals "},
       {"shape 'sphere'", " center radius toWorld flipNormals "},
+      {"shape 'cylinder'", " p0 p1 radius toWorld flipNormals "},
       {"shape 'instance'", " toWorld "},
       {"sensor 'perspective'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip "},
       {"sensor 'thinlens'", " toWorld focalLength fov fovAxis shutterOpen shutterClose nearClip farClip focusDistance apertureRadius "},

@@ -1,6 +1,6 @@
 /* scene_xml.c: pc_scene_load, the Mitsuba 0.6 XML scene reader (the subset of DESIGN.md §5):
  * the scene element, integrator, perspective sensor with hdrfilm, shapes (meshes in world
- * space, exact spheres) with their BSDFs and area emitters, point emitters and the environment
+ * space, exact spheres and cylinders) with their BSDFs and area emitters, point emitters and the environment
  * (constant, envmap). Anything else
  * is refused with "file:line: what". BSDFs and textures are in scene_materials_xml.c. */
 #include <errno.h>
@@ -11,6 +11,7 @@
 #include <strings.h>
 
 #include "scene_xml_ctx.h"
+#include "shape_cylinder.h"
 #include "xml_values.h"
 
 #define DISK_SEGMENTS 256
@@ -411,12 +412,12 @@ static int add_shape_with_light(pc_sx *c, const pc_xml_node *n, pc_shape *sh, bo
 
 int pc_sx_add_motion(pc_sx *c, const pc_xml_node *n, const char *what, const pc_anim *anim) {
   pc_scene *s = c->s;
-  for (int k = 0; s->shapes[s->nshapes - 1].kind == PC_SHAPE_SPHERE && k < anim->n; k++) {
+  pc_shape_kind kind = s->shapes[s->nshapes - 1].kind;
+  for (int k = 0; kind != PC_SHAPE_MESH && k < anim->n; k++) {
     const double *sc = anim->k[k].s;
     if (fabs(sc[0] - sc[1]) > 1e-5 * fabs(sc[0]) || fabs(sc[0] - sc[2]) > 1e-5 * fabs(sc[0]))
-      return pc_errf(c->e, PC_EUNSUPPORTED,
-                     "%s:%d: %s: a moving toWorld that does not scale uniformly (a sphere must stay a sphere)", c->file,
-                     n->line, what);
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: a moving toWorld that does not scale uniformly (a %s must keep its shape)",
+                     c->file, n->line, what, kind == PC_SHAPE_SPHERE ? "sphere" : "cylinder");
   }
   int rc = pc_sx_grow(c, (void **)&s->motions, &c->cap_motions, s->nmotions + 1, sizeof *s->motions);
   if (rc) return rc;
@@ -499,8 +500,8 @@ static int shape(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
   if (strcmp(type, "instance") == 0) return pc_sx_instance(c, n);
   bool is_file = strcmp(type, "obj") == 0 || strcmp(type, "ply") == 0 || strcmp(type, "serialized") == 0;
   bool is_obj = strcmp(type, "obj") == 0;
-  bool is_sphere = strcmp(type, "sphere") == 0;
-  if (!is_file && !is_sphere && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
+  bool is_sphere = strcmp(type, "sphere") == 0, is_cylinder = strcmp(type, "cylinder") == 0;
+  if (!is_file && !is_sphere && !is_cylinder && strcmp(type, "rectangle") != 0 && strcmp(type, "cube") != 0 && strcmp(type, "disk") != 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: shape '%s': not modelled by pcbpt", c->file, n->line, type);
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "shape '%s'", type);
@@ -508,7 +509,7 @@ static int shape(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
   mesh_opts o = {.obj = is_obj, .file = is_file, .flip_tex = true, .xf = mat4_identity()};
   bool collapse = false, load_materials = true;
   int shape_index = is_obj ? -1 : 0;
-  vec3 center = v3s(0);
+  vec3 center = v3s(0), p0 = v3s(0), p1 = v3(0, 0, 1);
   float radius = 1.f;
   pc_param p[10] = {{"toWorld", PC_P_MOTION, to_world, 0, 0}, {"flipNormals", PC_P_BOOL, &o.flip_normals, 0, 0}};
   int np = 2;
@@ -524,6 +525,10 @@ static int shape(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
     p[np++] = (pc_param){"maxSmoothAngle", PC_P_FLOAT, &o.smooth_angle, 0, 0};
   } else if (is_sphere) {
     p[np++] = (pc_param){"center", PC_P_POINT, &center, 0, 0};
+    p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
+  } else if (is_cylinder) {
+    p[np++] = (pc_param){"p0", PC_P_POINT, &p0, 0, 0};
+    p[np++] = (pc_param){"p1", PC_P_POINT, &p1, 0, 0};
     p[np++] = (pc_param){"radius", PC_P_FLOAT, &radius, 0, 0};
   }
   if ((rc = pc_sx_params(c, n, what, p, np))) return rc;
@@ -599,6 +604,10 @@ static int shape(pc_sx *c, const pc_xml_node *n, pc_sx_xf *to_world) {
     sh.flip_normals = o.flip_normals;
     if (!(radius > 0.f) || !(sh.radius > 0.f) || !isfinite(sh.radius) || !v3_is_finite(sh.center))
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius must be positive and finite", c->file, n->line, what);
+  } else if (is_cylinder) {
+    const char *why = pc_cylinder_place(&sh, p0, p1, radius, &o.xf);
+    if (why) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: %s", c->file, n->line, what, why);
+    sh.flip_normals = o.flip_normals;
   } else {
     sh.kind = PC_SHAPE_MESH;
     if ((rc = load_mesh(c, n, type, what, filename, shape_index, &o.file_face_normals, &sh.mesh))) return rc;
@@ -768,15 +777,7 @@ static int default_sensor(pc_sx *c, const pc_xml_node *root) {
   int rc = pc_sx_warn(c, root, "the scene has no <sensor>: Mitsuba's default perspective camera (fov 45, looking along +z at the shapes)");
   if (rc) return rc;
   vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
-  for (int i = 0; i < c->s->nshapes; i++) {
-    const pc_shape *sh = &c->s->shapes[i];
-    if (sh->kind == PC_SHAPE_SPHERE) {
-      lo = v3_min(lo, v3_sub(sh->center, v3s(sh->radius)));
-      hi = v3_max(hi, v3_add(sh->center, v3s(sh->radius)));
-    } else {
-      for (uint32_t v = 0; v < sh->mesh.nverts; v++) lo = v3_min(lo, sh->mesh.p[v]), hi = v3_max(hi, sh->mesh.p[v]);
-    }
-  }
+  for (int i = 0; i < c->s->nshapes; i++) pc_shape_grow_bounds(&c->s->shapes[i], &lo, &hi);
   pc_camera *cam = &c->s->camera;
   cam->width = 768, cam->height = 576; /* hdrfilm's default */
   cam->fov_deg = 45.f;

@@ -285,7 +285,7 @@ static const bad_case bad_cases[] = {
     {"<shape type=\"cube\"><transform name=\"toWorld\">\n<rotate angle=\"30\"/></transform></shape>", 3, "zero axis"},
     {"<shape type=\"cube\"><transform name=\"toWorld\">\n<translate x=\"1e300\"/><scale value=\"1e300\"/></transform></shape>", 3, "non-finite"},
     /* shapes and files */
-    {"\n<shape type=\"cylinder\"/>", 3, "cylinder"},
+    {"\n<shape type=\"hair\"/>", 3, "hair"},
     {"<shape type=\"obj\"/>", 2, "filename"},
     {"<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>", 2, "cannot find"},
     {"<shape type=\"obj\"><string name=\"filename\" value=\"/etc/passwd\"/></shape>", 2, "absolute"},
