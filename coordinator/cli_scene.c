@@ -30,6 +30,12 @@ void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const p
             " material (glass, a mirror, a smooth plastic coat, a mask's holes), so its image lacks it; bdpt and"
             " pcbpt render it\n",
             verb, path);
+  if (m == PC_METHOD_LT && !req->lt_complete)
+    fprintf(stderr,
+            "pcbpt-coord %s: warning: %s: lt never sees a delta material from the camera (glass, a mirror, a smooth"
+            " plastic coat, a mask's holes), so its image lacks what is seen in or through one; pt, bdpt and pcbpt"
+            " render it\n",
+            verb, path);
 }
 
 void pc_cli_warn_backs(const char *verb, pc_scene *s) {

@@ -227,6 +227,7 @@ void pc_render_request_apply_scene(pc_render_request *r, pc_scene *s) {
     r->method_auto = s->method == PC_METHOD_PCBPT;
   }
   r->pt_complete = pc_scene_pt_complete(s);
+  r->lt_complete = pc_scene_lt_complete(s);
   r->caustics = pc_scene_has_caustics(s);
   if (!r->depth_set) r->set.max_depth = s->max_depth;
   if (!r->width_set) r->set.width = s->camera.width;

@@ -25,6 +25,8 @@ typedef struct pc_render_request {
   /* The scene lets PT sample every path (pc_scene_pt_complete), so auto may choose it: set by
    * pc_render_request_apply_scene, false until then. */
   bool pt_complete;
+  /* The scene lets LT sample every path (pc_scene_lt_complete): set as pt_complete. */
+  bool lt_complete;
   /* The scene has caustics (pc_scene_has_caustics), so auto keeps every light-tracing path:
    * set by pc_render_request_apply_scene. */
   bool caustics;

@@ -44,4 +44,6 @@ bool pc_scene_pt_complete(const pc_scene *s) {
   return !delta_light || !any_shape(s, pc_material_has_delta);
 }
 
+bool pc_scene_lt_complete(const pc_scene *s) { return !any_shape(s, pc_material_has_delta); }
+
 bool pc_scene_has_caustics(const pc_scene *s) { return any_shape(s, pc_material_casts_caustics); }

@@ -179,6 +179,12 @@ int pc_method_parse(const char *name, pc_method *out); /* "pt" or "path", "lt", 
  * light, however long it runs, while the bidirectional methods' light sub-paths find it. Judged
  * from the shapes' materials and the lights, before or after pc_scene_build. */
 bool pc_scene_pt_complete(const pc_scene *s);
+/* Whether light tracing can sample every path of the scene. It cannot where the camera sees a
+ * delta lobe (a mirror or glass, a smooth plastic coat, a mask's holes): its paths reach the
+ * camera only by a connection from their last surface vertex, which a delta lobe does not make,
+ * so its image lacks what is seen in or through such a surface. Judged from the materials of
+ * every shape (seen or not), before or after pc_scene_build. */
+bool pc_scene_lt_complete(const pc_scene *s);
 /* A shape is a mirror or a glass (pc_material_casts_caustics): light that reaches a diffuse
  * surface by way of it and is seen from there (a caustic) is sampled well by light tracing
  * alone, so the light-tracing paths are not to be cut (--method auto's stage 5, pilot.h). */

@@ -108,6 +108,12 @@ check pt-incomplete 0 "pt never samples the light a point or spot light sends th
 check bdpt-complete 0 "" -- "$bin" render "$tmp/point_glass.xml" --method bdpt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 if grep -q "pt never samples" "$tmp/err"; then echo "FAIL bdpt-complete: warned"; fail=1; fi
 if grep -q "one-sided" "$tmp/err"; then echo "FAIL bdpt-complete: warned of backs"; fail=1; fi
+# LT on the same scene misses the glass the camera sees (warned); on a scene of diffuse surfaces only
+# it misses nothing
+check lt-incomplete 0 "lt never sees a delta material from the camera" -- \
+  "$bin" render "$tmp/point_glass.xml" --method lt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
+check lt-complete 0 "" -- "$bin" render "$scene" --method lt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
+if grep -q "lt never sees" "$tmp/err"; then echo "FAIL lt-complete: warned"; fail=1; fi
 
 # A room whose walls face out of it (published conversions from renderers with two-sided
 # materials): black as in Mitsuba, and render names the walls the camera sees from behind
