@@ -41,11 +41,13 @@ static int read_image(const char *path, int srgb_to_linear, bool bytes, pc_image
     return pc_jpeg_read(path, srgb_to_linear, bytes, out, e);
   if (n >= 4 && memcmp(m, exr_magic, 4) == 0) return pc_exr_read_beauty(path, out, e);
   if ((n >= 7 && memcmp(m, "#?RADIA", 7) == 0) || (n >= 6 && memcmp(m, "#?RGBE", 6) == 0)) return pc_rgbe_read(path, out, e);
-  if (n >= 2 && m[0] == 'B' && m[1] == 'M') return pc_bmp_tga_read(path, "BMP", srgb_to_linear, bytes, out, e);
+  if (n >= 2 && m[0] == 'B' && m[1] == 'M') return pc_stb8_read(path, "BMP", srgb_to_linear, bytes, out, e);
+  if (n >= 2 && m[0] == 'P' && m[1] == '6') return pc_stb8_read(path, "PPM", srgb_to_linear, bytes, out, e);
+  if (n >= 2 && m[0] == 'P' && (m[1] == 'F' || m[1] == 'f')) return pc_pfm_read(path, out, e);
   /* TGA has no magic number: its name says it, as for Mitsuba */
   const char *dot = strrchr(path, '.');
-  if (dot && strcasecmp(dot, ".tga") == 0) return pc_bmp_tga_read(path, "TGA", srgb_to_linear, bytes, out, e);
-  return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG, OpenEXR, Radiance RGBE, BMP or TGA file", path);
+  if (dot && strcasecmp(dot, ".tga") == 0) return pc_stb8_read(path, "TGA", srgb_to_linear, bytes, out, e);
+  return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG, OpenEXR, Radiance RGBE, PFM, PPM (P6), BMP or TGA file", path);
 }
 
 int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e) {

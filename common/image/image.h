@@ -25,12 +25,12 @@ static inline float pc_image_sample(const pc_image *img, size_t k) {
   return img->rgb8 ? img->lut8[img->rgb8[k]] : img->rgb[k];
 }
 
-/* Reads a PNG, JPEG, EXR, Radiance RGBE .hdr or BMP (chosen by content, not extension), or a
- * TGA (by its .tga name: the format has no magic number). 8-bit formats
- * are converted from sRGB to linear when `srgb_to_linear`; EXR and RGBE are linear. For EXR the beauty R,G,B channels
+/* Reads a PNG, JPEG, EXR, Radiance RGBE .hdr, PFM, binary PPM or BMP (chosen by content, not
+ * extension), or a TGA (by its .tga name: the format has no magic number). 8-bit formats
+ * are converted from sRGB to linear when `srgb_to_linear`; EXR, RGBE and PFM are linear. For EXR the beauty R,G,B channels
  * are read. */
 int pc_image_read(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);
-/* The same, but an 8-bit PNG, JPEG, BMP or TGA is kept in its bytes (rgb8 and lut8, rgb NULL); every
+/* The same, but an 8-bit PNG, JPEG, PPM, BMP or TGA is kept in its bytes (rgb8 and lut8, rgb NULL); every
  * sample's value is the float pc_image_read gives for it. For textures, which may be many and
  * large. */
 int pc_image_read_bytes(const char *path, int srgb_to_linear, pc_image *out, pc_err *e);

@@ -1,4 +1,5 @@
-/* image_internal.h: what the image codecs (image.c, image_png.c, image_jpeg.c, image_exr.c, image_bmp_tga.c)
+/* image_internal.h: what the image codecs (image.c, image_png.c, image_jpeg.c, image_exr.c, image_stb8.c,
+ * image_pfm.c)
  * share with each other and nobody else: per-format readers and the sRGB transfer functions. */
 #ifndef PC_IMAGE_INTERNAL_H
 #define PC_IMAGE_INTERNAL_H
@@ -15,10 +16,12 @@ int pc_png_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out,
 int pc_jpeg_read(const char *path, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e);
 /* The linear value of each 8-bit sample: lut[i] = i / 255, through the sRGB EOTF when asked. */
 void pc_image_lut8(int srgb_to_linear, float lut[256]);
-/* BMP or TGA (format names which, for messages), 8-bit, as pc_png_read. */
-int pc_bmp_tga_read(const char *path, const char *format, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e);
+/* BMP, TGA or PPM (format names which: "BMP", "TGA", "PPM"), 8-bit, as pc_png_read. */
+int pc_stb8_read(const char *path, const char *format, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e);
 /* Radiance RGBE (.hdr, "#?RADIANCE" or "#?RGBE"): linear. */
 int pc_rgbe_read(const char *path, pc_image *out, pc_err *e);
+/* Portable float map (PF, or Pf for grey): linear, as Mitsuba reads it. */
+int pc_pfm_read(const char *path, pc_image *out, pc_err *e);
 /* The beauty R,G,B, or the first RGB triplet when the file has no plain R,G,B. */
 int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e);
 

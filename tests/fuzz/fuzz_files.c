@@ -1,6 +1,6 @@
 /* fuzz_files.c: libFuzzer target for the binary files a scene names besides its XML and OBJ
- * (which fuzz_scene covers): textures and environment maps (PNG, JPEG, EXR, Radiance RGBE, BMP,
- * told apart by content, and TGA), the EXR reader of `compare` and references, and the PLY and Mitsuba
+ * (which fuzz_scene covers): textures and environment maps (PNG, JPEG, EXR, Radiance RGBE, PFM,
+ * PPM, BMP, told apart by content, and TGA), the EXR reader of `compare` and references, and the PLY and Mitsuba
  * `serialized` meshes. Whatever the bytes: a clean return, no crash, no leak. The first byte
  * picks the reader, the second its option; the rest is the file:
  *   0  pc_image_read, sRGB decoding when the option is odd; pc_image_read_bytes (textures)

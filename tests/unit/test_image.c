@@ -793,6 +793,108 @@ static void test_bmp_tga(void **state) {
   free(file);
 }
 
+/* PPM (P6) as Mitsuba reads it: 8-bit sRGB samples (the same as the PNG of those bytes); a
+ * 16-bit one is refused, a short one is refused. */
+static void test_ppm(void **state) {
+  const int w = 5, h = 3;
+  unsigned char px[5 * 3 * 3];
+  for (size_t i = 0; i < sizeof px; i++) px[i] = (unsigned char)(i * 71 + 3);
+  const char *png = path_in(state, "ref.png"), *ppm = path_in(state, "t.ppm");
+  write_png(png, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, px, (size_t)w * 3);
+  const char head[] = "P6\n# a comment\n5 3\n255\n";
+  unsigned char file[sizeof head - 1 + sizeof px];
+  memcpy(file, head, sizeof head - 1);
+  memcpy(file + sizeof head - 1, px, sizeof px);
+  spit(ppm, file, sizeof file);
+  for (int srgb = 0; srgb < 2; srgb++) {
+    pc_image ref, f, b;
+    pc_err e;
+    assert_int_equal(pc_image_read(png, srgb, &ref, &e), PC_OK);
+    int rc = pc_image_read(ppm, srgb, &f, &e);
+    if (rc != PC_OK) print_error("%s\n", e.msg);
+    assert_int_equal(rc, PC_OK);
+    assert_int_equal(pc_image_read_bytes(ppm, srgb, &b, &e), PC_OK);
+    assert_true(f.w == w && f.h == h && b.rgb8);
+    for (size_t i = 0; i < sizeof px; i++) assert_true(f.rgb[i] == ref.rgb[i] && pc_image_sample(&b, i) == ref.rgb[i]);
+    pc_image_free(&ref);
+    pc_image_free(&f);
+    pc_image_free(&b);
+  }
+  pc_image img;
+  pc_err e;
+  spit(ppm, file, sizeof file - 4);
+  assert_int_not_equal(pc_image_read(ppm, 1, &img, &e), PC_OK);
+  assert_null(img.rgb);
+  const char wide[] = "P6\n1 1\n65535\n\x12\x34\x56\x78\x9a\xbc";
+  spit(ppm, (const unsigned char *)wide, sizeof wide - 1);
+  assert_int_equal(pc_image_read(ppm, 1, &img, &e), PC_EUNSUPPORTED);
+  assert_non_null(strstr(e.msg, "16-bit"));
+}
+
+/* Writes a PFM of the given header and 32-bit samples in the given byte order. */
+static void write_pfm(const char *path, const char *head, const float *v, size_t n, bool little) {
+  size_t hl = strlen(head);
+  unsigned char *file = malloc(hl + 4 * n);
+  memcpy(file, head, hl);
+  for (size_t i = 0; i < n; i++) {
+    uint32_t u;
+    memcpy(&u, &v[i], 4);
+    for (int k = 0; k < 4; k++) file[hl + 4 * i + k] = (unsigned char)(u >> (little ? 8 * k : 24 - 8 * k));
+  }
+  spit(path, file, hl + 4 * n);
+  free(file);
+}
+
+/* PFM as Mitsuba reads it: linear floats, rows from the bottom, the scale's sign the byte order
+ * and its magnitude a factor, grey replicated; malformed headers and short files refused. */
+static void test_pfm(void **state) {
+  const char *pfm = path_in(state, "t.pfm");
+  /* 2 x 2 RGB, file rows bottom first */
+  const float rgb[12] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  for (int little = 0; little < 2; little++) {
+    write_pfm(pfm, little ? "PF\n2 2\n-2.0\n" : "PF\n2 2\n2\n", rgb, 12, little);
+    pc_image img;
+    pc_err e;
+    int rc = pc_image_read(pfm, 1, &img, &e);
+    if (rc != PC_OK) print_error("%s\n", e.msg);
+    assert_int_equal(rc, PC_OK);
+    assert_true(img.w == 2 && img.h == 2 && img.rgb && !img.rgb8);
+    /* the image's top row is the file's second */
+    const float want[12] = {14, 16, 18, 20, 22, 24, 2, 4, 6, 8, 10, 12};
+    for (int i = 0; i < 12; i++) assert_true(img.rgb[i] == want[i]);
+    pc_image_free(&img);
+  }
+  const float grey[3] = {0.25f, 0.5f, 1e30f};
+  write_pfm(pfm, "Pf 3 1 -1\n", grey, 3, true);
+  pc_image img;
+  pc_err e;
+  assert_int_equal(pc_image_read_bytes(pfm, 1, &img, &e), PC_OK);
+  assert_true(img.w == 3 && img.h == 1 && img.rgb);
+  for (int i = 0; i < 9; i++) assert_true(img.rgb[i] == grey[i / 3]);
+  pc_image_free(&img);
+  const struct { const char *head; size_t n; const char *want; } bad[] = {
+      {"PF\n2 2\n-1\n", 11, "truncated"},
+      {"PF\n0 2\n-1\n", 0, "size"},
+      {"PF\n2 40000\n-1\n", 0, "size"},
+      {"PF\n2 2x\n-1\n", 12, "size"},
+      {"PF\n2 2\n0\n", 12, "scale"},
+      {"PF\n2 2\nnan\n", 12, "scale"},
+      {"PF\n2 2", 0, "header"},
+      {"PF\n2 2\n-1", 0, "header"},
+      {"PF\n2 2\n-100000000000000000000000000000000000\n", 12, "header"},
+      {"PFx2 2\n-1\n", 12, "not a PFM"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    write_pfm(pfm, bad[i].head, rgb, bad[i].n, true);
+    memset(&img, 0, sizeof img);
+    int rc = pc_image_read(pfm, 1, &img, &e);
+    if (rc == PC_OK || !strstr(e.msg, bad[i].want)) print_error("case %zu: %s\n", i, rc ? e.msg : "read");
+    assert_int_not_equal(rc, PC_OK);
+    assert_non_null(strstr(e.msg, bad[i].want));
+    assert_null(img.rgb);
+  }
+}
+
 /* Radiance RGBE: flat scanlines (width < 8), value = mantissa * 2^(E - 136). */
 static void test_rgbe_read(void **state) {
   const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n";
@@ -1053,6 +1155,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_exr_roundtrip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_bmp_tga, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_ppm, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_pfm, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_no_beauty_gives_first_triplet, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_rows, setup, teardown),

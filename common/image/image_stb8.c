@@ -1,7 +1,8 @@
-/* image_bmp_tga.c: BMP and Truevision TGA textures, which Mitsuba 0.6's bitmap reads too (a
- * published pool scene's textures are BMP), through Debian's stb_image (libstb-dev) as 8-bit
- * RGB. stb decodes a file that ends early as if zeros followed, so the size in the header is
- * checked against what the file can hold before any pixel is decoded. */
+/* image_stb8.c: BMP, Truevision TGA and binary PPM (P6) textures, which Mitsuba 0.6's bitmap
+ * reads too (a published pool scene's textures are BMP), through Debian's stb_image (libstb-dev)
+ * as 8-bit RGB. stb decodes a BMP or TGA that ends early as if zeros followed, so the size in
+ * the header is checked against what the file can hold before any pixel is decoded. */
+#include <ctype.h>
 #include <limits.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -22,10 +23,24 @@ static uint32_t le(const unsigned char *b, int n) {
   return v;
 }
 
+/* A P6 header's length: four words (P6, width, height, maximum value), each after whitespace
+ * and comments from '#' to the end of the line, and one byte of whitespace after the last. */
+static double ppm_header_bytes(const unsigned char *b, size_t n) {
+  size_t i = 0;
+  for (int word = 0; word < 4; word++) {
+    while (i < n && (isspace(b[i]) || b[i] == '#'))
+      if (b[i++] == '#')
+        while (i < n && b[i] != '\n') i++;
+    while (i < n && !isspace(b[i])) i++;
+  }
+  return (double)i + 1;
+}
+
 /* The bytes an uncompressed file needs for its pixels (0 when it is compressed or the header is
  * too short to tell: then only the PIXELS_PER_BYTE bound holds). */
-static double uncompressed_bytes(const unsigned char *b, size_t n, bool bmp, int w, int h) {
-  if (bmp) {
+static double uncompressed_bytes(const unsigned char *b, size_t n, char format, int w, int h) {
+  if (format == 'P') return ppm_header_bytes(b, n) + 3.0 * w * h;
+  if (format == 'B') {
     if (n < 34) return 0; /* the info header to biCompression */
     uint32_t offset = le(b + 10, 4), bpp = le(b + 28, 2), compression = le(b + 30, 4);
     if (compression != 0 && compression != 3) return 0; /* BI_RGB or BI_BITFIELDS */
@@ -48,7 +63,11 @@ static int decode(const char *path, const char *format, const unsigned char *fil
     return pc_errf(e, PC_ELIMIT, "%s: %dx%d pixels (at most %d on a side)", path, w, h, PC_IMAGE_MAX_DIM);
   if ((double)w * (double)h > PIXELS_PER_BYTE * (double)n + 1024.0)
     return pc_errf(e, PC_EPARSE, "%s: a %dx%d %s image cannot fit in %zu bytes (truncated?)", path, w, h, format, n);
-  double need = uncompressed_bytes(file, n, format[0] == 'B', w, h);
+  /* Mitsuba reads a PPM's samples above 255 as 16-bit words in the machine's byte order (the
+     format's is big-endian), so no image of such a file agrees with it */
+  if (format[0] == 'P' && stbi_is_16_bit_from_memory(file, (int)n))
+    return pc_errf(e, PC_EUNSUPPORTED, "%s: a 16-bit PPM (maximum value above 255): only 8-bit ones are read", path);
+  double need = uncompressed_bytes(file, n, format[0], w, h);
   if (need > (double)n)
     return pc_errf(e, PC_EPARSE, "%s: a %dx%d %s image needs %.0f bytes, the file has %zu (truncated)", path, w, h,
                    format, need, n);
@@ -77,7 +96,7 @@ static int decode(const char *path, const char *format, const unsigned char *fil
   return PC_OK;
 }
 
-int pc_bmp_tga_read(const char *path, const char *format, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e) {
+int pc_stb8_read(const char *path, const char *format, int srgb_to_linear, bool bytes, pc_image *out, pc_err *e) {
   char *file;
   size_t n;
   /* stb takes the length as an int */
