@@ -146,6 +146,18 @@ static bool is_rigid(const mat4 *m) {
   return true;
 }
 
+/* Mitsuba's Transform::hasScale, which its perspective sensors refuse: a row of the 3x3 part
+ * off unit length, or two rows off orthogonal, by more than 1e-3. */
+static bool mitsuba_has_scale(const mat4 *m) {
+  for (int i = 0; i < 3; i++)
+    for (int j = i; j < 3; j++) {
+      double d = 0;
+      for (int k = 0; k < 3; k++) d += m->m[i][k] * m->m[j][k];
+      if (fabs(d - (i == j)) > 1e-3) return true;
+    }
+  return false;
+}
+
 /* pcbpt draws its own independent samples; the sampler's sampleCount is the default number of
  * iterations (one sample per pixel each), as it is Mitsuba's samples per pixel. */
 static int sampler(pc_sx *c, const pc_xml_node *n) {
@@ -235,9 +247,17 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
     mat4 m = pc_anim_eval(&s->camera_anim, s->camera_anim.k[k].time);
     rigid = is_rigid(&m);
   }
+  /* Mitsuba tests the transform at time 0 with a tolerance ten times this one's */
+  mat4 at0 = s->camera_anim.n ? pc_anim_eval(&s->camera_anim, 0.f) : xf;
+  if (!rigid && mitsuba_has_scale(&at0))
+    return pc_errf(c->e, PC_EUNSUPPORTED,
+                   "%s:%d: %s: a toWorld that scales or shears (not rigid): Mitsuba 0.6 refuses it too (\"scale factors in"
+                   " the camera-to-world transformation are not allowed\")",
+                   c->file, p[2].line, what);
   if (!rigid)
     return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: a toWorld that scales or shears (not rigid): not modelled by pcbpt",
+                   "%s:%d: %s: a toWorld that scales or shears (not rigid to 1e-4): not modelled by pcbpt (Mitsuba accepts"
+                   " a camera matrix rigid to 1e-3)",
                    c->file, p[2].line, what);
   cam->aperture_radius = 0.f;
   if (lens) {
