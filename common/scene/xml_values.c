@@ -207,6 +207,9 @@ static int one_transform(const char *file, const pc_xml_node *c, mat4 *t, pc_err
   *t = mat4_identity();
   if (c->first) return pc_errf(e, PC_EPARSE, "%s:%d: <%s> must be empty", file, c->line, c->name);
   if (strcmp(c->name, "translate") == 0) {
+    /* Mitsuba 2's form, which some converters write into 0.6 scenes; Mitsuba 0.6's schema refuses it */
+    if (pc_xml_attr(c, "value"))
+      return pc_errf(e, PC_EPARSE, "%s:%d: <translate value=...> is Mitsuba 2's form: Mitsuba 0.6 takes x, y, z", file, c->line);
     if ((rc = pc_xml_check_attrs(file, c, xyz, e)) || (rc = xyz_attrs(file, c, 0, v, e))) return rc;
     for (int i = 0; i < 3; i++) t->m[i][3] = v[i];
   } else if (strcmp(c->name, "scale") == 0) {

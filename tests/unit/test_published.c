@@ -41,7 +41,7 @@ static const struct { const char *folder, *defines[3]; } scene_defines[] = {
 /* Files that are not Mitsuba 0.6 scenes (their renderers extended the format), refused with one
  * line as Mitsuba 0.6 would refuse them. */
 static const struct { const char *folder, *why; } not_mitsuba[] = {
-    {"rb-veach-mis", "unknown attribute 'value' on <translate>"}, /* scene.xsd: translate takes x, y, z */
+    {"rb-veach-mis", "<translate value=...> is Mitsuba 2's form"}, /* scene.xsd: translate takes x, y, z */
     /* Lumen's exports: Mitsuba 0.6 has no 'glass' plugin, and its perspective camera refuses a
      * toWorld whose rows are not orthonormal (Transform::hasScale; lu-bedroom's are 0.026 apart). */
     {"lu-torus", "bsdf 'glass'"},
