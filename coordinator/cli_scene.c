@@ -28,7 +28,8 @@ void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const p
     fprintf(stderr,
             "pcbpt-coord %s: warning: %s: pt never samples the light a point or spot light sends through a delta"
             " material (glass, a mirror, a smooth plastic coat, a mask's holes), so its image lacks it; bdpt and"
-            " pcbpt render it\n",
+            " pcbpt render it where it lands on a surface seen other than through a delta material (seen through"
+            " one, no method samples it, nor does Mitsuba)\n",
             verb, path);
   if (m == PC_METHOD_LT && !req->lt_complete)
     fprintf(stderr,
