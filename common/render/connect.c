@@ -121,8 +121,7 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
   if (ev->kind == PC_VTX_CAMERA) {
     const pc_camera *cam = &s->camera;
     if (!pc_camera_raster_from(cam, ev->p, we, &out->px, &out->py)) return false;
-    float cz = v3_dot(we, cam->dir);
-    pdf_e_fwd = 1.f / (cam->image_area * cz * cz * cz);
+    pdf_e_fwd = pc_camera_dir_pdf(cam, we);
     fe = v3s(pdf_e_fwd);
     cos_e = 0.f; /* the pinhole cannot be hit */
   } else {

@@ -211,8 +211,7 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
   v0->q = 1.f;
   v0->delta = false;
   v0->mis_near = v0->mis_far = 0.f;
-  float cz = v3_dot(d, cam->dir);
-  float pdf = 1.f / (cam->image_area * cz * cz * cz);
+  float pdf = pc_camera_dir_pdf(cam, d);
   if (!(pdf > 0.f) || !isfinite(pdf)) return 1;
   /* The pinhole cannot be hit: cos_out 0. */
   return walk(c, n, rng, v, 1, max_vertices, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);

@@ -25,6 +25,21 @@ void pc_camera_prepare(pc_camera *c) {
     c->tan_half_y = t * h / w;
   }
   c->image_area = 4.f * c->tan_half_x * c->tan_half_y;
+  float skew = pc_maxf(fabsf(v3_dot(c->right, c->up)), pc_maxf(fabsf(v3_dot(c->right, c->dir)), fabsf(v3_dot(c->up, c->dir))));
+  if (skew < 1e-6f) {
+    c->inv_right = c->right, c->inv_up = c->up, c->inv_dir = c->dir;
+    c->inv_det = 1.f;
+    return;
+  }
+  /* a near-rigid matrix of a published scene, used as Mitsuba uses it (not squared up): the
+     raster position of a direction inverts the ray of that position exactly, so every strategy
+     sees the same image */
+  vec3 a = v3_cross(c->up, c->dir), b = v3_cross(c->dir, c->right), n = v3_cross(c->right, c->up);
+  float det = v3_dot(c->right, a);
+  c->inv_right = v3_scale(a, 1.f / det);
+  c->inv_up = v3_scale(b, 1.f / det);
+  c->inv_dir = v3_scale(n, 1.f / det);
+  c->inv_det = 1.f / fabsf(det);
 }
 
 vec3 pc_camera_ray_dir(const pc_camera *c, float px, float py) {
@@ -34,10 +49,10 @@ vec3 pc_camera_ray_dir(const pc_camera *c, float px, float py) {
 }
 
 bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py) {
-  float cz = v3_dot(dir, c->dir);
+  float cz = v3_dot(dir, c->inv_dir);
   if (!(cz > 0.f)) return false;
-  float x = v3_dot(dir, c->right) / cz / c->tan_half_x;
-  float y = v3_dot(dir, c->up) / cz / c->tan_half_y;
+  float x = v3_dot(dir, c->inv_right) / cz / c->tan_half_x;
+  float y = v3_dot(dir, c->inv_up) / cz / c->tan_half_y;
   float rx = (x + 1.f) * 0.5f * (float)c->width;
   float ry = (1.f - y) * 0.5f * (float)c->height;
   if (!(rx >= 0.f && rx < (float)c->width && ry >= 0.f && ry < (float)c->height)) return false;
@@ -49,15 +64,14 @@ bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py) {
 float pc_camera_we(const pc_camera *c, vec3 dir) {
   float px, py;
   if (!pc_camera_raster(c, dir, &px, &py)) return 0.f;
-  float cz = v3_dot(dir, c->dir);
-  return 1.f / (c->image_area * cz * cz * cz * cz);
+  float k = v3_dot(dir, c->inv_dir), cz = v3_dot(dir, c->dir);
+  return c->inv_det / (c->image_area * k * k * k * cz);
 }
 
 float pc_camera_pdf_dir(const pc_camera *c, vec3 dir) {
   float px, py;
   if (!pc_camera_raster(c, dir, &px, &py)) return 0.f;
-  float cz = v3_dot(dir, c->dir);
-  return 1.f / (c->image_area * cz * cz * cz);
+  return pc_camera_dir_pdf(c, dir);
 }
 
 vec3 pc_camera_lens_point(const pc_camera *c, float u1, float u2) {

@@ -14,8 +14,9 @@
 #include "vecmath.h"
 
 typedef struct pc_camera {
-  mat4 to_world;       /* camera to world, rigid (scale is refused by the parser) */
-  vec3 pos, dir, right, up; /* derived: world position, forward, image-right, image-up */
+  mat4 to_world;       /* camera to world: rigid, or (a pinhole) as near rigid as Mitsuba accepts */
+  vec3 pos, dir, right, up; /* derived: world position, forward, image-right, image-up (unit; at
+                               most 1e-3 off orthogonal for a near-rigid pinhole) */
   int width, height;
   float fov_deg;       /* along fov_axis */
   char fov_axis;       /* 'x', 'y', 'd' (diagonal), 's' (smaller), 'l' (larger) */
@@ -24,6 +25,11 @@ typedef struct pc_camera {
   /* derived by pc_camera_prepare */
   float tan_half_x, tan_half_y; /* half extents of the image plane at distance 1 */
   float image_area;             /* area of the image plane at distance 1 */
+  /* The rows of the inverse of the frame (right | up | dir), which take a world direction to its
+   * image-plane coordinates, and 1 / |its determinant|; (right, up, dir) and 1 where the frame is
+   * orthonormal, so that a rigid camera computes exactly what a transpose does. */
+  vec3 inv_right, inv_up, inv_dir;
+  float inv_det;
 } pc_camera;
 
 void pc_camera_prepare(pc_camera *c);
@@ -46,9 +52,18 @@ bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py);
 
 /* Importance We(dir) for a world direction leaving the camera, normalised so that
  * integrating We * cos over the image solid angle gives 1 per pixel-count unit:
- * We = 1 / (A * cos^4) with A the image-plane area at distance 1 (0 outside the image). */
+ * We = 1 / (A * cos^4) with A the image-plane area at distance 1 (0 outside the image); in
+ * general the direction pdf over cos, cos = dot(dir, c->dir) being the cosine the connections
+ * use. */
 float pc_camera_we(const pc_camera *c, vec3 dir);
 /* Solid-angle pdf of generating `dir` by uniform raster sampling: 1 / (A cos^3). */
 float pc_camera_pdf_dir(const pc_camera *c, vec3 dir);
+/* The same for a direction known to lie in the image: 1 / (A cos^3) with cos the direction's
+ * depth along dir, and for a sheared frame 1 / (A |det| k^3), k its depth in the frame's own
+ * coordinates (the solid angle of image-plane area dA at direction w is |det| k^3 dA). */
+static inline float pc_camera_dir_pdf(const pc_camera *c, vec3 dir) {
+  float k = v3_dot(dir, c->inv_dir);
+  return c->inv_det / (c->image_area * k * k * k);
+}
 
 #endif
