@@ -37,6 +37,15 @@ static pc_camera make_camera(int w, int h, float fov, char axis) { return make_s
 /* Integrates We*cos and the direction pdf over the sphere by uniform sampling; both must be 1.
  * Standard error of a uniform-sphere estimate of these peaked integrands is measured and the
  * assertion uses 5 of them. */
+/* The ray through (px, py), checked to project back there. */
+static vec3 ray_back_to(const pc_camera *c, float px, float py) {
+  vec3 d = pc_camera_ray_dir(c, px, py);
+  float rx, ry;
+  assert_true(pc_camera_raster(c, d, &rx, &ry));
+  assert_true(fabsf(rx - px) < 1e-3f && fabsf(ry - py) < 1e-3f);
+  return d;
+}
+
 static void importance_integrates_to_one(float shear) {
   pc_camera c = make_sheared_camera(64, 48, 40.f, 'x', shear);
   pc_rng rng = pc_rng_make(7, 0, PC_STREAM_MISC, 0);
@@ -75,10 +84,7 @@ static void test_sheared_frame(void **state) {
   assert_true(c.inv_det != 1.f && fabsf(v3_dot(c.up, c.dir)) > 0.1f);
   for (float py = 0.5f; py < 48; py += 4.3f)
     for (float px = 0.5f; px < 64; px += 5.1f) {
-      vec3 d = pc_camera_ray_dir(&c, px, py);
-      float rx, ry;
-      assert_true(pc_camera_raster(&c, d, &rx, &ry));
-      assert_true(fabsf(rx - px) < 1e-3f && fabsf(ry - py) < 1e-3f);
+      vec3 d = ray_back_to(&c, px, py);
       /* the solid angle of a raster square of side h, against its share of the image: the pdf */
       const float h = 0.05f;
       vec3 a = pc_camera_ray_dir(&c, px - h / 2, py - h / 2), b = pc_camera_ray_dir(&c, px + h / 2, py - h / 2),
@@ -99,10 +105,7 @@ static void test_raster_roundtrip(void **state) {
     pc_camera c = make_camera(80, 30, 35.f, axes[a]);
     for (float py = 0.5f; py < 30; py += 3.7f)
       for (float px = 0.5f; px < 80; px += 5.3f) {
-        vec3 d = pc_camera_ray_dir(&c, px, py);
-        float rx, ry;
-        assert_true(pc_camera_raster(&c, d, &rx, &ry));
-        assert_true(fabsf(rx - px) < 1e-3f && fabsf(ry - py) < 1e-3f);
+        ray_back_to(&c, px, py);
       }
   }
 }
