@@ -84,16 +84,17 @@ vec3 pc_camera_lens_point(const pc_camera *c, float u1, float u2) {
 vec3 pc_camera_lens_dir(const pc_camera *c, vec3 lens, float px, float py) {
   vec3 d = pc_camera_ray_dir(c, px, py);
   if (!(c->aperture_radius > 0.f)) return d;
-  vec3 focus = v3_madd(c->pos, d, c->focus_distance / v3_dot(d, c->dir));
+  vec3 focus = v3_madd(c->pos, d, c->focus_distance / v3_dot(d, c->inv_dir));
   return v3_norm(v3_sub(focus, lens));
 }
 
 bool pc_camera_raster_from(const pc_camera *c, vec3 lens, vec3 dir, float *px, float *py) {
   if (!(c->aperture_radius > 0.f)) return pc_camera_raster(c, dir, px, py);
-  float cz = v3_dot(dir, c->dir);
+  float cz = v3_dot(dir, c->inv_dir);
   if (!(cz > 0.f)) return false;
-  /* the lens lies in the plane through pos across dir: the ray meets the plane in focus at
-   * depth focus_distance, where the pinhole ray of the same pixel meets it too */
+  /* the lens lies in the plane of right and up through pos: the ray meets the plane in focus at
+   * depth focus_distance (in the frame's own coordinates), where the pinhole ray of the same
+   * pixel meets it too */
   vec3 focus = v3_madd(lens, dir, c->focus_distance / cz);
   return pc_camera_raster(c, v3_sub(focus, c->pos), px, py);
 }

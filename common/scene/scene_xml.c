@@ -254,13 +254,13 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    "%s:%d: %s: a toWorld that scales or shears (not rigid): Mitsuba 0.6 refuses it too (\"scale factors in"
                    " the camera-to-world transformation are not allowed\")",
                    c->file, p[2].line, what);
-  /* what Mitsuba accepts (a matrix printed with few digits) a still pinhole uses with its axes
-     as they are, not squared up (camera.c); a thin lens or a moving sensor must be rigid */
-  if (!rigid && (lens || s->camera_anim.n))
+  /* what Mitsuba accepts (a matrix printed with few digits) a still sensor uses with its axes
+     as they are, not squared up (camera.c); a moving one must be rigid */
+  if (!rigid && s->camera_anim.n)
     return pc_errf(c->e, PC_EUNSUPPORTED,
-                   "%s:%d: %s: a toWorld that scales or shears (not rigid to 1e-4): not modelled by pcbpt for a %s (Mitsuba"
-                   " accepts a camera matrix rigid to 1e-3)",
-                   c->file, p[2].line, what, lens ? "thin lens" : "moving sensor");
+                   "%s:%d: %s: a moving toWorld that scales or shears (not rigid to 1e-4): not modelled by pcbpt"
+                   " (Mitsuba accepts a camera matrix rigid to 1e-3)",
+                   c->file, p[2].line, what);
   cam->aperture_radius = 0.f;
   if (lens) {
     if (p[4].set && (rc = pc_sx_warn(c, n, "%s: farClip: pcbpt does not clip (it is the default focusDistance)", what)))

@@ -112,9 +112,8 @@ static void test_raster_roundtrip(void **state) {
 
 /* A thin lens: rays from any lens point through a raster position meet at one point of the
  * plane in focus, and project back to that raster position; the pinhole draws no lens sample. */
-static void test_thin_lens(void **state) {
-  (void)state;
-  pc_camera c = make_camera(64, 48, 40.f, 'x');
+static void thin_lens(float shear) {
+  pc_camera c = make_sheared_camera(64, 48, 40.f, 'x', shear);
   pc_rng rng = pc_rng_make(3, 0, PC_STREAM_MISC, 0), before = rng;
   vec3 d, o = pc_camera_sample_ray(&c, 10.5f, 20.25f, &rng, &d);
   assert_true(o.x == c.pos.x && o.y == c.pos.y && o.z == c.pos.z);
@@ -127,18 +126,28 @@ static void test_thin_lens(void **state) {
   for (int i = 0; i < 1000; i++) {
     float px = 64 * pc_rng_f(&rng), py = 48 * pc_rng_f(&rng), rx, ry;
     o = pc_camera_sample_ray(&c, px, py, &rng, &d);
+    /* the lens point on the disk of radius 0.3 in the frame's own coordinates */
     vec3 off = v3_sub(o, c.pos);
-    assert_true(v3_len(off) <= 0.3f * 1.0001f && fabsf(v3_dot(off, c.dir)) < 1e-5f);
-    far = fmaxf(far, v3_len(off));
-    /* the ray reaches the focus plane where the pinhole ray of the pixel does */
-    vec3 p = v3_madd(o, d, 5.f / v3_dot(d, c.dir));
+    float lx = v3_dot(off, c.inv_right), ly = v3_dot(off, c.inv_up), r = sqrtf(lx * lx + ly * ly);
+    assert_true(r <= 0.3f * 1.0001f && fabsf(v3_dot(off, c.inv_dir)) < 1e-5f);
+    far = fmaxf(far, r);
+    /* the ray reaches the focus plane (depth 5 in the frame's coordinates) where the pinhole ray
+       of the pixel does */
+    vec3 p = v3_madd(o, d, 5.f / v3_dot(d, c.inv_dir));
     vec3 q = pc_camera_ray_dir(&c, px, py);
-    q = v3_madd(c.pos, q, 5.f / v3_dot(q, c.dir));
+    q = v3_madd(c.pos, q, 5.f / v3_dot(q, c.inv_dir));
     assert_true(v3_len(v3_sub(p, q)) < 1e-4f);
     assert_true(pc_camera_raster_from(&c, o, d, &rx, &ry));
     assert_true(fabsf(rx - px) < 2e-3f && fabsf(ry - py) < 2e-3f);
   }
   assert_true(far > 0.29f);
+}
+
+/* The same for a frame whose up axis leans (see test_sheared_frame). */
+static void test_thin_lens(void **state) {
+  (void)state;
+  thin_lens(0.f);
+  thin_lens(0.2f);
 }
 
 static void test_fov_axes(void **state) {
