@@ -1,4 +1,4 @@
-/* image.h: an RGB float raster and its files: PNG/JPEG/EXR/RGBE/BMP/TGA read (textures, references),
+/* image.h: an RGB float raster and its files: PNG/JPEG/EXR/RGBE/PFM/PPM/BMP/TGA read (textures, references),
  * EXR write with named layers and header attributes, sRGB PNG preview. */
 #ifndef PC_IMAGE_H
 #define PC_IMAGE_H
