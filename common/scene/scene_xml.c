@@ -135,28 +135,23 @@ static int film(pc_sx *c, const pc_xml_node *n) {
   return 0;
 }
 
-/* The 3x3 part's columns are orthonormal (rotations and mirror flips only). */
-static bool is_rigid(const mat4 *m) {
+/* Whether the 3x3 part's columns (rows: by_rows) are orthonormal to within tol. */
+static bool orthonormal(const mat4 *m, bool by_rows, double tol) {
   for (int i = 0; i < 3; i++)
-    for (int j = 0; j < 3; j++) {
+    for (int j = i; j < 3; j++) {
       double d = 0;
-      for (int k = 0; k < 3; k++) d += m->m[k][i] * m->m[k][j];
-      if (fabs(d - (i == j)) > 1e-4) return false;
+      for (int k = 0; k < 3; k++) d += by_rows ? m->m[i][k] * m->m[j][k] : m->m[k][i] * m->m[k][j];
+      if (fabs(d - (i == j)) > tol) return false;
     }
   return true;
 }
 
+/* Rotations and mirror flips only. */
+static bool is_rigid(const mat4 *m) { return orthonormal(m, false, 1e-4); }
+
 /* Mitsuba's Transform::hasScale, which its perspective sensors refuse: a row of the 3x3 part
  * off unit length, or two rows off orthogonal, by more than 1e-3. */
-static bool mitsuba_has_scale(const mat4 *m) {
-  for (int i = 0; i < 3; i++)
-    for (int j = i; j < 3; j++) {
-      double d = 0;
-      for (int k = 0; k < 3; k++) d += m->m[i][k] * m->m[j][k];
-      if (fabs(d - (i == j)) > 1e-3) return true;
-    }
-  return false;
-}
+static bool mitsuba_has_scale(const mat4 *m) { return !orthonormal(m, true, 1e-3); }
 
 /* pcbpt draws its own independent samples; the sampler's sampleCount is the default number of
  * iterations (one sample per pixel each), as it is Mitsuba's samples per pixel. */
