@@ -14,9 +14,9 @@
 #include "vecmath.h"
 
 typedef struct pc_camera {
-  mat4 to_world;       /* camera to world: rigid, or (a pinhole) as near rigid as Mitsuba accepts */
+  mat4 to_world;       /* camera to world: rigid, or (a still sensor) as near rigid as Mitsuba accepts */
   vec3 pos, dir, right, up; /* derived: world position, forward, image-right, image-up (unit; at
-                               most 1e-3 off orthogonal for a near-rigid pinhole) */
+                               most 1e-3 off orthogonal for a near-rigid still sensor) */
   int width, height;
   float fov_deg;       /* along fov_axis */
   char fov_axis;       /* 'x', 'y', 'd' (diagonal), 's' (smaller), 'l' (larger) */

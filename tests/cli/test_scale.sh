@@ -30,29 +30,37 @@ open("%s/ground.xml" % out, "w").write(open("%s/unit.xml" % out).read().replace(
 PY
 # compare's beauty row: RMSE relMSE L1 mean mean(ref)
 beauty() { awk '$1 == "beauty" { print $3, $5, $6 }' "$tmp/out"; }
-for m in pt lt bdpt pcbpt; do
-  for v in unit small big far ground; do
-    check "$m-$v" 0 "$m: 8 iterations" -- "$bin" render "$tmp/$v.xml" --method "$m" --spp 8 --width 32 --height 32 \
-      --threads 2 --quiet --out "$tmp/$v-$m.exr"
+# Renders $tmp/<prefix>unit.xml and each variant with every method and compares each variant's
+# image with unit's: relMSE below the variant's bound (a Python dict by variant, else a default)
+# and the mean within a relative tolerance.
+same_image() {
+  local prefix=$1 variants=$2 bounds=$3 default=$4 meantol=$5
+  for m in pt lt bdpt pcbpt; do
+    for v in unit $variants; do
+      check "$prefix$m-$v" 0 "$m: 8 iterations" -- "$bin" render "$tmp/$prefix$v.xml" --method "$m" --spp 8 --width 32 \
+        --height 32 --threads 2 --quiet --out "$tmp/$prefix$v-$m.exr"
+    done
+    for v in $variants; do
+      check "$prefix$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/$prefix$v-$m.exr" "$tmp/${prefix}unit-$m.exr"
+      read -r rel mean ref <<<"$(beauty)"
+      python3 -c "
+import ast, sys
+v, bounds = sys.argv[1], ast.literal_eval(sys.argv[5])
+rel, mean, ref, default, meantol = map(float, sys.argv[2:5] + sys.argv[6:8])
+sys.exit(0 if rel < bounds.get(v, default) and abs(mean / ref - 1) < meantol else 1)" \
+        "$v" "$rel" "$mean" "$ref" "$bounds" "$default" "$meantol" ||
+        { echo "FAIL $prefix$m-$v: relMSE $rel, mean $mean against $ref"; fail=1; continue; }
+      echo "ok   $prefix$m-$v: relMSE $rel, mean $mean against $ref"
+    done
   done
-  for v in small big far ground; do
-    check "$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/$v-$m.exr" "$tmp/unit-$m.exr"
-    read -r rel mean ref <<<"$(beauty)"
-    # the same samples up to rounding: the scaled boxes agree far below the noise (relMSE below
-    # 3e-5; 1.3e-2 to 1.5e-1 with the absolute offset), so does the box beside the plane (0 for
-    # pt, lt and bdpt, 2.4e-3 for pcbpt; 2.4e-2 and 1.4e-1 for pt and lt with the radius as the
-    # floor); the moved one's geometry is rounded to 10^-3, which moves some samples (2.7e-2 for
-    # lt, 2e-3 to 4e-3 for the others; 0.09 to 5.7 with the absolute offset), but not the
-    # brightness
-    python3 -c "
-import sys
-rel, mean, ref = map(float, sys.argv[2:])
-bound = {'far': 0.05, 'ground': 0.01}.get(sys.argv[1], 1e-3)
-sys.exit(0 if rel < bound and abs(mean / ref - 1) < 0.02 else 1)" "$v" "$rel" "$mean" "$ref" ||
-      { echo "FAIL $m-$v: relMSE $rel, mean $mean against $ref"; fail=1; continue; }
-    echo "ok   $m-$v: relMSE $rel, mean $mean against $ref"
-  done
-done
+}
+# the same samples up to rounding: the scaled boxes agree far below the noise (relMSE below
+# 3e-5; 1.3e-2 to 1.5e-1 with the absolute offset), so does the box beside the plane (0 for
+# pt, lt and bdpt, 2.4e-3 for pcbpt; 2.4e-2 and 1.4e-1 for pt and lt with the radius as the
+# floor); the moved one's geometry is rounded to 10^-3, which moves some samples (2.7e-2 for
+# lt, 2e-3 to 4e-3 for the others; 0.09 to 5.7 with the absolute offset), but not the
+# brightness
+same_image "" "small big far ground" "{'far': 0.05, 'ground': 0.01}" 1e-3 0.02
 # The same for exact cylinders (an emitting tube and an open two-sided one over a floor), whose
 # hits are solved in double from float rays and offset by their own coordinates: 1/1000 and
 # 1000 times the size agree with the original to rounding (relMSE ~1e-13 for pt, bdpt and lt,
@@ -75,21 +83,5 @@ for name, sc, ox in (("unit", 1, 0), ("small", 1e-3, 0), ("big", 1e3, 0), ("far"
         '<shape type="cylinder"><float name="radius" value="0.5"/><transform name="toWorld"><rotate x="1" angle="-90"/>'
         '<translate x="0.3"/>' + move + '<bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape></scene>')
 PY
-for m in pt lt bdpt pcbpt; do
-  for v in unit small big far; do
-    check "cyl-$m-$v" 0 "$m: 8 iterations" -- "$bin" render "$tmp/cyl-$v.xml" --method "$m" --spp 8 --width 32 --height 32 \
-      --threads 2 --quiet --out "$tmp/cyl-$v-$m.exr"
-  done
-  for v in small big far; do
-    check "cyl-$m-$v-compare" 0 "beauty" -- "$bin" compare "$tmp/cyl-$v-$m.exr" "$tmp/cyl-unit-$m.exr"
-    read -r rel mean ref <<<"$(beauty)"
-    python3 -c "
-import sys
-rel, mean, ref = map(float, sys.argv[2:])
-bound = 0.05 if sys.argv[1] == 'far' else 1e-4
-sys.exit(0 if rel < bound and abs(mean / ref - 1) < 0.01 else 1)" "$v" "$rel" "$mean" "$ref" ||
-      { echo "FAIL cyl-$m-$v: relMSE $rel, mean $mean against $ref"; fail=1; continue; }
-    echo "ok   cyl-$m-$v: relMSE $rel, mean $mean against $ref"
-  done
-done
+same_image cyl- "small big far" "{'far': 0.05}" 1e-4 0.01
 exit $fail
