@@ -625,11 +625,6 @@ static void test_warnings(void **state) {
   assert_int_equal(failures, 0);
 }
 
-/* PT cannot sample a path from a point or spot light through a delta lobe: with such a light,
- * any shape with a delta lobe (also wrapped or mixed in) makes the scene incomplete for it; an
- * area light, or only rough and diffuse materials, leave it complete. And caustics
- * (pc_scene_has_caustics): a shape of mirror or glass, smooth, thin or rough, also wrapped or
- * mixed in; not a plastic's or a coating's coat over a diffuse base. */
 /* A still pinhole whose matrix Mitsuba accepts though it is not rigid to 1e-4 (printed with few
  * digits): loaded with its axes as they are, and its raster positions invert its rays. */
 static void test_near_rigid_camera(void **state) {
@@ -654,6 +649,11 @@ static void test_near_rigid_camera(void **state) {
   th_rm_rf(t.root);
 }
 
+/* PT cannot sample a path from a point or spot light through a delta lobe: with such a light,
+ * any shape with a delta lobe (also wrapped or mixed in) makes the scene incomplete for it; an
+ * area light, or only rough and diffuse materials, leave it complete. And caustics
+ * (pc_scene_has_caustics): a shape of mirror or glass, smooth, thin or rough, also wrapped or
+ * mixed in; not a plastic's or a coating's coat over a diffuse base. */
 static void test_pt_complete(void **state) {
   (void)state;
   tmp t;
