@@ -653,7 +653,8 @@ static void test_near_rigid_camera(void **state) {
  * any shape with a delta lobe (also wrapped or mixed in) makes the scene incomplete for it; an
  * area light, or only rough and diffuse materials, leave it complete. And caustics
  * (pc_scene_has_caustics): a shape of mirror or glass, smooth, thin or rough, also wrapped or
- * mixed in; not a plastic's or a coating's coat over a diffuse base. */
+ * mixed in; not a plastic's or a coating's coat over a diffuse base. LT (pc_scene_lt_complete)
+ * misses any delta lobe, whatever the light. */
 static void test_pt_complete(void **state) {
   (void)state;
   tmp t;
