@@ -145,7 +145,7 @@ static bool intersect(const pc_shape *sh, const float o[3], const float d[3], fl
  * lane i. */
 #define LANE_F(base, N, k, i) (((float *)(base))[(k) * (N) + (i)])
 #define LANE_U(base, N, k, i) (((unsigned *)(base))[(k) * (N) + (i)])
-enum { RAY_ORG = 0, RAY_TNEAR = 3, RAY_DIR = 4, RAY_TFAR = 8, HIT_NG = 0, HIT_U = 3, HIT_V = 4, HIT_PRIM = 5, HIT_GEOM = 6, HIT_INST = 7 };
+enum { RAY_ORG = 0, RAY_TNEAR = 3, RAY_DIR = 4, RAY_TFAR = 8, HIT_NG = 0, HIT_V = 4, HIT_PRIM = 5, HIT_GEOM = 6, HIT_INST = 7 };
 
 static bool lane_intersect(const pc_shape *sh, void *ray, unsigned N, unsigned i, float *t) {
   float o[3], d[3];
@@ -163,18 +163,9 @@ static void on_intersect(const struct RTCIntersectFunctionNArguments *args) {
   for (unsigned i = 0; i < N; i++) {
     float t;
     if (args->valid[i] != -1 || !lane_intersect(sh, ray, N, i, &t)) continue;
-    /* the hit record is pc_cylinder_hit's; Embree only needs a normal and the ids */
-    vec3 p = v3(LANE_F(ray, N, RAY_ORG, i) + t * LANE_F(ray, N, RAY_DIR, i),
-                LANE_F(ray, N, RAY_ORG + 1, i) + t * LANE_F(ray, N, RAY_DIR + 1, i),
-                LANE_F(ray, N, RAY_ORG + 2, i) + t * LANE_F(ray, N, RAY_DIR + 2, i));
-    vec3 l = v3_sub(p, sh->center);
-    vec3 ng = v3_sub(l, v3_scale(sh->cyl_axes.n, v3_dot(l, sh->cyl_axes.n)));
+    /* pc_cylinder_hit builds the hit record from t alone; nothing reads Embree's Ng, u, v */
     LANE_F(ray, N, RAY_TFAR, i) = t;
-    LANE_F(hit, N, HIT_NG, i) = ng.x;
-    LANE_F(hit, N, HIT_NG + 1, i) = ng.y;
-    LANE_F(hit, N, HIT_NG + 2, i) = ng.z;
-    LANE_F(hit, N, HIT_U, i) = 0.f;
-    LANE_F(hit, N, HIT_V, i) = 0.f;
+    for (int k = HIT_NG; k <= HIT_V; k++) LANE_F(hit, N, k, i) = 0.f;
     LANE_U(hit, N, HIT_PRIM, i) = args->primID;
     LANE_U(hit, N, HIT_GEOM, i) = args->geomID;
     for (unsigned l2 = 0; l2 < RTC_MAX_INSTANCE_LEVEL_COUNT; l2++) LANE_U(hit, N, HIT_INST + l2, i) = args->context->instID[l2];
