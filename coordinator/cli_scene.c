@@ -26,7 +26,7 @@ int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path
 void pc_cli_warn_method(const char *verb, const char *path, pc_method m, const pc_render_request *req) {
   if (m == PC_METHOD_PT && !req->pt_complete)
     fprintf(stderr,
-            "pcbpt-coord %s: warning: %s: pt never samples the light a point or spot light sends through a delta"
+            "pcbpt-coord %s: warning: %s: pt never samples the light a point, spot or directional light sends through a delta"
             " material (glass, a mirror, a smooth plastic coat, a mask's holes), so its image lacks it; bdpt and"
             " pcbpt render it where it lands on a surface seen other than through a delta material (seen through"
             " one, no method samples it, nor does Mitsuba)\n",

@@ -90,8 +90,12 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
   vec3 fl;
   float cos_l, pdf_l_fwd, pdf_l_rev = 0.f;
   if (env) {
+    /* A directional light is a Dirac in direction: it cannot be hit (cos_l 0, no s=0 strategy),
+     * and a camera sees it in no pixel. */
+    bool directional = s->lights[lv->light].type == PC_LIGHT_DIRECTIONAL;
+    if (directional && ev->kind == PC_VTX_CAMERA) return false;
     fl = v3s(1.f);
-    cos_l = 1.f;
+    cos_l = directional ? 0.f : 1.f;
     pdf_l_fwd = pc_env_disk_pdf(s);
   } else if (lv->kind == PC_VTX_LIGHT) {
     const pc_light *l = &s->lights[lv->light];

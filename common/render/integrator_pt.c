@@ -26,9 +26,9 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_bsdf_out *o, const pc_shading 
   const pc_light *l = &s->lights[li];
   float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), u2 = pc_rng_f(rng);
   vec3 wi, le, f;
-  float pl; /* solid-angle pdf of wi; 0 for a point or spot light (delta) */
+  float pl; /* solid-angle pdf of wi; 0 for a point, spot or directional light (delta) */
   float pb, pb_rev; /* BSDF sampling's pdf of wi (without q), and of the reverse (unused) */
-  float geo = 1.f; /* point or spot light: 1 / d^2 */
+  float geo = 1.f; /* point or spot light: 1 / d^2; with the choice's pdf for every delta light */
   bool visible;
   if (l->type == PC_LIGHT_ENV) {
     wi = pc_env_sample(l, u1, u2, &pl);
@@ -37,6 +37,15 @@ static vec3 nee(pc_tctx *c, pc_rng *rng, const pc_bsdf_out *o, const pc_shading 
     le = pc_env_le(l, wi);
     f = pc_bsdf_eval_pdfs_out(o, s->textures, sh, wi, PC_RADIANCE, &pb, &pb_rev);
     if (v3_is_zero(le) || v3_is_zero(f)) return v3s(0.f);
+    c->rays++;
+    visible = pc_scene_escapes(s, h->p, h->ng, h->eps, wi);
+  } else if (l->type == PC_LIGHT_DIRECTIONAL) {
+    wi = v3_neg(l->direction);
+    le = l->irradiance;
+    pl = 0.f;
+    geo = 1.f / pick;
+    f = pc_bsdf_eval_pdfs_out(o, s->textures, sh, wi, PC_RADIANCE, &pb, &pb_rev);
+    if (v3_is_zero(f)) return v3s(0.f);
     c->rays++;
     visible = pc_scene_escapes(s, h->p, h->ng, h->eps, wi);
   } else {

@@ -142,6 +142,17 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
     out->mis_near = pa > 0.f ? pc_mis(n, 1.f / pa) : 0.f;
     return;
   }
+  if (l->type == PC_LIGHT_DIRECTIONAL) {
+    /* At infinity too, with its one direction: the Dirac factor cancels between strategies. */
+    out->kind = PC_VTX_ENV;
+    out->p = s->scene_center;
+    out->ng = v3s(0.f);
+    out->eps = 0.f;
+    out->wo = l->direction;
+    out->beta = v3_scale(l->irradiance, 1.f / pick);
+    out->mis_near = pc_mis(n, 1.f / pick);
+    return;
+  }
   pc_light_point lp;
   pc_light_sample_point(s, l, u1, u2, u3, &lp);
   float pa = pick * lp.pdf_area; /* area pdf (point and spot lights: the choice, the delta cancels) */
@@ -155,9 +166,9 @@ void pc_light_vertex_sample(const pc_scene *s, const pc_mis_counts *n, float u0,
   out->mis_near = pc_mis(n, 1.f / pa);
 }
 
-/* A light sub-path from the environment: the direction of v[0], from a uniform point of the
- * disk of radius R perpendicular to it, centred on the bounding sphere's tangent plane behind
- * the scene (pbrt-v3's infinite lights). */
+/* A light sub-path from the environment or a directional light: the direction of v[0], from a
+ * uniform point of the disk of radius R perpendicular to it, centred on the bounding sphere's
+ * tangent plane behind the scene (pbrt-v3's infinite lights, Mitsuba's directional). */
 static int env_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, pc_path_vertex *v) {
   const pc_scene *s = c->scene;
   vec3 w = v[0].wo;
@@ -169,7 +180,9 @@ static int env_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, pc_path_
   v[0].p = v3_add(v3_madd(s->scene_center, w, -s->env_radius), disk);
   float pdf_pos = pc_env_disk_pdf(s);
   vec3 beta = v3_scale(v[0].beta, 1.f / pdf_pos);
-  return walk(c, n, rng, v, 1, c->max_segments, true, w, beta, pdf_pos, 0.f, false, 1.f, NULL, NULL);
+  /* A directional light cannot be hit: cos_out 0 removes the s=0 strategy, as for point lights. */
+  float cos_out = s->lights[v[0].light].type == PC_LIGHT_DIRECTIONAL ? 0.f : 1.f;
+  return walk(c, n, rng, v, 1, c->max_segments, true, w, beta, pdf_pos, 0.f, false, cos_out, NULL, NULL);
 }
 
 int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path_vertex *v) {

@@ -1,5 +1,6 @@
-/* light.h: emitters (area lights on any shape, point and spot lights, and the environment: Mitsuba's
- * `constant` and lat-long `envmap`, at most one per scene), the power-proportional choice
+/* light.h: emitters (area lights on any shape, point and spot lights, Mitsuba's distant
+ * `directional` light, and the environment: Mitsuba's `constant` and lat-long `envmap`, at most
+ * one per scene), the power-proportional choice
  * among them, and every sampling routine and pdf the integrators need: sampling a point toward
  * a receiver (next-event estimation), sampling an emitted ray (light sub-paths), and the pdfs
  * of both for MIS. Area lights emit on the front side of their surface only (Mitsuba). */
@@ -15,14 +16,18 @@
 #include "vecmath.h"
 
 /* Point and spot lights sit at one point (a delta in position): they cannot be hit and their
- * sampled point has area pdf 1; a spot only adds a directional profile (light_spot.c). */
-typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT, PC_LIGHT_SPOT, PC_LIGHT_ENV } pc_light_type;
+ * sampled point has area pdf 1; a spot only adds a directional profile (light_spot.c). A
+ * directional light is a delta in direction, at infinity like the environment: it cannot be
+ * hit either, and its light paths start on the environment's disk. */
+typedef enum { PC_LIGHT_AREA, PC_LIGHT_POINT, PC_LIGHT_SPOT, PC_LIGHT_ENV, PC_LIGHT_DIRECTIONAL } pc_light_type;
 
 typedef struct pc_light {
   pc_light_type type;
   vec3 radiance;      /* area: emitted radiance */
   vec3 intensity;     /* point, spot: radiant intensity (a spot's, at the centre of its beam) */
   vec3 position;      /* point, spot */
+  vec3 irradiance;    /* directional: power per unit area across its direction (Mitsuba's) */
+  vec3 direction;     /* directional: the unit direction its light travels */
   int shape;          /* area: index of its shape in the scene */
   /* area: triangles, an exact sphere or cylinder, sampled uniformly by area */
   float area;
@@ -51,6 +56,11 @@ typedef struct pc_light {
 
 static inline bool pc_light_is_delta_pos(const pc_light *l) {
   return l->type == PC_LIGHT_POINT || l->type == PC_LIGHT_SPOT;
+}
+
+/* Whether no eye path can reach the light by scattering: only connections sample it. */
+static inline bool pc_light_is_delta(const pc_light *l) {
+  return pc_light_is_delta_pos(l) || l->type == PC_LIGHT_DIRECTIONAL;
 }
 
 struct pc_scene;

@@ -40,7 +40,7 @@ static bool any_shape(const pc_scene *s, bool (*has)(const pc_material *, int, i
 
 bool pc_scene_pt_complete(const pc_scene *s) {
   bool delta_light = false;
-  for (int i = 0; i < s->nlights && !delta_light; i++) delta_light = pc_light_is_delta_pos(&s->lights[i]);
+  for (int i = 0; i < s->nlights && !delta_light; i++) delta_light = pc_light_is_delta(&s->lights[i]);
   return !delta_light || !any_shape(s, pc_material_has_delta);
 }
 

@@ -64,6 +64,9 @@ static int build_lights(pc_scene *s, pc_err *e) {
       /* A texture enters the choice by its mean (the choice needs no exact flux). */
       vec3 t = l->spot_tex ? pc_texture_average(l->spot_tex) : v3s(1.f);
       l->power = (float)(pc_spot_solid_angle(l) * v3_luminance(v3_mul(l->intensity, t)));
+    } else if (l->type == PC_LIGHT_DIRECTIONAL) {
+      /* what crosses the disk its light paths start on (Mitsuba's, over its own bounding disk) */
+      l->power = PC_PI * s->env_radius * s->env_radius * v3_luminance(l->irradiance);
     } else if (l->type == PC_LIGHT_ENV) {
       /* Mitsuba allows one environment emitter per scene; the loader refuses a second. */
       if (s->env_light >= 0) return pc_errf(e, PC_EINVAL, "%s: more than one environment emitter", s->path);

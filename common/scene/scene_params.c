@@ -196,7 +196,8 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
       rc = parse_slot(c, ch, what, p->out);
     break;
   case PC_P_POINT:
-    if ((ok = strcmp(el, "point") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nxyz, c->e))) {
+  case PC_P_VECTOR:
+    if ((ok = strcmp(el, p->kind == PC_P_POINT ? "point" : "vector") == 0) && !(rc = pc_xml_check_attrs(c->file, ch, nxyz, c->e))) {
       static const char *const xyz[3] = {"x", "y", "z"};
       double v[3] = {0, 0, 0};
       for (int i = 0; i < 3 && !rc; i++)
@@ -254,6 +255,7 @@ static const char *ignored_as_mitsuba(const char *what, const char *name) {
       {"emitter 'area'", " radiance samplingWeight "},
       {"emitter 'point'", " toWorld position intensity samplingWeight "},
       {"emitter 'spot'", " toWorld intensity cutoffAngle beamWidth texture samplingWeight "},
+      {"emitter 'directional'", " toWorld direction irradiance samplingWeight "},
       {"emitter 'constant'", " radiance samplingWeight "},
       {"emitter 'envmap'", " filename scale toWorld gamma cache samplingWeight "},
       {"shape 'obj'", " filename faceNormals maxSmoothAngle flipNormals flipTexCoords toWorld collapse shapeIndex loadMaterials "},

@@ -740,6 +740,40 @@ static int spot_emitter(pc_sx *c, const pc_xml_node *n, pc_light *l) {
   return 0;
 }
 
+/* Mitsuba's `directional`: a distant light sending `irradiance` along the unit `direction`, or
+ * along the +z axis of its toWorld (which, as in Mitsuba, may neither scale nor shear); one of
+ * the two, not both. */
+static int directional_emitter(pc_sx *c, const pc_xml_node *n, pc_light *l) {
+  static const char what[] = "emitter 'directional'";
+  mat4 xf = mat4_identity();
+  vec3 dir = v3(0, 0, 1);
+  l->type = PC_LIGHT_DIRECTIONAL;
+  l->irradiance = v3s(1.f);
+  l->shape = -1;
+  pc_param p[] = {{"toWorld", PC_P_TRANSFORM, &xf, 0, 0},
+                  {"direction", PC_P_VECTOR, &dir, 0, 0},
+                  {"irradiance", PC_P_COLOR, &l->irradiance, 0, 0},
+                  {"samplingWeight", PC_P_FLOAT, &l->sampling_weight, 0, 0}};
+  int rc;
+  if ((rc = only_params(c, n, what, p, 4)) || (rc = sampling_weight(c, &p[3], l->sampling_weight, what)) ||
+      (rc = positive_color(c, &p[2], l->irradiance, what)))
+    return rc;
+  if (p[0].set && p[1].set)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give direction or toWorld, not both (as Mitsuba)", c->file, n->line, what);
+  if (p[0].set) {
+    if (mitsuba_has_scale(&xf))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: a toWorld that scales or shears: Mitsuba 0.6 refuses it too", c->file,
+                     p[0].line, what);
+    dir = mat4_vector(&xf, v3(0, 0, 1));
+  }
+  float len = v3_len(dir);
+  if (!(len > 1e-12f) || !isfinite(len))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: the direction must be a finite, non-zero vector", c->file,
+                   p[1].set ? p[1].line : p[0].line ? p[0].line : n->line, what);
+  l->direction = v3_scale(dir, 1.f / len);
+  return 0;
+}
+
 static int emitter(pc_sx *c, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, true, &type);
@@ -759,6 +793,8 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
       pc_light_free(&l);
       return rc;
     }
+  } else if (strcmp(type, "directional") == 0) {
+    if ((rc = directional_emitter(c, n, &l))) return rc;
   } else if (strcmp(type, "point") == 0) {
     l.type = PC_LIGHT_POINT;
     l.intensity = v3s(1.f);

@@ -63,6 +63,7 @@ typedef enum {
   PC_P_COLOR_SIGNED, /* the same, negative <rgb> and <spectrum> values kept (pc_xv_color_signed) */
   PC_P_SLOT,      /* a colour or a texture (nested, or <ref name=.. id=..>) -> pc_tex_slot */
   PC_P_POINT,     /* <point> -> vec3 */
+  PC_P_VECTOR,    /* <vector> -> vec3 (Mitsuba 0.6 keeps points and vectors apart) */
   PC_P_TRANSFORM, /* <transform>, or an <animation> that does not move -> mat4 */
   PC_P_MOTION,    /* <transform> or <animation> -> pc_sx_xf (the caller frees its anim) */
   PC_P_IOR,       /* <float> or <string> with a Mitsuba IOR name -> float */
@@ -73,7 +74,7 @@ typedef enum {
 typedef struct pc_param {
   const char *name;
   pc_param_kind kind;
-  void *out;   /* int*, float*, bool*, const char**, vec3*, pc_tex_slot*, vec3*, mat4*, pc_sx_xf*, float* */
+  void *out;   /* int*, float*, bool*, const char**, vec3*, pc_tex_slot*, vec3* (point, vector), mat4*, pc_sx_xf*, float* */
   bool set;    /* filled by pc_sx_params */
   int line;
 } pc_param;

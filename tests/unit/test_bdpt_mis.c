@@ -9,7 +9,9 @@
  * pc_mis_weight_hit) must give the explicit weights too, summing to 1. The same on
  * scenes/env-objects, lit by an envmap: the environment vertex at infinity has solid-angle
  * densities from both sides and the first vertex of its light paths the disk's area density
- * times its cosine (path_vertex.h); the explicit evaluation places it far along its direction. */
+ * times its cosine (path_vertex.h); the explicit evaluation places it far along its direction.
+ * A directional light is such a vertex too, with a Dirac in direction: no eye path reaches it
+ * (s=0 impossible), and its light paths start on the same disk. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -30,10 +32,12 @@ typedef struct fixture {
   pc_tctx c;
   pc_path_vertex *lbuf, *ebuf;
   int checked, strategies_checked, env_checked, at_point_checked; /* at_point: from a point or spot light */
+  int directional_checked; /* counted in env_checked too */
 } fixture;
 
-/* The light added to a scene: none, a point light, or a spot (60 degree cutoff, 40 degree beam). */
-typedef enum { NO_EXTRA, EXTRA_POINT, EXTRA_SPOT } extra_light;
+/* The light added to a scene: none, a point light, a spot (60 degree cutoff, 40 degree beam) or
+ * a directional light. */
+typedef enum { NO_EXTRA, EXTRA_POINT, EXTRA_SPOT, EXTRA_DIRECTIONAL } extra_light;
 #define SPOT_CUTOFF_DEG 60.0
 
 static void load_scene(fixture *f, const char *name, extra_light extra) {
@@ -66,6 +70,11 @@ static void load_scene(fixture *f, const char *name, extra_light extra) {
     pc_spot_set_angles(l, (float)SPOT_CUTOFF_DEG, 40.f);
     l->shape = -1;
     l->position = v3_add(s->scene_center, v3(0.3f, 0.2f, 0.1f));
+    if (extra == EXTRA_DIRECTIONAL) {
+      l->type = PC_LIGHT_DIRECTIONAL;
+      l->irradiance = v3s(3.f);
+      l->direction = v3_norm(v3(-0.3f, -1.f, -0.2f));
+    }
   }
   f->scene.camera.width = f->scene.camera.height = 32;
   assert_int_equal(pc_scene_build(&f->scene, &e), PC_OK);
@@ -114,6 +123,9 @@ static vec3 unit(vec3 a, vec3 b) { return v3_norm(v3_sub(b, a)); }
 /* The environment vertex x_0 stands this far along the direction light arrives from. */
 #define ENV_FAR 1e4f
 static bool env_at(const fpath *fp, int i) { return fp->x[i].kind == PC_VTX_ENV; }
+static bool directional_at(const fixture *f, const fpath *fp) {
+  return env_at(fp, 0) && f->scene.lights[fp->x[0].light].type == PC_LIGHT_DIRECTIONAL;
+}
 
 /* Solid-angle pdf of scattering at x_i from `from` toward `to` (q included). */
 static double dir_pdf(const fixture *f, const fpath *fp, int i, int from, int to) {
@@ -133,12 +145,12 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
   int k = fp->k;
   const pc_scene *s = &f->scene;
   const pc_light *l = &s->lights[fp->x[0].light];
-  bool point = pc_light_is_delta_pos(l), env = env_at(fp, 0);
+  bool point = pc_light_is_delta_pos(l), env = env_at(fp, 0), directional = directional_at(f, fp);
   double fwd[2 * MAXV], bwd[2 * MAXV];
   /* Area pdfs from the light side (solid angle at the environment, whose light paths start
    * on the disk). */
   fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) / (point ? 1.0 : l->area);
-  if (env) fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) * pc_env_pdf(l, v3_neg(fp->x[0].wo));
+  if (env) fwd[0] = pc_light_choose_pdf(s, fp->x[0].light) * (directional ? 1.0 : pc_env_pdf(l, v3_neg(fp->x[0].wo)));
   for (int i = 1; i <= k; i++) {
     double pd;
     if (i == 1 && env) {
@@ -170,7 +182,7 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
     }
     bwd[i] = pd * (i == 0 && env ? 1.0 : geo(fp, i + 1, i));
   }
-  if (point) bwd[0] = 0.0;
+  if (point || directional) bwd[0] = 0.0; /* no eye path reaches them */
   double beta = n->power ? 2.0 : 1.0, sum = 0.0;
   for (int j = 0; j <= k; j++) {
     double p = 1.0;
@@ -208,7 +220,7 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
   if (ifrom2 < 0) {
     if (from_env) {
       pf = pc_env_disk_pdf(&f->scene);
-      cos_out = 1.f;
+      cos_out = directional_at(f, fp) ? 0.f : 1.f;
     } else if (a->kind == PC_VTX_CAMERA) {
       float cz = v3_dot(dir, f->scene.camera.dir);
       pf = 1.f / (f->scene.camera.image_area * cz * cz * cz);
@@ -241,7 +253,8 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
     lv[0].beta = v3s(1.f);
     lv[0].delta = false;
     lv[0].mis_near = pc_mis(n, 1.f / (pick * (pc_light_is_delta_pos(l) ? 1.f : 1.f / l->area)));
-    if (env_at(fp, 0)) lv[0].mis_near = pc_mis(n, 1.f / (pick * pc_env_pdf(l, v3_neg(fp->x[0].wo))));
+    if (env_at(fp, 0))
+      lv[0].mis_near = pc_mis(n, 1.f / (pick * (directional_at(f, fp) ? 1.f : pc_env_pdf(l, v3_neg(fp->x[0].wo)))));
     lv[0].mis_far = 0.f;
     for (int i = 1; i < j; i++) extend(f, n, fp, lv, i, true, i - 2, i - 1, i);
   }
@@ -250,7 +263,7 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
   ev[0].mis_near = ev[0].mis_far = 0.f;
   for (int u = 1; u <= k - j; u++) extend(f, n, fp, ev, u, false, u >= 2 ? k - u + 2 : -1, k - u + 1, k - u);
   if (j == 0) {
-    if (pc_light_is_delta_pos(&f->scene.lights[fp->x[0].light])) return 0.0;
+    if (pc_light_is_delta(&f->scene.lights[fp->x[0].light])) return 0.0;
     return pc_mis_weight_hit(&f->scene, n, &ev[k], fp->x[0].light);
   }
   pc_connection con;
@@ -284,6 +297,7 @@ static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int 
   f->checked++;
   f->env_checked += env_at(fp, 0);
   f->at_point_checked += !env_at(fp, 0) && pc_light_is_delta_pos(&f->scene.lights[fp->x[0].light]);
+  f->directional_checked += directional_at(f, fp);
 }
 
 typedef struct hits {
@@ -306,7 +320,7 @@ static void place_env(fpath *fp) {
 
 static void run(fixture *f, pc_mis_counts n, int npaths) {
   f->c.counts = n;
-  f->checked = f->strategies_checked = f->env_checked = f->at_point_checked = 0;
+  f->checked = f->strategies_checked = f->env_checked = f->at_point_checked = f->directional_checked = 0;
   for (int it = 0; it < npaths; it++) {
     f->c.iteration = (uint64_t)it;
     int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
@@ -338,8 +352,10 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
         check_path(f, &n, &fp, s, con.weight);
       }
   }
-  printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment, %d from a point or spot), %d strategy weights checked\n",
-         n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->at_point_checked, f->strategies_checked);
+  printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment or a directional light, %d from a point or spot,"
+         " %d from a directional light), %d strategy weights checked\n",
+         n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->at_point_checked,
+         f->directional_checked, f->strategies_checked);
   assert_true(f->checked > 50);
 }
 
@@ -395,8 +411,25 @@ static void test_mis_environment(void **state) {
   unload(&f);
 }
 
+/* A directional light: with outdoor's area light (glossy-glass is closed), and beside
+ * env-objects' environment (the two at infinity, one with a Dirac direction). */
+static void test_mis_directional(void **state) {
+  (void)state;
+  fixture f;
+  load_scene(&f, "outdoor", EXTRA_DIRECTIONAL);
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 400);
+  assert_true(f.directional_checked > 100 && f.directional_checked < f.checked);
+  run(&f, (pc_mis_counts){0.25f, 3.f, true}, 400);
+  unload(&f);
+  load_scene(&f, "env-objects", EXTRA_DIRECTIONAL);
+  run(&f, (pc_mis_counts){0.37f, 2.f, false}, 400);
+  assert_true(f.directional_checked > 50 && f.env_checked > f.directional_checked);
+  unload(&f);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_mis_directional),
       cmocka_unit_test(test_mis_environment),
       cmocka_unit_test(test_mis_balance),
       cmocka_unit_test(test_mis_power_nl),

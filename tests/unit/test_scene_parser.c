@@ -310,7 +310,12 @@ static const bad_case bad_cases[] = {
     {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<transform name=\"toWorld\"><scale x=\"2\"/></transform></emitter>", 3, "rotation"},
     {"<emitter type=\"constant\">\n<rgb name=\"radiance\" value=\"0\"/></emitter>", 3, "radiance"},
     {"<emitter type=\"constant\"/>\n<emitter type=\"constant\"/>", 3, "only one environment"},
-    {"<emitter type=\"directional\"/>", 2, "directional"},
+    {"<emitter type=\"collimated\"/>", 2, "emitter 'collimated': not modelled by pcbpt"},
+    {"<emitter type=\"directional\">\n<vector name=\"direction\" x=\"0\" y=\"0\" z=\"0\"/></emitter>", 3, "non-zero vector"},
+    {"<emitter type=\"directional\"><vector name=\"direction\" x=\"1\"/>\n<transform name=\"toWorld\"/></emitter>", 2, "not both"},
+    {"<emitter type=\"directional\">\n<transform name=\"toWorld\"><scale x=\"2\"/></transform></emitter>", 3, "scales or shears"},
+    {"<emitter type=\"directional\">\n<rgb name=\"irradiance\" value=\"0\"/></emitter>", 3, "'irradiance' must be positive"},
+    {"<emitter type=\"directional\">\n<point name=\"direction\" x=\"1\" y=\"0\" z=\"0\"/></emitter>", 3, "cannot be given as <point>"},
     {"<emitter type=\"sunsky\"/>", 2, "sunsky"},
     {"<emitter type=\"sunsky\"/>", 2, "emitter 'sunsky': not modelled by pcbpt"},
     {"<emitter type=\"constant\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
@@ -661,6 +666,7 @@ static void test_pt_complete(void **state) {
   tmp_make(&t);
 #define POINT "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"2\" z=\"0\"/></emitter>"
 #define SPOT "<emitter type=\"spot\"/>"
+#define DIRECTIONAL "<emitter type=\"directional\"/>"
 #define AREA "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>"
   static const struct {
     const char *light, *bsdf;
@@ -672,6 +678,8 @@ static void test_pt_complete(void **state) {
       {POINT, "<bsdf type=\"dielectric\"/>", false, true},
       {POINT, "<bsdf type=\"thindielectric\"/>", false, true},
       {SPOT, "<bsdf type=\"conductor\"/>", false, true},
+      {DIRECTIONAL, "<bsdf type=\"dielectric\"/>", false, true},
+      {DIRECTIONAL, "<bsdf type=\"roughplastic\"/>", true, false},
       {POINT, "<bsdf type=\"plastic\"/>", false, false},
       {POINT, "<bsdf type=\"roughplastic\"/>", true, false},
       {POINT, "<bsdf type=\"bumpmap\"><bsdf type=\"conductor\"/><texture type=\"checkerboard\"/></bsdf>", false, true},
@@ -716,7 +724,49 @@ static void test_pt_complete(void **state) {
   th_rm_rf(t.root);
 #undef POINT
 #undef SPOT
+#undef DIRECTIONAL
 #undef AREA
+}
+
+/* Mitsuba's `directional`: irradiance 1 along +z by default; `direction` normalized, or toWorld's
+ * +z axis; its power is what crosses the disk its light paths start on. */
+static void test_directional_params(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct {
+    const char *emitter;
+    vec3 dir, irradiance;
+  } cases[] = {
+      {"<emitter type=\"directional\"/>", {0, 0, 1}, {1, 1, 1}},
+      {"<emitter type=\"directional\"><vector name=\"direction\" x=\"0\" y=\"-2\" z=\"0\"/>"
+       "<rgb name=\"irradiance\" value=\"3, 2, 1\"/></emitter>", {0, -1, 0}, {3, 2, 1}},
+      {"<emitter type=\"directional\"><transform name=\"toWorld\"><lookat origin=\"1, 1, 1\" target=\"2, 0, 1\" up=\"0, 0, 1\"/></transform>"
+       "<spectrum name=\"irradiance\" value=\"5\"/></emitter>", {0.70710678f, -0.70710678f, 0}, {5, 5, 5}},
+      {"<emitter type=\"directional\"><transform name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/></transform></emitter>",
+       {0, -1, 0}, {1, 1, 1}},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char body[1024];
+    snprintf(body, sizeof body, SENSOR "<shape type=\"sphere\"/>%s", cases[i].emitter);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    assert_int_equal(s.nlights, 1);
+    const pc_light *l = &s.lights[0];
+    assert_int_equal(l->type, PC_LIGHT_DIRECTIONAL);
+    for (int k = 0; k < 3; k++) {
+      assert_float_equal(((const float *)&l->direction)[k], ((const float *)&cases[i].dir)[k], 1e-6);
+      assert_float_equal(((const float *)&l->irradiance)[k], ((const float *)&cases[i].irradiance)[k], 1e-6);
+    }
+    assert_int_equal(pc_scene_build(&s, &e), 0);
+    assert_float_equal(l->power, M_PI * s.env_radius * s.env_radius * v3_luminance(cases[i].irradiance), 1e-4 * l->power);
+    assert_int_equal(s.env_light, -1); /* not the environment an escaping eye ray sees */
+    pc_scene_free(&s);
+  }
+  th_rm_rf(t.root);
 }
 
 /* maxSmoothAngle reaches the mesh: a cube's 90-degree edges split its 8 corners into 24 vertices */
@@ -1590,6 +1640,8 @@ static void test_motion_params(void **state) {
        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>", "an emitter on a moving shape"},
       {"<emitter type=\"point\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<translate x=\"1\"/>") "</animation></emitter>",
        "a moving 'toWorld' (motion blur): not modelled"},
+      {"<emitter type=\"directional\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<rotate x=\"1\" angle=\"10\"/>")
+       "</animation></emitter>", "a moving 'toWorld' (motion blur): not modelled"},
       {"<shape type=\"shapegroup\" id=\"g\"><shape type=\"cube\"><animation name=\"toWorld\">" KEY(0, "")
        KEY(1, "<translate x=\"1\"/>") "</animation></shape></shape>", "nested instancing"},
       {"<shape type=\"sphere\"><animation name=\"toWorld\">" KEY(0, "") KEY(1, "<scale x=\"2\"/>") "</animation></shape>",
@@ -1881,6 +1933,7 @@ int main(void) {
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
       cmocka_unit_test(test_thinlens_params),  cmocka_unit_test(test_pt_complete), cmocka_unit_test(test_near_rigid_camera),
+      cmocka_unit_test(test_directional_params),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
