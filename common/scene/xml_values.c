@@ -247,19 +247,34 @@ static int one_transform(const char *file, const pc_xml_node *c, mat4 *t, pc_err
       return pc_errf(e, PC_EUNSUPPORTED, "%s:%d: <matrix> must be affine (last row 0 0 0 1)", file, c->line);
   } else if (strcmp(c->name, "lookat") == 0 || strcmp(c->name, "lookAt") == 0) {
     double o[3], tg[3], up[3], dir[3], left[3], nup[3];
+    const char *up_text = pc_xml_attr(c, "up");
+    bool up_given = up_text && strspn(up_text, ", \t\r\n") < strlen(up_text);
     if ((rc = pc_xml_check_attrs(file, c, look, e)) || (rc = vec_attr(file, c, "origin", o, e)) ||
-        (rc = vec_attr(file, c, "target", tg, e)) || (rc = vec_attr(file, c, "up", up, e)))
+        (rc = vec_attr(file, c, "target", tg, e)) || (up_given && (rc = vec_attr(file, c, "up", up, e))))
       return rc;
     for (int i = 0; i < 3; i++) dir[i] = tg[i] - o[i];
     double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     if (!(dl > 0) || !isfinite(dl)) return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> origin equals target", file, c->line);
     normalize3(dir);
+    /* Without an up (or with a zero one) Mitsuba takes the first axis of its coordinateSystem
+       about the view direction, which fixes the image's roll. */
+    if (!up_given || (up[0] == 0 && up[1] == 0 && up[2] == 0)) {
+      double side[3];
+      if (fabs(dir[0]) > fabs(dir[1])) {
+        double inv = 1 / sqrt(dir[0] * dir[0] + dir[2] * dir[2]);
+        side[0] = dir[2] * inv, side[1] = 0, side[2] = -dir[0] * inv;
+      } else {
+        double inv = 1 / sqrt(dir[1] * dir[1] + dir[2] * dir[2]);
+        side[0] = 0, side[1] = dir[2] * inv, side[2] = -dir[1] * inv;
+      }
+      cross3(side, dir, up);
+    }
     cross3(up, dir, left);
     double ll = sqrt(left[0] * left[0] + left[1] * left[1] + left[2] * left[2]);
     /* only an exactly parallel up is refused, as Mitsuba's normalizeStrict does: a scene
        generator's up 4e-7 away from the view direction still gives a camera there */
     if (!(ll > 0) || !isfinite(ll))
-      return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> up is zero or parallel to the view direction", file, c->line);
+      return pc_errf(e, PC_EINVAL, "%s:%d: <lookat> up is parallel to the view direction", file, c->line);
     normalize3(left);
     cross3(dir, left, nup);
     for (int i = 0; i < 3; i++) {

@@ -1485,6 +1485,40 @@ static void test_lookat_near_parallel(void **state) {
   th_rm_rf(t.root);
 }
 
+/* <lookat> without an up, or with a zero one: Mitsuba takes the first axis of its
+ * coordinateSystem about the view direction (so a camera's roll is Mitsuba's). */
+static void test_lookat_without_up(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct {
+    const char *lookat;
+    vec3 dir, up;
+  } cases[] = {
+      {"<lookat origin=\"0, 0, 3\" target=\"0, 0, 0\"/>", {0, 0, -1}, {1, 0, 0}},
+      {"<lookat origin=\"0, 0, 3\" target=\"0, 0, 0\" up=\"0, 0, 0\"/>", {0, 0, -1}, {1, 0, 0}},
+      {"<lookat origin=\"0, 0, 0\" target=\"2, 1, 0.5\"/>", {0.872872f, 0.436436f, 0.218218f}, {0.423405f, -0.899735f, 0.105851f}},
+      {"<lookAt origin=\"1, 1, 1\" target=\"1, 3, 1\" up=\"\"/>", {0, 1, 0}, {1, 0, 0}},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char body[1024];
+    snprintf(body, sizeof body,
+             "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/><transform name=\"toWorld\">%s</transform></sensor>"
+             "<shape type=\"cube\"/>",
+             cases[i].lookat);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    pc_camera_prepare(&s.camera);
+    near3(s.camera.dir, cases[i].dir, 1e-5f);
+    near3(v3_norm(s.camera.up), cases[i].up, 1e-5f);
+    pc_scene_free(&s);
+  }
+  th_rm_rf(t.root);
+}
+
 /* Mitsuba's shapegroup and instance: the group's shapes appear once per instance, through the
  * instance's toWorld after their own; the group itself is not rendered. */
 static void test_instances(void **state) {
@@ -1929,6 +1963,7 @@ int main(void) {
       cmocka_unit_test(test_embree_shares_meshes), cmocka_unit_test(test_tri_consts),
       cmocka_unit_test(test_check_without_bvh), cmocka_unit_test(test_probe_backs),
       cmocka_unit_test(test_lookat_near_parallel),
+      cmocka_unit_test(test_lookat_without_up),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
