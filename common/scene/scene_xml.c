@@ -822,6 +822,20 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
   return id ? pc_sx_id_add(c, id, PC_ID_OTHER, idx, n->line) : 0;
 }
 
+/* Mitsuba's <alias id="a" as="b"/>: b names the object a names. */
+static int alias(pc_sx *c, const pc_xml_node *n) {
+  static const char *const attrs[] = {"id", "as", NULL};
+  int rc = pc_xml_check_attrs(c->file, n, attrs, c->e);
+  if (rc) return rc;
+  const char *id = pc_xml_attr(n, "id"), *as = pc_xml_attr(n, "as");
+  if (!id || !as) return pc_errf(c->e, PC_EPARSE, "%s:%d: <alias> needs both 'id' and 'as'", c->file, n->line);
+  const pc_sx_id *old = pc_sx_id_find(c, id);
+  if (!old) return pc_errf(c->e, PC_EINVAL, "%s:%d: <alias>: no object has the id '%s' (yet)", c->file, n->line, id);
+  pc_id_kind kind = old->kind; /* pc_sx_id_add may move the table */
+  int index = old->index;
+  return pc_sx_id_add(c, as, kind, index, n->line);
+}
+
 /* Mitsuba's Scene::configure without a sensor: a perspective camera, fov 45 along x, default
  * film, unrotated (looking along +z), centred on the shapes' bounds in x and y and far enough
  * in front of their nearest z for the x-y extent to fill the fov; at the origin if there are no
@@ -891,6 +905,8 @@ static int scene_root(pc_sx *c, const pc_xml_node *root) {
       rc = pc_sx_texture(c, ch, &idx);
     } else if (strcmp(el, "emitter") == 0) {
       rc = emitter(c, ch);
+    } else if (strcmp(el, "alias") == 0) {
+      rc = alias(c, ch);
     } else {
       return pc_sx_unexpected(c, ch, "scene");
     }

@@ -311,6 +311,9 @@ static const bad_case bad_cases[] = {
     {"<emitter type=\"constant\">\n<rgb name=\"radiance\" value=\"0\"/></emitter>", 3, "radiance"},
     {"<emitter type=\"constant\"/>\n<emitter type=\"constant\"/>", 3, "only one environment"},
     {"<emitter type=\"collimated\"/>", 2, "emitter 'collimated': not modelled by pcbpt"},
+    {"<bsdf type=\"diffuse\" id=\"a\"/>\n<alias id=\"b\" as=\"c\"/>", 3, "no object has the id 'b'"},
+    {"<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"diffuse\" id=\"c\"/>\n<alias id=\"a\" as=\"c\"/>", 3, "duplicate id 'c'"},
+    {"<bsdf type=\"diffuse\" id=\"a\"/>\n<alias id=\"a\"/>", 3, "needs both"},
     {"<emitter type=\"directional\">\n<vector name=\"direction\" x=\"0\" y=\"0\" z=\"0\"/></emitter>", 3, "non-zero vector"},
     {"<emitter type=\"directional\"><vector name=\"direction\" x=\"1\"/>\n<transform name=\"toWorld\"/></emitter>", 2, "not both"},
     {"<emitter type=\"directional\">\n<transform name=\"toWorld\"><scale x=\"2\"/></transform></emitter>", 3, "scales or shears"},
@@ -1485,6 +1488,26 @@ static void test_lookat_near_parallel(void **state) {
   th_rm_rf(t.root);
 }
 
+/* <alias id="a" as="b"/>: b refers to what a does. */
+static void test_alias(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  pc_err e = {0};
+  int rc = load_body(&t,
+                     SENSOR "<bsdf type=\"diffuse\"/><bsdf type=\"roughplastic\" id=\"a\"/><alias id=\"a\" as=\"b\"/>"
+                            "<shape type=\"cube\"><ref id=\"b\"/></shape><shape type=\"sphere\"><ref id=\"a\"/></shape>",
+                     &s, &e);
+  if (rc) print_error("%s\n", e.msg);
+  assert_int_equal(rc, 0);
+  assert_int_equal(s.nshapes, 2);
+  assert_int_equal(s.shapes[0].material, s.shapes[1].material);
+  assert_int_equal(s.materials[s.shapes[0].material].type, PC_MAT_ROUGHPLASTIC);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* <lookat> without an up, or with a zero one: Mitsuba takes the first axis of its
  * coordinateSystem about the view direction (so a camera's roll is Mitsuba's). */
 static void test_lookat_without_up(void **state) {
@@ -1964,6 +1987,7 @@ int main(void) {
       cmocka_unit_test(test_check_without_bvh), cmocka_unit_test(test_probe_backs),
       cmocka_unit_test(test_lookat_near_parallel),
       cmocka_unit_test(test_lookat_without_up),
+      cmocka_unit_test(test_alias),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
