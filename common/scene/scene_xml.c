@@ -46,12 +46,46 @@ static const pc_xml_node *find_medium(const pc_xml_node *n) {
   return NULL;
 }
 
+static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n);
+
+/* Mitsuba's adaptive and irrcache integrators wrap one sampling integrator, whose image they
+ * compute (adaptively sampled, or with cached indirect light): the image is the nested one's. */
+static int wrapper_integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n, const char *what) {
+  const pc_xml_node *nested = NULL;
+  pc_param p[] = {{"*", PC_P_IGNORED, "it steers the wrapper's own sampling or caching, not the image", 0, 0}};
+  int rc = pc_sx_params(c, n, what, p, 1);
+  if (rc) return rc;
+  for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
+    if (pc_sx_is_param(ch, p, 1)) continue;
+    if (strcmp(ch->name, "integrator") != 0) return pc_sx_unexpected(c, ch, what);
+    if (nested) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: more than one nested <integrator>", c->file, ch->line, what);
+    nested = ch;
+  }
+  if (!nested) return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: needs a nested <integrator> (as in Mitsuba)", c->file, n->line, what);
+  if ((rc = pc_sx_warn(c, n, "%s: rendering what its nested integrator renders (without the wrapper's own sampling)", what)))
+    return rc;
+  return integrator(c, root, nested);
+}
+
 static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
   const char *type;
   int rc = object_type(c, n, false, &type);
   if (rc) return rc;
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "integrator '%.60s'", type);
+  if (strcmp(type, "adaptive") == 0 || strcmp(type, "irrcache") == 0) return wrapper_integrator(c, root, n, what);
+  /* these compute something else than the light arriving at the camera */
+  static const struct { const char *type, *why; } other_images[] = {
+      {"ao", "ambient occlusion"},
+      {"field", "geometric fields (positions, normals, depth, ...)"},
+      {"multichannel", "several images as channels of one file"},
+      {"motion", "motion vectors"},
+  };
+  for (size_t i = 0; i < sizeof other_images / sizeof other_images[0]; i++)
+    if (strcmp(type, other_images[i].type) == 0)
+      return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: it renders %s, not light: not modelled by pcbpt", c->file, n->line,
+                     what, other_images[i].why);
+  bool direct = strcmp(type, "direct") == 0;
   if (strcmp(type, "path") == 0) c->s->method = PC_METHOD_PT;
   else if (strcmp(type, "bdpt") == 0) c->s->method = PC_METHOD_BDPT;
   else if (strcmp(type, "pcbpt") == 0) c->s->method = PC_METHOD_PCBPT;
@@ -62,9 +96,15 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
     if (m)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: the scene has participating media (<medium> on line %d): not modelled by pcbpt",
                      c->file, n->line, what, m->line);
-    if ((rc = pc_sx_warn(c, n, "%s: not a pcbpt method; rendering with the default (%s, or --method)", what,
-                         pc_method_name(c->s->method))))
-      return rc;
+    if (direct) {
+      /* emitters seen, and light one bounce away: the paths of at most two segments */
+      rc = pc_sx_warn(c, n, "%s: direct illumination only: rendered as maxDepth 2 with the default method (%s, or --method)",
+                      what, pc_method_name(c->s->method));
+    } else {
+      rc = pc_sx_warn(c, n, "%s: not a pcbpt method; rendering with the default (%s, or --method)", what,
+                      pc_method_name(c->s->method));
+    }
+    if (rc) return rc;
   }
   int depth = -1;
   bool hide = false, light_image = true;
@@ -81,9 +121,12 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
                    hide ? p[2].line : p[3].line, what, hide ? "hideEmitters" : "lightImage");
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next)
     if (!pc_sx_is_param(ch, p, 5) && (rc = pc_sx_warn(c, ch, "%s: nested <%s> ignored", what, ch->name))) return rc;
-  if (depth == 0 || depth < -1)
+  if (direct && p[0].set) {
+    if ((rc = pc_sx_warn(c, n, "%s: parameter 'maxDepth' ignored (Mitsuba's plugin does not read it either)", what))) return rc;
+  } else if (depth == 0 || depth < -1) {
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
-  c->s->max_depth = depth;
+  }
+  c->s->max_depth = direct ? 2 : depth;
   return 0;
 }
 
@@ -181,7 +224,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   const char *what = lens ? "sensor 'thinlens'" : "sensor 'perspective'";
   pc_camera *cam = &c->s->camera;
   float fov = 0, far_clip = 1e4f, aperture = 0.f;
-  const char *axis = "x";
+  const char *axis = "x", *focal = "50mm"; /* Mitsuba's default: a 50 mm lens on 35 mm film */
   mat4 xf;
   pc_sx_xf cx = {.xf = mat4_identity()};
   /* pcbpt does not clip, which only differs for geometry closer than nearClip or beyond
@@ -196,12 +239,15 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                   {"focusDistance", PC_P_IGNORED, "a pinhole camera has no focus", 0, 0},
                   {"shutterOpen", PC_P_FLOAT, &s->shutter_open, 0, 0},
                   {"shutterClose", PC_P_FLOAT, &s->shutter_close, 0, 0},
-                  {"apertureRadius", PC_P_FLOAT, &aperture, 0, 0}};
+                  {"apertureRadius", PC_P_FLOAT, &aperture, 0, 0},
+                  {"focalLength", PC_P_STRING, &focal, 0, 0}};
   if (lens) {
     p[4] = (pc_param){"farClip", PC_P_FLOAT, &far_clip, 0, 0};
     p[5] = (pc_param){"focusDistance", PC_P_FLOAT, &cam->focus_distance, 0, 0};
+  } else {
+    p[8] = p[9]; /* a pinhole has no aperture */
   }
-  const int np = lens ? 9 : 8;
+  const int np = lens ? 10 : 9;
   rc = pc_sx_params(c, n, what, p, np);
   pc_anim_free(&s->camera_anim);
   s->camera_anim = cx.anim;
@@ -221,8 +267,20 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
     }
   }
   if (!have_film) cam->width = 768, cam->height = 576; /* Mitsuba's hdrfilm default */
-  if (!p[0].set)
-    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'fov' is required (focalLength is not supported)", c->file, n->line, what);
+  const pc_param *focal_p = &p[np - 1];
+  if (p[0].set && focal_p->set)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give fov or focalLength, not both (as Mitsuba)", c->file, focal_p->line, what);
+  if (!p[0].set) {
+    /* Mitsuba's focal length, "<x>mm" (or a bare number), of a 35 mm film: its diagonal field */
+    char *end = NULL;
+    errno = 0;
+    double mm = strtod(focal, &end);
+    if (end == focal || !(strcmp(end, "mm") == 0 || *end == 0) || errno || !(mm > 0) || !isfinite(mm))
+      return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: focalLength '%.40s' must be a positive length in mm, e.g. \"35mm\"",
+                     c->file, focal_p->set ? focal_p->line : n->line, what, focal);
+    fov = (float)(2.0 * atan(sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2.0 * mm)) * 180.0 / M_PI);
+    axis = "diagonal";
+  }
   if (!(fov > 0.f && fov < 180.f))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: fov must lie in (0, 180) degrees", c->file, p[0].line, what);
   static const struct { const char *name; char c; } axes[] = {

@@ -103,7 +103,7 @@ cat >"$tmp/point_glass.xml" <<'XML'
   <shape type="rectangle"><transform name="toWorld"><rotate x="1" angle="-90"/><translate y="-0.5"/></transform></shape>
 </scene>
 XML
-check pt-incomplete 0 "pt never samples the light a point or spot light sends through a delta" -- \
+check pt-incomplete 0 "pt never samples the light a point, spot or directional light sends through a delta" -- \
   "$bin" render "$tmp/point_glass.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 check bdpt-complete 0 "" -- "$bin" render "$tmp/point_glass.xml" --method bdpt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 if grep -q "pt never samples" "$tmp/err"; then echo "FAIL bdpt-complete: warned"; fail=1; fi

@@ -263,9 +263,18 @@ static const bad_case bad_cases[] = {
     {"<integrator type=\"bdpt\">\n<boolean name=\"lightImage\" value=\"false\"/></integrator>", 3, "lightImage"},
     {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"5x\"/></integrator>", 2, "integer"},
     {"<integrator type=\"path\"><integer name=\"maxDepth\" value=\"99999999999\"/></integrator>", 2, "integer"},
+    {"\n<integrator type=\"ao\"/>", 3, "ambient occlusion, not light"},
+    {"\n<integrator type=\"field\"><string name=\"field\" value=\"position\"/></integrator>", 3, "geometric fields"},
+    {"\n<integrator type=\"multichannel\"><integrator type=\"path\"/></integrator>", 3, "several images"},
+    {"\n<integrator type=\"adaptive\"/>", 3, "needs a nested <integrator>"},
+    {"<integrator type=\"irrcache\"><integrator type=\"path\"/>\n<integrator type=\"path\"/></integrator>", 3, "more than one nested"},
+    {"<integrator type=\"adaptive\"><integrator type=\"path\">\n<integer name=\"maxDepth\" value=\"0\"/></integrator></integrator>", 3, "maxDepth"},
     /* sensor */
     {"<sensor type=\"orthographic\"/>", 2, "orthographic"},
-    {"<sensor type=\"perspective\"/>", 2, "fov"},
+    {"<sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/>\n<string name=\"focalLength\" value=\"35mm\"/></sensor>", 3, "not both"},
+    {"<sensor type=\"perspective\">\n<string name=\"focalLength\" value=\"35cm\"/></sensor>", 3, "focalLength '35cm'"},
+    {"<sensor type=\"thinlens\"><float name=\"apertureRadius\" value=\"0.1\"/>\n<string name=\"focalLength\" value=\"-5mm\"/></sensor>", 3, "positive length"},
+    {"<sensor type=\"perspective\">\n<float name=\"focalLength\" value=\"35\"/></sensor>", 3, "cannot be given as <float>"},
     {"<sensor type=\"perspective\">\n<float name=\"focalLength\" value=\"50\"/></sensor>", 3, "focalLength"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n<string name=\"fovAxis\" value=\"z\"/></sensor>", 3, "fovAxis"},
     {"<sensor type=\"perspective\"><float name=\"fov\" value=\"180\"/></sensor>", 2, "fov"},
@@ -1488,6 +1497,70 @@ static void test_lookat_near_parallel(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's integrators that pcbpt renders another way: a wrapper (adaptive, irrcache) renders
+ * what its nested integrator does, maxDepth included; `direct` is the paths of at most two
+ * segments. */
+static void test_integrator_kinds(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct {
+    const char *integrator;
+    int max_depth;
+    pc_method method;
+  } cases[] = {
+      {"<integrator type=\"adaptive\"><float name=\"maxError\" value=\"0.05\"/>"
+       "<integrator type=\"path\"><integer name=\"maxDepth\" value=\"3\"/></integrator></integrator>", 3, PC_METHOD_PT},
+      {"<integrator type=\"irrcache\"><integrator type=\"adaptive\"><integrator type=\"bdpt\">"
+       "<integer name=\"maxDepth\" value=\"7\"/></integrator></integrator></integrator>", 7, PC_METHOD_BDPT},
+      {"<integrator type=\"direct\"><integer name=\"shadingSamples\" value=\"4\"/></integrator>", 2, PC_METHOD_PT},
+      {"<integrator type=\"photonmapper\"><integer name=\"maxDepth\" value=\"4\"/></integrator>", 4, PC_METHOD_PT},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char body[1024];
+    snprintf(body, sizeof body, "%s" SENSOR "<shape type=\"sphere\"/>", cases[i].integrator);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    assert_int_equal(s.max_depth, cases[i].max_depth);
+    assert_int_equal(s.method, cases[i].method);
+    pc_scene_free(&s);
+  }
+  th_rm_rf(t.root);
+}
+
+/* Mitsuba's focalLength ("<x>mm" on 35 mm film, 50mm when neither it nor fov is given): the
+ * diagonal field of view 2 atan(43.27 mm / 2x). */
+static void test_focal_length(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct {
+    const char *sensor;
+    double fov;
+  } cases[] = {
+      {"<sensor type=\"perspective\"/>", 46.7930},
+      {"<sensor type=\"perspective\"><string name=\"focalLength\" value=\"35mm\"/></sensor>", 63.4404},
+      {"<sensor type=\"thinlens\"><float name=\"apertureRadius\" value=\"0.1\"/><string name=\"focalLength\" value=\"200\"/></sensor>",
+       12.3470},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char body[1024];
+    snprintf(body, sizeof body, "%s<shape type=\"sphere\"/>", cases[i].sensor);
+    pc_scene s;
+    pc_err e = {0};
+    int rc = load_body(&t, body, &s, &e);
+    if (rc) print_error("case %zu: %s\n", i, e.msg);
+    assert_int_equal(rc, 0);
+    assert_float_equal(s.camera.fov_deg, cases[i].fov, 1e-3);
+    assert_int_equal(s.camera.fov_axis, 'd');
+    pc_scene_free(&s);
+  }
+  th_rm_rf(t.root);
+}
+
 /* <alias id="a" as="b"/>: b refers to what a does. */
 static void test_alias(void **state) {
   (void)state;
@@ -1988,6 +2061,8 @@ int main(void) {
       cmocka_unit_test(test_lookat_near_parallel),
       cmocka_unit_test(test_lookat_without_up),
       cmocka_unit_test(test_alias),
+      cmocka_unit_test(test_focal_length),
+      cmocka_unit_test(test_integrator_kinds),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
       cmocka_unit_test(test_mixes),            cmocka_unit_test(test_obj_materials),
       cmocka_unit_test(test_animation),        cmocka_unit_test(test_motion_params),
