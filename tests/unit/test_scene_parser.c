@@ -242,6 +242,14 @@ static int load_body(tmp *t, const char *body, pc_scene *s, pc_err *e) {
   return pc_scene_load(t->scene, s, e);
 }
 
+/* load_body that must succeed: prints the loader's message (with `what`) before failing. */
+static void load_ok(tmp *t, const char *body, const char *what, pc_scene *s) {
+  pc_err e = {0};
+  int rc = load_body(t, body, s, &e);
+  if (rc) print_error("%s: %s\n", what, e.msg);
+  assert_int_equal(rc, 0);
+}
+
 #define SENSOR "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>"
 #define KEY(t, body) "<transform time=\"" #t "\">" body "</transform>"
 
@@ -762,10 +770,7 @@ static void test_directional_params(void **state) {
     char body[1024];
     snprintf(body, sizeof body, SENSOR "<shape type=\"sphere\"/>%s", cases[i].emitter);
     pc_scene s;
-    pc_err e = {0};
-    int rc = load_body(&t, body, &s, &e);
-    if (rc) print_error("case %zu: %s\n", i, e.msg);
-    assert_int_equal(rc, 0);
+    load_ok(&t, body, cases[i].emitter, &s);
     assert_int_equal(s.nlights, 1);
     const pc_light *l = &s.lights[0];
     assert_int_equal(l->type, PC_LIGHT_DIRECTIONAL);
@@ -773,6 +778,7 @@ static void test_directional_params(void **state) {
       assert_float_equal(((const float *)&l->direction)[k], ((const float *)&cases[i].dir)[k], 1e-6);
       assert_float_equal(((const float *)&l->irradiance)[k], ((const float *)&cases[i].irradiance)[k], 1e-6);
     }
+    pc_err e = {0};
     assert_int_equal(pc_scene_build(&s, &e), 0);
     assert_float_equal(l->power, M_PI * s.env_radius * s.env_radius * v3_luminance(cases[i].irradiance), 1e-4 * l->power);
     assert_int_equal(s.env_light, -1); /* not the environment an escaping eye ray sees */
@@ -1520,10 +1526,7 @@ static void test_integrator_kinds(void **state) {
     char body[1024];
     snprintf(body, sizeof body, "%s" SENSOR "<shape type=\"sphere\"/>", cases[i].integrator);
     pc_scene s;
-    pc_err e = {0};
-    int rc = load_body(&t, body, &s, &e);
-    if (rc) print_error("case %zu: %s\n", i, e.msg);
-    assert_int_equal(rc, 0);
+    load_ok(&t, body, cases[i].integrator, &s);
     assert_int_equal(s.max_depth, cases[i].max_depth);
     assert_int_equal(s.method, cases[i].method);
     pc_scene_free(&s);
@@ -1550,10 +1553,7 @@ static void test_focal_length(void **state) {
     char body[1024];
     snprintf(body, sizeof body, "%s<shape type=\"sphere\"/>", cases[i].sensor);
     pc_scene s;
-    pc_err e = {0};
-    int rc = load_body(&t, body, &s, &e);
-    if (rc) print_error("case %zu: %s\n", i, e.msg);
-    assert_int_equal(rc, 0);
+    load_ok(&t, body, cases[i].sensor, &s);
     assert_float_equal(s.camera.fov_deg, cases[i].fov, 1e-3);
     assert_int_equal(s.camera.fov_axis, 'd');
     pc_scene_free(&s);
@@ -1567,13 +1567,10 @@ static void test_alias(void **state) {
   tmp t;
   tmp_make(&t);
   pc_scene s;
-  pc_err e = {0};
-  int rc = load_body(&t,
-                     SENSOR "<bsdf type=\"diffuse\"/><bsdf type=\"roughplastic\" id=\"a\"/><alias id=\"a\" as=\"b\"/>"
-                            "<shape type=\"cube\"><ref id=\"b\"/></shape><shape type=\"sphere\"><ref id=\"a\"/></shape>",
-                     &s, &e);
-  if (rc) print_error("%s\n", e.msg);
-  assert_int_equal(rc, 0);
+  load_ok(&t,
+          SENSOR "<bsdf type=\"diffuse\"/><bsdf type=\"roughplastic\" id=\"a\"/><alias id=\"a\" as=\"b\"/>"
+                 "<shape type=\"cube\"><ref id=\"b\"/></shape><shape type=\"sphere\"><ref id=\"a\"/></shape>",
+          "alias", &s);
   assert_int_equal(s.nshapes, 2);
   assert_int_equal(s.shapes[0].material, s.shapes[1].material);
   assert_int_equal(s.materials[s.shapes[0].material].type, PC_MAT_ROUGHPLASTIC);
@@ -1603,10 +1600,7 @@ static void test_lookat_without_up(void **state) {
              "<shape type=\"cube\"/>",
              cases[i].lookat);
     pc_scene s;
-    pc_err e = {0};
-    int rc = load_body(&t, body, &s, &e);
-    if (rc) print_error("case %zu: %s\n", i, e.msg);
-    assert_int_equal(rc, 0);
+    load_ok(&t, body, cases[i].lookat, &s);
     pc_camera_prepare(&s.camera);
     near3(s.camera.dir, cases[i].dir, 1e-5f);
     near3(v3_norm(s.camera.up), cases[i].up, 1e-5f);
