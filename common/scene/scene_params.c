@@ -7,7 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "file_read.h"
 #include "scene_xml_ctx.h"
+#include "spectrum.h"
 #include "xml_values.h"
 
 #define SUBST_MAX (64 << 10)
@@ -75,6 +77,58 @@ static int parse_int(pc_sx *c, const pc_xml_node *ch, const char *what, int *out
   return 0;
 }
 
+#define SPD_MAX_BYTES (1 << 20)
+
+/* <spectrum filename=...>: a spectral file as Mitsuba's InterpolatedSpectrum reads it (lines of
+ * "wavelength value", blank and '#' lines skipped, the first other line that does not start
+ * with two numbers ends it), zero-extended and integrated to RGB as a wavelength:value list is. */
+static int spectrum_file(pc_sx *c, const pc_xml_node *ch, const char *what, vec3 *out) {
+  static const char *const allowed[] = {"name", "filename", NULL};
+  int rc = pc_xml_check_attrs(c->file, ch, allowed, c->e);
+  if (rc) return rc; /* with value or intent too, as Mitsuba refuses them */
+  char *path = NULL, *data = NULL;
+  size_t len = 0;
+  if ((rc = pc_sx_resolve(c, ch, what, pc_xml_attr(ch, "filename"), &path))) return rc;
+  rc = pc_file_read(path, SPD_MAX_BYTES, &data, &len, c->e);
+  free(path);
+  if (rc) return rc;
+  double lambda[PC_SPECTRUM_MAX_SAMPLES], value[PC_SPECTRUM_MAX_SAMPLES];
+  int n = 0;
+  for (char *line = data, *next; line && line < data + len; line = next) {
+    next = memchr(line, '\n', (size_t)(data + len - line));
+    if (next) *next++ = 0;
+    while (*line == ' ' || *line == '\t' || *line == '\r') line++;
+    if (!*line || *line == '#') continue;
+    char *end;
+    double l = strtod(line, &end), v;
+    if (end == line) break;
+    char *end2;
+    v = strtod(end, &end2);
+    if (end2 == end) break;
+    if (n == PC_SPECTRUM_MAX_SAMPLES || !isfinite(l) || !isfinite(v)) {
+      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: spectrum file '%s': %s", c->file, ch->line, what, pc_xml_attr(ch, "filename"),
+                   n == PC_SPECTRUM_MAX_SAMPLES ? "more than 1024 entries" : "a value that is not a finite number");
+      break;
+    }
+    lambda[n] = l;
+    value[n++] = v;
+  }
+  free(data);
+  if (rc) return rc;
+  double rgb[3];
+  if (n < 2 || pc_spectrum_sampled_rgb(lambda, value, n, rgb) != 0)
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: spectrum file '%s': needs at least 2 entries at increasing wavelengths", c->file,
+                   ch->line, what, pc_xml_attr(ch, "filename"));
+  *out = v3((float)rgb[0], (float)rgb[1], (float)rgb[2]);
+  return 0;
+}
+
+/* A colour parameter: <rgb>, <srgb>, <spectrum> (values or a file), <blackbody>. */
+static int read_color(pc_sx *c, const pc_xml_node *ch, const char *what, bool signed_ok, vec3 *out) {
+  if (strcmp(ch->name, "spectrum") == 0 && pc_xml_attr(ch, "filename")) return spectrum_file(c, ch, what, out);
+  return signed_ok ? pc_xv_color_signed(c->file, ch, out, c->e) : pc_xv_color(c->file, ch, out, c->e);
+}
+
 static int parse_slot(pc_sx *c, const pc_xml_node *ch, const char *what, pc_tex_slot *slot) {
   if (strcmp(ch->name, "texture") == 0) {
     int idx, rc = pc_sx_texture(c, ch, &idx);
@@ -96,7 +150,7 @@ static int parse_slot(pc_sx *c, const pc_xml_node *ch, const char *what, pc_tex_
     return 0;
   }
   slot->tex = -1;
-  return pc_xv_color(c->file, ch, &slot->value, c->e);
+  return read_color(c, ch, what, false, &slot->value);
 }
 
 /* An <animation> of <transform time=...> keyframes: a static one is the plain transform Mitsuba
@@ -183,12 +237,12 @@ static int read_one(pc_sx *c, const pc_xml_node *ch, const char *what, pc_param 
   case PC_P_COLOR:
     if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
               strcmp(el, "blackbody") == 0))
-      rc = pc_xv_color(c->file, ch, p->out, c->e);
+      rc = read_color(c, ch, what, false, p->out);
     break;
   case PC_P_COLOR_SIGNED:
     if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||
               strcmp(el, "blackbody") == 0))
-      rc = pc_xv_color_signed(c->file, ch, p->out, c->e);
+      rc = read_color(c, ch, what, true, p->out);
     break;
   case PC_P_SLOT:
     if ((ok = strcmp(el, "rgb") == 0 || strcmp(el, "srgb") == 0 || strcmp(el, "spectrum") == 0 ||

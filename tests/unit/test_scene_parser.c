@@ -1561,6 +1561,46 @@ static void test_focal_length(void **state) {
   th_rm_rf(t.root);
 }
 
+/* <spectrum filename=...>: read as Mitsuba's InterpolatedSpectrum reads a file (comments and
+ * blank lines skipped, the first line without two numbers ends it), the same RGB as the same
+ * samples written as a wavelength:value list; bad files are refused with the file named. */
+static void test_spectrum_file(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  assert_int_equal(th_write_str(t.dir, "r.spd", "# measured\n\n  400 0.2\n450\t0.4\n\r\n550 0.9 extra\n700 0.5\nend of data\n800 9\n"), 0);
+  assert_int_equal(th_write_str(t.dir, "one.spd", "500 1\n"), 0);
+  assert_int_equal(th_write_str(t.dir, "down.spd", "500 1\n400 1\n"), 0);
+  pc_scene a, b;
+  load_ok(&t, SENSOR "<shape type=\"sphere\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" filename=\"r.spd\"/></bsdf>"
+                     "<emitter type=\"area\"><spectrum name=\"radiance\" filename=\"r.spd\"/></emitter></shape>",
+          "file", &a);
+  load_ok(&t, SENSOR "<shape type=\"sphere\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"400:0.2, 450:0.4, 550:0.9, 700:0.5\"/></bsdf>"
+                     "<emitter type=\"area\"><spectrum name=\"radiance\" value=\"400:0.2, 450:0.4, 550:0.9, 700:0.5\"/></emitter></shape>",
+          "list", &b);
+  vec3 ra = a.materials[a.shapes[0].material].reflectance.value, rb = b.materials[b.shapes[0].material].reflectance.value;
+  assert_true(ra.x == rb.x && ra.y == rb.y && ra.z == rb.z && ra.y > 0.3f);
+  assert_true(a.lights[0].radiance.x == rb.x && a.lights[0].radiance.y == rb.y && a.lights[0].radiance.z == rb.z);
+  pc_scene_free(&a);
+  pc_scene_free(&b);
+  static const struct { const char *spectrum, *want; } bad[] = {
+      {"filename=\"missing.spd\"", "cannot find 'missing.spd'"},
+      {"filename=\"one.spd\"", "'one.spd': needs at least 2 entries"},
+      {"filename=\"down.spd\"", "'down.spd': needs at least 2 entries at increasing wavelengths"},
+      {"filename=\"r.spd\" value=\"0.5\"", "unknown attribute 'value'"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    char body[512];
+    snprintf(body, sizeof body, SENSOR "<shape type=\"sphere\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" %s/></bsdf></shape>",
+             bad[i].spectrum);
+    pc_err e = {0};
+    assert_int_not_equal(load_body(&t, body, &a, &e), 0);
+    if (!strstr(e.msg, bad[i].want)) print_error("case %zu: %s\n", i, e.msg);
+    assert_non_null(strstr(e.msg, bad[i].want));
+  }
+  th_rm_rf(t.root);
+}
+
 /* <alias id="a" as="b"/>: b refers to what a does. */
 static void test_alias(void **state) {
   (void)state;
@@ -2055,6 +2095,7 @@ int main(void) {
       cmocka_unit_test(test_lookat_near_parallel),
       cmocka_unit_test(test_lookat_without_up),
       cmocka_unit_test(test_alias),
+      cmocka_unit_test(test_spectrum_file),
       cmocka_unit_test(test_focal_length),
       cmocka_unit_test(test_integrator_kinds),
     cmocka_unit_test(test_instances),        cmocka_unit_test(test_layers),
