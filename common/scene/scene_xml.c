@@ -869,7 +869,10 @@ static int emitter(pc_sx *c, const pc_xml_node *n) {
       return pc_errf(c->e, PC_ENUMERIC, "%s:%d: emitter 'point': position is not finite", c->file, n->line);
     if ((rc = positive_color(c, &p[2], l.intensity, "emitter 'point'"))) return rc;
   } else {
-    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s': not modelled by pcbpt", c->file, n->line, type);
+    /* Mitsuba's sky and sun are an environment map it computes from published model tables */
+    bool sky = strcmp(type, "sunsky") == 0 || strcmp(type, "sky") == 0 || strcmp(type, "sun") == 0;
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s': not modelled by pcbpt%s", c->file, n->line, type,
+                   sky ? " (an 'envmap' of the same sky, e.g. one Mitsuba rendered with a spherical sensor, stands in for it)" : "");
   }
   int idx;
   if ((rc = add_light(c, n, &l, &idx))) {
