@@ -56,6 +56,14 @@ void pc_cli_warn_backs(const char *verb, pc_scene *s) {
     fprintf(stderr, "pcbpt-coord %s: warning: %s: not checked for surfaces seen from behind: %s\n", verb, s->path, e.msg);
     return;
   }
+  /* Mitsuba's path tracer starts its camera rays at nearClip and ends them at farClip; its
+     light tracing does not see past those surfaces, so there is no one image to match */
+  if (b.nearer + b.farther > 0)
+    fprintf(stderr,
+            "pcbpt-coord %s: warning: %s: %.1f%% of the image is nearer than the sensor's nearClip (%g) and %.1f%% beyond"
+            " its farClip (%g): pcbpt renders those surfaces, which Mitsuba's path tracer clips away\n",
+            verb, s->path, 100.0 * b.nearer / b.rays, (double)s->camera.near_clip, 100.0 * b.farther / b.rays,
+            (double)s->camera.far_clip);
   if (b.rays == 0 || b.backs * 100 < b.rays) return;
   char named[PC_SCENE_BACKS_NAMED * 320] = "";
   size_t used = 0;

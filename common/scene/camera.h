@@ -22,6 +22,9 @@ typedef struct pc_camera {
   char fov_axis;       /* 'x', 'y', 'd' (diagonal), 's' (smaller), 'l' (larger) */
   float aperture_radius; /* thinlens: world-space lens radius; 0 for the pinhole */
   float focus_distance;  /* thinlens: distance along dir of the plane in focus */
+  /* Mitsuba's clip range along dir (nearClip, farClip): pcbpt does not clip, and the probe of
+   * pc_scene_probe_backs counts what the camera sees outside it */
+  float near_clip, far_clip;
   /* derived by pc_camera_prepare */
   float tan_half_x, tan_half_y; /* half extents of the image plane at distance 1 */
   float image_area;             /* area of the image plane at distance 1 */

@@ -154,12 +154,14 @@ int pc_scene_check(pc_scene *s, pc_err *e);
 /* Where the camera sees the back of a one-sided material (pc_material_shows_behind), which
  * renders black as in Mitsuba 0.6: a scene whose walls face away from the room it encloses
  * (published conversions from renderers whose materials are two-sided) renders nearly black,
- * and a user is owed the reason. pc_scene_probe_backs traces grid x grid primary rays through
- * the image of a checked scene (pc_scene_check, not built) on an Embree structure of its own,
- * released before it returns. */
+ * and a user is owed the reason. Also where it sees a surface outside the sensor's clip range,
+ * which Mitsuba's path tracer would see past and pcbpt does not. pc_scene_probe_backs traces
+ * grid x grid primary rays through the image of a checked scene (pc_scene_check, not built) on
+ * an Embree structure of its own, released before it returns. */
 #define PC_SCENE_BACKS_NAMED 3
 typedef struct pc_scene_backs {
   int rays, backs;                  /* rays traced; of them, the first hits on such a back */
+  int nearer, farther;              /* first hits nearer than nearClip, beyond farClip (along the view) */
   int nshapes;                      /* shapes whose backs were hit, the most hit first (at most 3) */
   int shape[PC_SCENE_BACKS_NAMED], count[PC_SCENE_BACKS_NAMED];
 } pc_scene_backs;

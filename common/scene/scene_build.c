@@ -390,6 +390,9 @@ int pc_scene_probe_backs(pc_scene *s, int grid, pc_scene_backs *out, pc_err *e) 
       pc_hit h;
       out->rays++;
       if (!pc_scene_intersect(s, cam->pos, d, INFINITY, &h)) continue;
+      float depth = v3_dot(v3_sub(h.p, cam->pos), cam->dir);
+      out->nearer += depth < cam->near_clip;
+      out->farther += depth > cam->far_clip;
       int m = s->shapes[h.shape].material;
       if (v3_dot(d, h.ns) < 0.f || pc_material_shows_behind(s->materials, s->nmaterials, m)) continue;
       out->backs++;

@@ -223,26 +223,26 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    n->line, type);
   const char *what = lens ? "sensor 'thinlens'" : "sensor 'perspective'";
   pc_camera *cam = &c->s->camera;
-  float fov = 0, far_clip = 1e4f, aperture = 0.f;
+  float fov = 0, aperture = 0.f;
   const char *axis = "x", *focal = "50mm"; /* Mitsuba's default: a 50 mm lens on 35 mm film */
   mat4 xf;
   pc_sx_xf cx = {.xf = mat4_identity()};
   /* pcbpt does not clip, which only differs for geometry closer than nearClip or beyond
-   * farClip (which is also a thin lens's default focus distance, as in Mitsuba); focusDistance
-   * does nothing in a pinhole camera. */
+   * farClip (which is also a thin lens's default focus distance, as in Mitsuba): the clip range
+   * is kept for the probe that says where that is; focusDistance does nothing in a pinhole. */
   pc_scene *s = c->s;
   cam->focus_distance = 0.f;
+  cam->near_clip = 1e-2f, cam->far_clip = 1e4f; /* Mitsuba's defaults */
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
                   {"toWorld", PC_P_MOTION, &cx, 0, 0},
-                  {"nearClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
-                  {"farClip", PC_P_IGNORED, "pcbpt does not clip", 0, 0},
+                  {"nearClip", PC_P_FLOAT, &cam->near_clip, 0, 0},
+                  {"farClip", PC_P_FLOAT, &cam->far_clip, 0, 0},
                   {"focusDistance", PC_P_IGNORED, "a pinhole camera has no focus", 0, 0},
                   {"shutterOpen", PC_P_FLOAT, &s->shutter_open, 0, 0},
                   {"shutterClose", PC_P_FLOAT, &s->shutter_close, 0, 0},
                   {"apertureRadius", PC_P_FLOAT, &aperture, 0, 0},
                   {"focalLength", PC_P_STRING, &focal, 0, 0}};
   if (lens) {
-    p[4] = (pc_param){"farClip", PC_P_FLOAT, &far_clip, 0, 0};
     p[5] = (pc_param){"focusDistance", PC_P_FLOAT, &cam->focus_distance, 0, 0};
   } else {
     p[8] = p[9]; /* a pinhole has no aperture */
@@ -291,6 +291,9 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
   if (!cam->fov_axis)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: unknown fovAxis '%s' (x, y, diagonal, smaller, larger)", c->file, p[1].line,
                    what, axis);
+  if (!(cam->near_clip > 0.f && cam->far_clip > cam->near_clip && isfinite(cam->far_clip)))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: the clip range must satisfy 0 < nearClip < farClip (finite)", c->file,
+                   p[3].set ? p[3].line : p[4].set ? p[4].line : n->line, what);
   if (!(s->shutter_close >= s->shutter_open))
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: shutterClose %g is before shutterOpen %g", c->file, n->line, what,
                    (double)s->shutter_close, (double)s->shutter_open);
@@ -316,9 +319,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    c->file, p[2].line, what);
   cam->aperture_radius = 0.f;
   if (lens) {
-    if (p[4].set && (rc = pc_sx_warn(c, n, "%s: farClip: pcbpt does not clip (it is the default focusDistance)", what)))
-      return rc;
-    if (!p[5].set) cam->focus_distance = far_clip;
+    if (!p[5].set) cam->focus_distance = cam->far_clip;
     if (!p[8].set)
       return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: 'apertureRadius' is required", c->file, n->line, what);
     if (!(aperture >= 0.f) || !isfinite(aperture))
@@ -910,6 +911,7 @@ static int default_sensor(pc_sx *c, const pc_xml_node *root) {
   cam->width = 768, cam->height = 576; /* hdrfilm's default */
   cam->fov_deg = 45.f;
   cam->fov_axis = 'x';
+  cam->near_clip = 1e-2f, cam->far_clip = 1e4f;
   cam->to_world = mat4_identity();
   if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z) {
     vec3 ext = v3_sub(hi, lo);

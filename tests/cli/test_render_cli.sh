@@ -108,6 +108,22 @@ check pt-incomplete 0 "pt never samples the light a point, spot or directional l
 check bdpt-complete 0 "" -- "$bin" render "$tmp/point_glass.xml" --method bdpt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/pg.exr"
 if grep -q "pt never samples" "$tmp/err"; then echo "FAIL bdpt-complete: warned"; fail=1; fi
 if grep -q "one-sided" "$tmp/err"; then echo "FAIL bdpt-complete: warned of backs"; fail=1; fi
+
+# a surface nearer than the sensor's nearClip, which Mitsuba's path tracer would not see: render
+# says how much of the image it is; the default clip range, which clips nothing here, says nothing
+cat >"$tmp/clip.xml" <<'XML'
+<scene version="0.6.0"><emitter type="constant"/>
+  <sensor type="perspective"><float name="fov" value="45"/><float name="nearClip" value="4"/></sensor>
+  <shape type="rectangle"><boolean name="flipNormals" value="true"/><transform name="toWorld"><scale x="9" y="9"/><translate z="5"/></transform></shape>
+  <shape type="cube"><transform name="toWorld"><scale value="0.5"/><translate z="2.5"/></transform></shape>
+</scene>
+XML
+check near-clip 0 "of the image is nearer than the sensor's nearClip (4) and 0.0% beyond its farClip (10000)" -- \
+  "$bin" render "$tmp/clip.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/clip.exr"
+sed -i 's|<float name="nearClip" value="4"/>||' "$tmp/clip.xml"
+check no-clip 0 "" -- "$bin" render "$tmp/clip.xml" --method pt --spp 1 --width 8 --height 8 --threads 1 --out "$tmp/clip.exr"
+if grep -q "nearClip" "$tmp/err"; then echo "FAIL no-clip: warned"; fail=1; fi
+
 # LT on the same scene misses the glass the camera sees (warned); on a scene of diffuse surfaces only
 # it misses nothing
 check lt-incomplete 0 "lt never sees a delta material from the camera" -- \

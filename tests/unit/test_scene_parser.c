@@ -549,7 +549,6 @@ static const bad_case warn_cases[] = {
     {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<boolean name=\"banner\" value=\"false\"/></film></sensor>", 3, "banner"},
     {"<sensor type=\"perspective\">" FOV "\n<sampler type=\"ldsampler\"><integer name=\"sampleCount\" value=\"16\"/></sampler></sensor>", 3, "sampleCount 16"},
     {"<sensor type=\"perspective\">" FOV "\n<float name=\"focusDistance\" value=\"3\"/></sensor>", 3, "focusDistance"},
-    {"<sensor type=\"perspective\">" FOV "\n<float name=\"nearClip\" value=\"0.1\"/></sensor>", 3, "nearClip"},
     {"\n<integer name=\"maxDepth\" value=\"5\"/>" SENSOR, 3, "scene: parameter 'maxDepth'"},
     {"<bsdf type=\"conductor\">\n<string name=\"distribution\" value=\"ggx\"/></bsdf>" SENSOR, 3, "parameter 'distribution' ignored"},
     {"<bsdf type=\"plastic\">\n<float name=\"alpha\" value=\"0.1\"/></bsdf>" SENSOR, 3, "does not read it either"},
@@ -1411,6 +1410,54 @@ static void test_check_without_bvh(void **state) {
   th_rm_rf(t.root);
 }
 
+/* The probe also counts what the camera sees outside the sensor's clip range (Mitsuba's path
+ * tracer clips it away): a wall 5 ahead (depth 5 along the view, 49% of the image) and a cube
+ * whose front face is at depth 2 (51%); the clip range is validated as Mitsuba validates it. */
+static void test_probe_clip(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  static const struct {
+    const char *clip;
+    int nearer_pct, farther_pct;
+  } c[] = {
+      {"", 0, 0},
+      {"<float name=\"nearClip\" value=\"4\"/>", 51, 0},
+      {"<float name=\"nearClip\" value=\"2.5\"/><float name=\"farClip\" value=\"4\"/>", 51, 49},
+      {"<float name=\"nearClip\" value=\"1\"/><float name=\"farClip\" value=\"4.9\"/>", 0, 49},
+      {"<float name=\"farClip\" value=\"1\"/>", 0, 100},
+  };
+  for (size_t i = 0; i < sizeof c / sizeof *c; i++) {
+    char body[2048];
+    snprintf(body, sizeof body,
+             "<emitter type=\"constant\"/><sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>%s</sensor>"
+             "<shape type=\"rectangle\"><transform name=\"toWorld\"><scale x=\"9\" y=\"9\"/><translate z=\"5\"/></transform></shape>"
+             "<shape type=\"cube\"><transform name=\"toWorld\"><scale value=\"0.5\"/><translate z=\"2.5\"/></transform></shape>",
+             c[i].clip);
+    pc_scene s;
+    load_ok(&t, body, c[i].clip, &s);
+    pc_err e = {0};
+    pc_scene_backs b;
+    assert_int_equal(pc_scene_check(&s, &e), 0);
+    assert_int_equal(pc_scene_probe_backs(&s, 32, &b, &e), 0);
+    int np = (int)lround(100.0 * b.nearer / b.rays), fp = (int)lround(100.0 * b.farther / b.rays);
+    if (abs(np - c[i].nearer_pct) > 2 || abs(fp - c[i].farther_pct) > 2) print_error("case %zu: %d%% nearer, %d%% farther\n", i, np, fp);
+    assert_true(abs(np - c[i].nearer_pct) <= 2 && abs(fp - c[i].farther_pct) <= 2);
+    pc_scene_free(&s);
+  }
+  static const char *const bad[] = {"<float name=\"nearClip\" value=\"0\"/>",
+                                    "<float name=\"nearClip\" value=\"5\"/><float name=\"farClip\" value=\"5\"/>"};
+  for (size_t i = 0; i < 2; i++) {
+    char body[512];
+    snprintf(body, sizeof body, "<sensor type=\"perspective\">\n%s</sensor><shape type=\"cube\"/>", bad[i]);
+    pc_scene s;
+    pc_err e = {0};
+    assert_int_not_equal(load_body(&t, body, &s, &e), 0);
+    assert_non_null(strstr(e.msg, ":3: sensor 'perspective': the clip range must satisfy 0 < nearClip < farClip"));
+  }
+  th_rm_rf(t.root);
+}
+
 /* pc_scene_probe_backs: the camera (at the origin, looking along +z) sees a wall 5 ahead. A
  * rectangle's normal is +z, so unflipped the wall shows its back; what counts as black there is
  * the one-sided materials, not twosided ones, glass or flipped normals; the shapes come most seen
@@ -2095,6 +2142,7 @@ int main(void) {
       cmocka_unit_test(test_lookat_near_parallel),
       cmocka_unit_test(test_lookat_without_up),
       cmocka_unit_test(test_alias),
+      cmocka_unit_test(test_probe_clip),
       cmocka_unit_test(test_spectrum_file),
       cmocka_unit_test(test_focal_length),
       cmocka_unit_test(test_integrator_kinds),
