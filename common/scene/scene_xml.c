@@ -378,10 +378,10 @@ static int area_emitter(pc_sx *c, const pc_xml_node *n, vec3 *radiance, float *w
   if (rc) return rc;
   if (strcmp(type, "area") != 0)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: emitter '%s' cannot be attached to a shape (only area)", c->file, n->line, type);
+  *radiance = v3s(1.f); /* Mitsuba's D65 default, white in RGB mode */
   pc_param p[] = {{"radiance", PC_P_COLOR, radiance, 0, 0}, {"samplingWeight", PC_P_FLOAT, weight, 0, 0}};
   if ((rc = only_params(c, n, "emitter 'area'", p, 2)) || (rc = sampling_weight(c, &p[1], *weight, "emitter 'area'"))) return rc;
-  if (!p[0].set) return pc_errf(c->e, PC_EINVAL, "%s:%d: emitter 'area': 'radiance' is required", c->file, n->line);
-  return positive_color(c, &p[0], *radiance, "emitter 'area'");
+  return p[0].set ? positive_color(c, &p[0], *radiance, "emitter 'area'") : 0;
 }
 
 /* A similarity transform (rotation, translation, uniform scale, possibly mirrored): sets s. */

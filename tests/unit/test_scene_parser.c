@@ -341,7 +341,6 @@ static const bad_case bad_cases[] = {
     {"<emitter type=\"constant\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
     {"<emitter type=\"envmap\"><string name=\"filename\" value=\"tex.png\"/>\n<float name=\"samplingWeight\" value=\"2e6\"/></emitter>", 3, "samplingWeight"},
     {"<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>", 2, "nested"},
-    {"<shape type=\"cube\">\n<emitter type=\"area\"/></shape>", 3, "radiance"},
     {"<shape type=\"cube\">\n<emitter type=\"point\"/></shape>", 3, "point"},
     {"<shape type=\"cube\"><emitter type=\"area\">\n<rgb name=\"radiance\" value=\"0\"/></emitter></shape>", 3, "radiance"},
     {"<emitter type=\"point\">\n<float name=\"samplingWeight\" value=\"0\"/></emitter>", 3, "samplingWeight"},
@@ -1648,6 +1647,23 @@ static void test_spectrum_file(void **state) {
   th_rm_rf(t.root);
 }
 
+/* Mitsuba's emitters default to its D65 spectrum, white (1, 1, 1) in RGB mode. */
+static void test_emitter_defaults(void **state) {
+  (void)state;
+  tmp t;
+  tmp_make(&t);
+  pc_scene s;
+  load_ok(&t, SENSOR "<shape type=\"cube\"><emitter type=\"area\"/></shape><emitter type=\"point\"/><emitter type=\"constant\"/>",
+          "defaults", &s);
+  assert_int_equal(s.nlights, 3);
+  vec3 area = s.lights[0].radiance, point = s.lights[1].intensity, env = s.lights[2].radiance;
+  assert_true(area.x == 1.f && area.y == 1.f && area.z == 1.f);
+  assert_true(point.x == 1.f && point.y == 1.f && point.z == 1.f);
+  assert_true(env.x == 1.f && env.y == 1.f && env.z == 1.f);
+  pc_scene_free(&s);
+  th_rm_rf(t.root);
+}
+
 /* <alias id="a" as="b"/>: b refers to what a does. */
 static void test_alias(void **state) {
   (void)state;
@@ -2142,6 +2158,7 @@ int main(void) {
       cmocka_unit_test(test_lookat_near_parallel),
       cmocka_unit_test(test_lookat_without_up),
       cmocka_unit_test(test_alias),
+      cmocka_unit_test(test_emitter_defaults),
       cmocka_unit_test(test_probe_clip),
       cmocka_unit_test(test_spectrum_file),
       cmocka_unit_test(test_focal_length),
