@@ -126,6 +126,8 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
   } else if (depth == 0 || depth < -1) {
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
   }
+  /* Mitsuba's vpl defaults to 5 where every other integrator defaults to -1 (infinite) */
+  if (!p[0].set && strcmp(type, "vpl") == 0) depth = 5;
   c->s->max_depth = direct ? 2 : depth;
   return 0;
 }

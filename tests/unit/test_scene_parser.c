@@ -1551,7 +1551,7 @@ static void test_lookat_near_parallel(void **state) {
 
 /* Mitsuba's integrators that pcbpt renders another way: a wrapper (adaptive, irrcache) renders
  * what its nested integrator does, maxDepth included; `direct` is the paths of at most two
- * segments. */
+ * segments; `vpl` defaults to maxDepth 5, every other one to -1. */
 static void test_integrator_kinds(void **state) {
   (void)state;
   tmp t;
@@ -1567,6 +1567,9 @@ static void test_integrator_kinds(void **state) {
        "<integer name=\"maxDepth\" value=\"7\"/></integrator></integrator></integrator>", 7, PC_METHOD_BDPT},
       {"<integrator type=\"direct\"><integer name=\"shadingSamples\" value=\"4\"/></integrator>", 2, PC_METHOD_PT},
       {"<integrator type=\"photonmapper\"><integer name=\"maxDepth\" value=\"4\"/></integrator>", 4, PC_METHOD_PT},
+      {"<integrator type=\"vpl\"/>", 5, PC_METHOD_PT},
+      {"<integrator type=\"vpl\"><integer name=\"maxDepth\" value=\"-1\"/></integrator>", -1, PC_METHOD_PT},
+      {"<integrator type=\"sppm\"/>", -1, PC_METHOD_PT},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     char body[1024];
