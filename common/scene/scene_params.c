@@ -50,9 +50,17 @@ int pc_sx_params_only(pc_sx *c, const pc_xml_node *n, const char *what, pc_param
   return rc;
 }
 
+static const char *ignored_as_mitsuba(const char *what, const char *name);
+
 int pc_sx_unexpected(pc_sx *c, const pc_xml_node *ch, const char *what) {
   static const char *const unmodelled[] = {"medium", "subsurface", "phase", "volume", "sensor", NULL};
   const char *type = pc_xml_attr(ch, "type");
+  /* a texture where Mitsuba's plugin takes one and pcbpt a constant (a roughness map, a Phong
+     exponent map) */
+  const char *name = pc_xml_attr(ch, "name");
+  if (strcmp(ch->name, "texture") == 0 && name && !ignored_as_mitsuba(what, name))
+    return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: a texture for '%s' (Mitsuba's plugin reads one): not modelled by pcbpt, which takes a constant there",
+                   c->file, ch->line, what, name);
   /* a phase function or a volume only exists to describe a medium */
   bool media = strcmp(ch->name, "medium") == 0 || strcmp(ch->name, "phase") == 0 || strcmp(ch->name, "volume") == 0;
   for (const char *const *u = unmodelled; type && *u; u++)
