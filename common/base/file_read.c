@@ -11,6 +11,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#define LFS_PREFIX "version https://git-lfs.github.com/spec/"
+
+bool pc_is_lfs_pointer(const void *data, size_t len) {
+  return len >= sizeof LFS_PREFIX - 1 && memcmp(data, LFS_PREFIX, sizeof LFS_PREFIX - 1) == 0;
+}
+
 int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err *e) {
   *data = NULL;
   *len = 0;
@@ -52,6 +58,10 @@ int pc_file_read(const char *path, size_t max, char **data, size_t *len, pc_err 
     return pc_errf(e, PC_EIO, "%s: read error", path);
   }
   buf[n] = 0;
+  if (pc_is_lfs_pointer(buf, n)) {
+    free(buf);
+    return pc_errf(e, PC_EINVAL, "%s: " PC_LFS_POINTER_ERROR, path);
+  }
   *data = buf;
   *len = n;
   return 0;

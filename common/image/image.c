@@ -2,6 +2,8 @@
  * pc_image_read. */
 #include "image_internal.h"
 
+#include "file_read.h"
+
 #include <errno.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -28,7 +30,7 @@ static int read_image(const char *path, int srgb_to_linear, bool bytes, pc_image
   memset(out, 0, sizeof *out);
   FILE *f = fopen(path, "rb");
   if (!f) return pc_errf(e, PC_EIO, "%s: cannot open: %s", path, strerror(errno));
-  unsigned char m[8];
+  unsigned char m[48];
   size_t n = fread(m, 1, sizeof m, f);
   int rerr = ferror(f);
   fclose(f);
@@ -47,6 +49,7 @@ static int read_image(const char *path, int srgb_to_linear, bool bytes, pc_image
   /* TGA has no magic number: its name says it, as for Mitsuba */
   const char *dot = strrchr(path, '.');
   if (dot && strcasecmp(dot, ".tga") == 0) return pc_stb8_read(path, "TGA", srgb_to_linear, bytes, out, e);
+  if (pc_is_lfs_pointer(m, n)) return pc_errf(e, PC_EINVAL, "%s: " PC_LFS_POINTER_ERROR, path);
   return pc_errf(e, PC_EUNSUPPORTED, "%s: not a PNG, JPEG, OpenEXR, Radiance RGBE, PFM, PPM (P6), BMP or TGA file", path);
 }
 

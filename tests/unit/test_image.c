@@ -1140,11 +1140,28 @@ static void test_metrics_layers(void **state) {
   assert_non_null(strstr(e.msg, "differ"));
 }
 
+/* A Git LFS pointer where an image should be (a repository cloned without Git LFS): named as
+ * such, whatever the file's extension. */
+static void test_lfs_pointer(void **state) {
+  const char *ptr = "version https://git-lfs.github.com/spec/v1\noid sha256:534331e9438284caf604721d76be1a2313277cb4e645cb0123456789abcdef01\nsize 1048576\n";
+  const char *names[] = {"t.png", "t.jpg", "t.exr", "t.tga", "t.pfm"};
+  for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+    const char *p = path_in(state, names[i]);
+    spit(p, ptr, strlen(ptr));
+    pc_image img;
+    pc_err e = {0};
+    assert_int_equal(pc_image_read(p, true, &img, &e), PC_EINVAL);
+    if (!strstr(e.msg, "a Git LFS pointer, not the file itself")) print_error("%s: %s\n", names[i], e.msg);
+    assert_non_null(strstr(e.msg, "a Git LFS pointer, not the file itself"));
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_exr_roundtrip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_bmp_tga, setup, teardown),
       cmocka_unit_test_setup_teardown(test_ppm, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_lfs_pointer, setup, teardown),
       cmocka_unit_test_setup_teardown(test_pfm, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_no_beauty_gives_first_triplet, setup, teardown),
       cmocka_unit_test_setup_teardown(test_exr_write_errors, setup, teardown),

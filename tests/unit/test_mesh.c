@@ -500,6 +500,22 @@ static void test_mutations(void **state) {
   }
 }
 
+/* A repository cloned without Git LFS holds pointers where its meshes should be: each reader
+ * says so, not that the file is malformed. */
+static void test_lfs_pointer(void **state) {
+  (void)state;
+  const char *ptr = "version https://git-lfs.github.com/spec/v1\noid sha256:534331e9438284caf604721d76be1a2313277cb4e645cb0123456789abcdef01\nsize 1048576\n";
+  pc_mesh m;
+  pc_err e = {0};
+  bool fn;
+  assert_int_equal(pc_mesh_load_obj(put("p.obj", ptr, strlen(ptr)), &m, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "p.obj: a Git LFS pointer, not the file itself"));
+  assert_int_equal(pc_mesh_load_ply(put("p.ply", ptr, strlen(ptr)), &m, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "p.ply: a Git LFS pointer"));
+  assert_int_equal(pc_mesh_load_serialized(put("p.serialized", ptr, strlen(ptr)), 0, &m, &fn, &e), PC_EINVAL);
+  assert_non_null(strstr(e.msg, "p.serialized: a Git LFS pointer"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_obj_fan_and_indices), cmocka_unit_test(test_obj_forms_and_dedupe),
@@ -507,7 +523,7 @@ int main(void) {
       cmocka_unit_test(test_ply_binary),          cmocka_unit_test(test_ply_header_errors),
       cmocka_unit_test(test_mesh_ops),            cmocka_unit_test(test_methods),
       cmocka_unit_test(test_mutations),           cmocka_unit_test(test_serialized),
-      cmocka_unit_test(test_smooth_angle),
+      cmocka_unit_test(test_smooth_angle),        cmocka_unit_test(test_lfs_pointer),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
