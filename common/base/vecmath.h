@@ -78,6 +78,19 @@ static inline frame frame_from_normal(vec3 n) {
   f.n = n;
   return f;
 }
+/* Mitsuba's Frame(n) (coordinateSystem in its libcore/util.cpp): its tangents are where Mitsuba
+ * puts u = 0 on a cylinder, and s is the up it gives a <lookat> that names none. */
+static inline frame frame_mitsuba(vec3 n) {
+  vec3 t;
+  if (fabsf(n.x) > fabsf(n.y)) {
+    float inv = 1.f / sqrtf(n.x * n.x + n.z * n.z);
+    t = v3(n.z * inv, 0.f, -n.x * inv);
+  } else {
+    float inv = 1.f / sqrtf(n.y * n.y + n.z * n.z);
+    t = v3(0.f, n.z * inv, -n.y * inv);
+  }
+  return (frame){v3_cross(t, n), t, n};
+}
 static inline vec3 frame_to_local(const frame *f, vec3 v) {
   return v3(v3_dot(v, f->s), v3_dot(v, f->t), v3_dot(v, f->n));
 }

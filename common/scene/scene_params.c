@@ -94,9 +94,10 @@ static int spectrum_file(pc_sx *c, const pc_xml_node *ch, const char *what, vec3
   static const char *const allowed[] = {"name", "filename", NULL};
   int rc = pc_xml_check_attrs(c->file, ch, allowed, c->e);
   if (rc) return rc; /* with value or intent too, as Mitsuba refuses them */
+  const char *fname = pc_xml_attr(ch, "filename");
   char *path = NULL, *data = NULL;
   size_t len = 0;
-  if ((rc = pc_sx_resolve(c, ch, what, pc_xml_attr(ch, "filename"), &path))) return rc;
+  if ((rc = pc_sx_resolve(c, ch, what, fname, &path))) return rc;
   rc = pc_file_read(path, SPD_MAX_BYTES, &data, &len, c->e);
   free(path);
   if (rc) return rc;
@@ -105,16 +106,13 @@ static int spectrum_file(pc_sx *c, const pc_xml_node *ch, const char *what, vec3
   for (char *line = data, *next; line && line < data + len; line = next) {
     next = memchr(line, '\n', (size_t)(data + len - line));
     if (next) *next++ = 0;
-    while (*line == ' ' || *line == '\t' || *line == '\r') line++;
+    line += strspn(line, " \t\r");
     if (!*line || *line == '#') continue;
-    char *end;
-    double l = strtod(line, &end), v;
-    if (end == line) break;
-    char *end2;
-    v = strtod(end, &end2);
-    if (end2 == end) break;
+    char *end_l, *end_v;
+    double l = strtod(line, &end_l), v = strtod(end_l, &end_v);
+    if (end_l == line || end_v == end_l) break;
     if (n == PC_SPECTRUM_MAX_SAMPLES || !isfinite(l) || !isfinite(v)) {
-      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: spectrum file '%s': %s", c->file, ch->line, what, pc_xml_attr(ch, "filename"),
+      rc = pc_errf(c->e, PC_EINVAL, "%s:%d: %s: spectrum file '%s': %s", c->file, ch->line, what, fname,
                    n == PC_SPECTRUM_MAX_SAMPLES ? "more than 1024 entries" : "a value that is not a finite number");
       break;
     }
@@ -126,7 +124,7 @@ static int spectrum_file(pc_sx *c, const pc_xml_node *ch, const char *what, vec3
   double rgb[3];
   if (n < 2 || pc_spectrum_sampled_rgb(lambda, value, n, rgb) != 0)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: spectrum file '%s': needs at least 2 entries at increasing wavelengths", c->file,
-                   ch->line, what, pc_xml_attr(ch, "filename"));
+                   ch->line, what, fname);
   *out = v3((float)rgb[0], (float)rgb[1], (float)rgb[2]);
   return 0;
 }

@@ -106,7 +106,8 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
     }
     if (rc) return rc;
   }
-  int depth = -1;
+  /* Mitsuba's defaults: vpl 5, every other integrator -1 (infinite) */
+  int depth = strcmp(type, "vpl") == 0 ? 5 : -1;
   bool hide = false, light_image = true;
   /* maxDepth is honoured; rrDepth is ignored since pcbpt's Russian roulette is local by design;
    * the two switches that leave light out of the image are refused when set; every other
@@ -115,19 +116,15 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
                   {"rrDepth", PC_P_IGNORED, "pcbpt's Russian roulette depends on local vertex data only", 0, 0},
                   {"hideEmitters", PC_P_BOOL, &hide, 0, 0}, {"lightImage", PC_P_BOOL, &light_image, 0, 0},
                   {"*", PC_P_IGNORED, "it steers that integrator's own sampling, not the image", 0, 0}};
+  if (direct) p[0] = (pc_param){"maxDepth", PC_P_IGNORED, "Mitsuba's direct integrator does not read it", 0, 0};
   if ((rc = pc_sx_params(c, n, what, p, 5))) return rc;
   if (hide || !light_image)
     return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: '%s' (leaving light out of the image): not modelled by pcbpt", c->file,
                    hide ? p[2].line : p[3].line, what, hide ? "hideEmitters" : "lightImage");
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next)
     if (!pc_sx_is_param(ch, p, 5) && (rc = pc_sx_warn(c, ch, "%s: nested <%s> ignored", what, ch->name))) return rc;
-  if (direct && p[0].set) {
-    if ((rc = pc_sx_warn(c, n, "%s: parameter 'maxDepth' ignored (Mitsuba's plugin does not read it either)", what))) return rc;
-  } else if (depth == 0 || depth < -1) {
+  if (depth == 0 || depth < -1)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: maxDepth must be -1 (infinite) or at least 1", c->file, p[0].line, what);
-  }
-  /* Mitsuba's vpl defaults to 5 where every other integrator defaults to -1 (infinite) */
-  if (!p[0].set && strcmp(type, "vpl") == 0) depth = 5;
   c->s->max_depth = direct ? 2 : depth;
   return 0;
 }
@@ -198,6 +195,14 @@ static bool is_rigid(const mat4 *m) { return orthonormal(m, false, 1e-4); }
  * off unit length, or two rows off orthogonal, by more than 1e-3. */
 static bool mitsuba_has_scale(const mat4 *m) { return !orthonormal(m, true, 1e-3); }
 
+/* What Mitsuba's perspective sensor and hdrfilm assume where a scene says nothing (a sensor of
+ * its own, or the one Mitsuba makes for a scene without). */
+static void mitsuba_sensor_defaults(pc_camera *cam) {
+  cam->width = 768, cam->height = 576;
+  cam->near_clip = 1e-2f, cam->far_clip = 1e4f;
+  cam->focus_distance = 0.f, cam->aperture_radius = 0.f;
+}
+
 /* pcbpt draws its own independent samples; the sampler's sampleCount is the default number of
  * iterations (one sample per pixel each), as it is Mitsuba's samples per pixel. */
 static int sampler(pc_sx *c, const pc_xml_node *n) {
@@ -233,8 +238,7 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
    * farClip (which is also a thin lens's default focus distance, as in Mitsuba): the clip range
    * is kept for the probe that says where that is; focusDistance does nothing in a pinhole. */
   pc_scene *s = c->s;
-  cam->focus_distance = 0.f;
-  cam->near_clip = 1e-2f, cam->far_clip = 1e4f; /* Mitsuba's defaults */
+  mitsuba_sensor_defaults(cam);
   pc_param p[] = {{"fov", PC_P_FLOAT, &fov, 0, 0}, {"fovAxis", PC_P_STRING, &axis, 0, 0},
                   {"toWorld", PC_P_MOTION, &cx, 0, 0},
                   {"nearClip", PC_P_FLOAT, &cam->near_clip, 0, 0},
@@ -268,7 +272,6 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
       return pc_sx_unexpected(c, ch, what);
     }
   }
-  if (!have_film) cam->width = 768, cam->height = 576; /* Mitsuba's hdrfilm default */
   const pc_param *focal_p = &p[np - 1];
   if (p[0].set && focal_p->set)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: give fov or focalLength, not both (as Mitsuba)", c->file, focal_p->line, what);
@@ -319,7 +322,6 @@ static int sensor(pc_sx *c, const pc_xml_node *n) {
                    "%s:%d: %s: a moving toWorld that scales or shears (not rigid to 1e-4): not modelled by pcbpt"
                    " (Mitsuba accepts a camera matrix rigid to 1e-3)",
                    c->file, p[2].line, what);
-  cam->aperture_radius = 0.f;
   if (lens) {
     if (!p[5].set) cam->focus_distance = cam->far_clip;
     if (!p[8].set)
@@ -910,10 +912,9 @@ static int default_sensor(pc_sx *c, const pc_xml_node *root) {
   vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
   for (int i = 0; i < c->s->nshapes; i++) pc_shape_grow_bounds(&c->s->shapes[i], &lo, &hi);
   pc_camera *cam = &c->s->camera;
-  cam->width = 768, cam->height = 576; /* hdrfilm's default */
+  mitsuba_sensor_defaults(cam);
   cam->fov_deg = 45.f;
   cam->fov_axis = 'x';
-  cam->near_clip = 1e-2f, cam->far_clip = 1e4f;
   cam->to_world = mat4_identity();
   if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z) {
     vec3 ext = v3_sub(hi, lo);

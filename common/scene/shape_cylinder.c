@@ -5,20 +5,6 @@
 #include <embree3/rtcore.h>
 #include <math.h>
 
-/* Mitsuba's Frame(n) (coordinateSystem in libcore/util.cpp): where u = 0 lies on the tube, so
- * that textures wrap as they do there. */
-static frame mitsuba_frame(vec3 n) {
-  vec3 t;
-  if (fabsf(n.x) > fabsf(n.y)) {
-    float inv = 1.f / sqrtf(n.x * n.x + n.z * n.z);
-    t = v3(n.z * inv, 0.f, -n.x * inv);
-  } else {
-    float inv = 1.f / sqrtf(n.y * n.y + n.z * n.z);
-    t = v3(0.f, n.z * inv, -n.y * inv);
-  }
-  return (frame){v3_cross(t, n), t, n};
-}
-
 static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /* The linear part of xf applied to v, in double. */
@@ -57,7 +43,7 @@ const char *pc_cylinder_place(pc_shape *sh, vec3 p0, vec3 p1, float radius, cons
   if (!(len > 0.f) || !isfinite(len) || !v3_is_finite(p0)) return "p0 and p1 must be distinct finite points";
   sh->kind = PC_SHAPE_CYLINDER;
   sh->center = p0;
-  sh->cyl_axes = mitsuba_frame(v3_scale(d, 1.f / len));
+  sh->cyl_axes = frame_mitsuba(v3_scale(d, 1.f / len)); /* u = 0 where Mitsuba's is: textures wrap as there */
   sh->radius = radius;
   sh->length = len;
   return pc_cylinder_transform(sh, xf);

@@ -259,15 +259,8 @@ static int one_transform(const char *file, const pc_xml_node *c, mat4 *t, pc_err
     /* Without an up (or with a zero one) Mitsuba takes the first axis of its coordinateSystem
        about the view direction, which fixes the image's roll. */
     if (!up_given || (up[0] == 0 && up[1] == 0 && up[2] == 0)) {
-      double side[3];
-      if (fabs(dir[0]) > fabs(dir[1])) {
-        double inv = 1 / sqrt(dir[0] * dir[0] + dir[2] * dir[2]);
-        side[0] = dir[2] * inv, side[1] = 0, side[2] = -dir[0] * inv;
-      } else {
-        double inv = 1 / sqrt(dir[1] * dir[1] + dir[2] * dir[2]);
-        side[0] = 0, side[1] = dir[2] * inv, side[2] = -dir[1] * inv;
-      }
-      cross3(side, dir, up);
+      frame f = frame_mitsuba(v3((float)dir[0], (float)dir[1], (float)dir[2]));
+      up[0] = f.s.x, up[1] = f.s.y, up[2] = f.s.z;
     }
     cross3(up, dir, left);
     double ll = sqrt(left[0] * left[0] + left[1] * left[1] + left[2] * left[2]);

@@ -1569,7 +1569,8 @@ static void test_integrator_kinds(void **state) {
        "<integrator type=\"path\"><integer name=\"maxDepth\" value=\"3\"/></integrator></integrator>", 3, PC_METHOD_PT},
       {"<integrator type=\"irrcache\"><integrator type=\"adaptive\"><integrator type=\"bdpt\">"
        "<integer name=\"maxDepth\" value=\"7\"/></integrator></integrator></integrator>", 7, PC_METHOD_BDPT},
-      {"<integrator type=\"direct\"><integer name=\"shadingSamples\" value=\"4\"/></integrator>", 2, PC_METHOD_PT},
+      {"<integrator type=\"direct\"><integer name=\"shadingSamples\" value=\"4\"/><integer name=\"maxDepth\" value=\"7\"/>"
+       "</integrator>", 2, PC_METHOD_PT},
       {"<integrator type=\"photonmapper\"><integer name=\"maxDepth\" value=\"4\"/></integrator>", 4, PC_METHOD_PT},
       {"<integrator type=\"vpl\"/>", 5, PC_METHOD_PT},
       {"<integrator type=\"vpl\"><integer name=\"maxDepth\" value=\"-1\"/></integrator>", -1, PC_METHOD_PT},
