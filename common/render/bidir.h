@@ -43,6 +43,10 @@ typedef struct pc_connection {
   vec3 f;          /* unweighted contribution (path throughput / pdf) */
   float weight;    /* MIS weight of strategy (s,t) */
   float px, py;    /* t = 1: raster position of the splat */
+  /* t = 1, weighted: weight = mis_own / (mis_own + mis_eye), mis_eye the sum over the eye
+   * strategies, all of which scale with the camera's pdf: under a filter, pixel j's weight has
+   * mis_eye times pc_mis(its filter density at px, py). */
+  float mis_own, mis_eye;
 } pc_connection;
 
 /* Connects light vertex lv (s = lv->depth) to eye vertex ev (t = ev->depth; the camera when
@@ -65,6 +69,10 @@ void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_pa
 
 /* A light splat into layer `layer` and, with --strategy-layers, into layer s%dt%d. */
 void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer, int s, int t, int x, int y, vec3 v);
+
+/* The MIS weight of weighted t = 1 connection k in a pixel whose filter density at k's raster
+ * point is `density` (k->weight for the pixel box's 1); 0 where it is not a valid weight. */
+float pc_lt_pixel_weight(const pc_mis_counts *n, const pc_connection *k, float density);
 
 /* Light tracing: connects light vertices v[0..nl-1] of light path `index` to the camera (a thin
  * lens at lens points keyed by index), splats into c->splat. */

@@ -148,6 +148,10 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
     float sum_e = pc_mis_side(n, ev, pdf_l_fwd * cos_e / d2, pdf_e_rev, pc_mis_count(n, sl + 1, tl - 1));
     weight = weight_of(n, sl, tl, sum_l, sum_e);
     if (weight == 0.f) return false;
+    if (tl == 1) {
+      out->mis_own = pc_mis(n, pc_mis_count(n, sl, tl));
+      out->mis_eye = sum_l; /* sum_e is 0: the pinhole cannot be hit */
+    }
   }
   out->f = f;
   out->weight = weight;

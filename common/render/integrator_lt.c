@@ -6,6 +6,32 @@
  * light-traced paths have weight 1. BDPT uses the same splats with its full MIS weights. */
 #include "bidir.h"
 
+float pc_lt_pixel_weight(const pc_mis_counts *n, const pc_connection *k, float density) {
+  float w = k->mis_own / (k->mis_own + pc_mis(n, density) * k->mis_eye);
+  return w > 0.f && w <= 1.f ? w : 0.f;
+}
+
+/* A connection to the camera added to every pixel whose filter reaches its raster point: each
+ * pixel's measurement is its filter density there times the pixel box's, and its eye strategies'
+ * pdfs scale the same way (pc_camera_pixel_point), so their share of the MIS weight does. */
+static void splat_filtered(pc_tctx *c, const pc_connection *k, bool weighted, int s) {
+  const pc_camera *cam = &c->scene->camera;
+  int x0, y0, nx, ny;
+  float wx[PC_CAMERA_FOOTPRINT_MAX], wy[PC_CAMERA_FOOTPRINT_MAX];
+  pc_camera_footprint(cam, k->px, k->py, &x0, &nx, wx, &y0, &ny, wy);
+  for (int j = 0; j < ny; j++) {
+    if (!(wy[j] > 0.f)) continue;
+    for (int i = 0; i < nx; i++) {
+      float density = wx[i] * wy[j];
+      if (!(density > 0.f)) continue;
+      float w = weighted ? pc_lt_pixel_weight(&c->counts, k, density) : 1.f;
+      if (w == 0.f) continue;
+      pc_film_queue_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, s, 1, x0 + i, y0 + j,
+                                 v3_scale(k->f, density * w));
+    }
+  }
+}
+
 void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl, uint64_t index) {
   const pc_camera *cam = &c->scene->camera;
   /* a thin lens: each connection to the camera samples its own lens point */
@@ -18,6 +44,7 @@ void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl, uint64_t index) {
   eye.depth = 1;
   eye.material = eye.light = -1;
   bool lt_method = c->set->method == PC_METHOD_LT;
+  bool pixel_box = pc_rfilter_is_pixel(&cam->filter);
   for (int i = 0; i < nl; i++) {
     /* The lt method weighs only path length 1 (against s=0); BDPT weighs every length. */
     bool weighted = c->weighted && (!lt_method || lv[i].depth == 1);
@@ -27,8 +54,11 @@ void pc_lt_splat(pc_tctx *c, const pc_path_vertex *lv, int nl, uint64_t index) {
     }
     pc_connection k;
     if (!pc_connect(c, &c->counts, &lv[i], &eye, weighted, &k)) continue;
-    pc_film_queue_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
-                         v3_scale(k.f, k.weight));
+    if (pixel_box)
+      pc_film_queue_add_strategy(c->splat, c->set->strategy_layers, PC_LAYER_LT, lv[i].depth, 1, (int)k.px, (int)k.py,
+                                 v3_scale(k.f, k.weight));
+    else
+      splat_filtered(c, &k, weighted, lv[i].depth);
   }
 }
 

@@ -82,7 +82,8 @@ void pc_pt_pixel(pc_tctx *c, int x, int y) {
   const pc_scene *s = c->scene;
   const pc_render_settings *set = c->set;
   pc_rng rng = pc_rng_make(set->seed, c->iteration, PC_STREAM_EYE, (uint64_t)y * (uint64_t)s->camera.width + (uint64_t)x);
-  float px = (float)x + pc_rng_f(&rng), py = (float)y + pc_rng_f(&rng);
+  float u0 = pc_rng_f(&rng), u1 = pc_rng_f(&rng), px, py;
+  pc_camera_pixel_point(&s->camera, x, y, u0, u1, &px, &py);
   vec3 d, o = pc_camera_sample_ray(&s->camera, px, py, &rng, &d);
   vec3 beta = v3s(1.f);
   float prev_pdf = 0.f; /* solid-angle pdf (with continuation) of the last BSDF sample */

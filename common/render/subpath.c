@@ -209,7 +209,8 @@ int pc_light_subpath(pc_tctx *c, const pc_mis_counts *n, uint64_t index, pc_path
 int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y, int max_vertices, pc_path_vertex *v,
                    pc_emitter_hit_fn hit, void *user) {
   const pc_camera *cam = &c->scene->camera;
-  float px = (float)x + pc_rng_f(rng), py = (float)y + pc_rng_f(rng);
+  float u0 = pc_rng_f(rng), u1 = pc_rng_f(rng), px, py;
+  float density = pc_camera_pixel_point(cam, x, y, u0, u1, &px, &py);
   vec3 d;
   pc_path_vertex *v0 = &v[0];
   v0->kind = PC_VTX_CAMERA;
@@ -224,7 +225,10 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
   v0->q = 1.f;
   v0->delta = false;
   v0->mis_near = v0->mis_far = 0.f;
+  /* This pixel's eye strategies sample the direction with its filter's density (1 for the
+   * pixel box); light tracing does not, which the MIS weights see through this pdf. */
   float pdf = pc_camera_dir_pdf(cam, d);
+  if (density != 1.f) pdf *= density;
   if (!(pdf > 0.f) || !isfinite(pdf)) return 1;
   /* The pinhole cannot be hit: cos_out 0. */
   return walk(c, n, rng, v, 1, max_vertices, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);

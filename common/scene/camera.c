@@ -108,3 +108,37 @@ vec3 pc_camera_sample_ray(const pc_camera *c, float px, float py, pc_rng *rng, v
   *dir = pc_camera_lens_dir(c, o, px, py);
   return o;
 }
+
+float pc_camera_pixel_point(const pc_camera *c, int x, int y, float u0, float u1, float *px, float *py) {
+  if (pc_rfilter_is_pixel(&c->filter)) {
+    *px = (float)x + u0;
+    *py = (float)y + u1;
+    return 1.f;
+  }
+  float pdf_x, pdf_y;
+  *px = pc_rfilter_sample(&c->filter, (float)x + 0.5f, (float)c->width, u0, &pdf_x);
+  *py = pc_rfilter_sample(&c->filter, (float)y + 0.5f, (float)c->height, u1, &pdf_y);
+  return pdf_x * pdf_y;
+}
+
+/* The pixels of one axis whose filter reaches p, and their weights at p. */
+static int footprint_1d(const pc_rfilter *f, float p, int extent, int *first, float *w) {
+  int lo = (int)floorf(p - 0.5f - f->radius), hi = (int)ceilf(p - 0.5f + f->radius);
+  if (lo < 0) lo = 0;
+  if (hi > extent - 1) hi = extent - 1;
+  if (hi - lo + 1 > PC_CAMERA_FOOTPRINT_MAX) hi = lo + PC_CAMERA_FOOTPRINT_MAX - 1;
+  int n = 0;
+  for (int i = lo; i <= hi; i++) {
+    float centre = (float)i + 0.5f;
+    float v = pc_rfilter_value(f, p - centre);
+    w[n++] = v > 0.f ? v / pc_rfilter_mass(f, centre, (float)extent) : 0.f;
+  }
+  *first = lo;
+  return n;
+}
+
+void pc_camera_footprint(const pc_camera *c, float px, float py, int *x0, int *nx, float wx[PC_CAMERA_FOOTPRINT_MAX], int *y0,
+                         int *ny, float wy[PC_CAMERA_FOOTPRINT_MAX]) {
+  *nx = footprint_1d(&c->filter, px, c->width, x0, wx);
+  *ny = footprint_1d(&c->filter, py, c->height, y0, wy);
+}

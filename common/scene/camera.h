@@ -10,6 +10,7 @@
 
 #include <stdbool.h>
 
+#include "rfilter.h"
 #include "rng.h"
 #include "vecmath.h"
 
@@ -25,6 +26,7 @@ typedef struct pc_camera {
   /* Mitsuba's clip range along dir (nearClip, farClip): pcbpt does not clip, and the probe of
    * pc_scene_probe_backs counts what the camera sees outside it */
   float near_clip, far_clip;
+  pc_rfilter filter; /* the film's reconstruction filter: a pixel's measurement (rfilter.h) */
   /* derived by pc_camera_prepare */
   float tan_half_x, tan_half_y; /* half extents of the image plane at distance 1 */
   float image_area;             /* area of the image plane at distance 1 */
@@ -52,6 +54,19 @@ vec3 pc_camera_sample_ray(const pc_camera *c, float px, float py, pc_rng *rng, v
 bool pc_camera_raster_from(const pc_camera *c, vec3 lens, vec3 dir, float *px, float *py);
 /* Raster position of a world direction from the camera; false if outside the image or behind. */
 bool pc_camera_raster(const pc_camera *c, vec3 dir, float *px, float *py);
+
+/* The raster point of pixel (x, y)'s eye sample from u0, u1 in [0, 1), drawn from the pixel's
+ * filter weight; returns that weight there (its raster-area pdf: 1 for the pixel box, whose
+ * point is (x + u0, y + u1)). The eye strategies' camera pdf, pc_camera_dir_pdf's, is per pixel
+ * and scales by it. */
+float pc_camera_pixel_point(const pc_camera *c, int x, int y, float u0, float u1, float *px, float *py);
+
+/* The pixels a light-tracing splat at raster point (px, py) reaches under a filter that is not
+ * the pixel box: columns *x0 .. *x0 + *nx - 1 and rows *y0 .. *y0 + *ny - 1 with the 1-D weights
+ * wx and wy (pixel (x, y)'s weight at the point is wx * wy, 0 for some). */
+#define PC_CAMERA_FOOTPRINT_MAX ((int)(2.f * PC_RFILTER_MAX_RADIUS) + 2)
+void pc_camera_footprint(const pc_camera *c, float px, float py, int *x0, int *nx, float wx[PC_CAMERA_FOOTPRINT_MAX], int *y0,
+                         int *ny, float wy[PC_CAMERA_FOOTPRINT_MAX]);
 
 /* Importance We(dir) for a world direction leaving the camera, normalised so that
  * integrating We * cos over the image solid angle gives 1 per pixel-count unit:

@@ -129,17 +129,39 @@ static int integrator(pc_sx *c, const pc_xml_node *root, const pc_xml_node *n) {
   return 0;
 }
 
-/* pcbpt splats every sample into its pixel, which is Mitsuba's box filter; another filter
- * only blurs the same image a little. */
-static int rfilter(pc_sx *c, const pc_xml_node *n) {
+/* Mitsuba's box, tent and gaussian filters are each pixel's measurement (rfilter.h); its
+ * filters with negative lobes are not, and their pixels are boxes with a warning. */
+static int rfilter(pc_sx *c, const pc_xml_node *n, pc_rfilter *out) {
   const char *ft;
   int rc = object_type(c, n, false, &ft);
   if (rc) return rc;
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "rfilter '%.60s'", ft);
-  if (strcmp(ft, "box") != 0 && (rc = pc_sx_warn(c, n, "%s: pcbpt splats with a box filter", what))) return rc;
-  pc_param p[] = {{"*", PC_P_IGNORED, "pcbpt splats with a box filter", 0, 0}};
-  return only_params(c, n, what, p, 1);
+  pc_rfilter_type type;
+  float param = 0.f;
+  pc_param p[] = {{"radius", PC_P_FLOAT, &param, 0, 0}, {"stddev", PC_P_FLOAT, &param, 0, 0},
+                  {"*", PC_P_IGNORED, "Mitsuba's filter does not read it", 0, 0}};
+  if (strcmp(ft, "box") == 0) {
+    type = PC_RFILTER_BOX, param = 0.5f;
+    p[1].kind = PC_P_IGNORED, p[1].out = (void *)"Mitsuba's box does not read it";
+  } else if (strcmp(ft, "tent") == 0) {
+    type = PC_RFILTER_TENT;
+    p[0].kind = p[1].kind = PC_P_IGNORED;
+    p[0].out = p[1].out = (void *)"Mitsuba's tent has radius 1 whatever it says";
+  } else if (strcmp(ft, "gaussian") == 0) {
+    type = PC_RFILTER_GAUSSIAN, param = 0.5f;
+    p[0].kind = PC_P_IGNORED, p[0].out = (void *)"Mitsuba's gaussian has radius 4 stddev";
+  } else {
+    if ((rc = pc_sx_warn(c, n, "%s: a filter with negative lobes is not modelled: each pixel is a box", what))) return rc;
+    p[0].kind = p[1].kind = PC_P_IGNORED;
+    p[0].out = p[1].out = p[2].out = (void *)"the filter is not modelled";
+    return only_params(c, n, what, p, 3);
+  }
+  if ((rc = only_params(c, n, what, p, 3))) return rc;
+  if (!pc_rfilter_make(out, type, param))
+    return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: radius %g out of range (0, %g] pixels", c->file, n->line, what,
+                   type == PC_RFILTER_GAUSSIAN ? 4.0 * param : (double)param, (double)PC_RFILTER_MAX_RADIUS);
+  return 0;
 }
 
 static int film(pc_sx *c, const pc_xml_node *n) {
@@ -155,20 +177,27 @@ static int film(pc_sx *c, const pc_xml_node *n) {
   if (ldr && (rc = pc_sx_warn(c, n, "%s: pcbpt writes a linear EXR (plus a PNG preview); only the size is used", what)))
     return rc;
   int w = 768, h = 576, crop = 0;
+  bool hq_edges = false;
   pc_param p[] = {{"width", PC_P_INT, &w, 0, 0}, {"height", PC_P_INT, &h, 0, 0},
                   {"cropOffsetX", PC_P_INT, &crop, 0, 0}, {"cropOffsetY", PC_P_INT, &crop, 0, 0},
                   {"cropWidth", PC_P_INT, &crop, 0, 0}, {"cropHeight", PC_P_INT, &crop, 0, 0},
+                  {"highQualityEdges", PC_P_BOOL, &hq_edges, 0, 0},
                   {"*", PC_P_IGNORED, "it sets the output file, not the image", 0, 0}};
-  if ((rc = pc_sx_params(c, n, what, p, 7))) return rc;
+  if ((rc = pc_sx_params(c, n, what, p, 8))) return rc;
   for (int i = 2; i < 6; i++)
     if (p[i].set)
       return pc_errf(c->e, PC_EUNSUPPORTED, "%s:%d: %s: '%s' (a crop window) is not supported", c->file, p[i].line, what,
                      p[i].name);
   for (const pc_xml_node *ch = n->first; ch; ch = ch->next) {
-    if (pc_sx_is_param(ch, p, 7)) continue;
+    if (pc_sx_is_param(ch, p, 8)) continue;
     if (strcmp(ch->name, "rfilter") != 0) return pc_sx_unexpected(c, ch, what);
-    if ((rc = rfilter(c, ch))) return rc;
+    if ((rc = rfilter(c, ch, &c->s->camera.filter))) return rc;
   }
+  /* Mitsuba then also samples beyond the film for the pixels at its edge; pcbpt weighs the
+   * film alone there, as Mitsuba does by default. */
+  if (hq_edges && !pc_rfilter_is_pixel(&c->s->camera.filter) &&
+      (rc = pc_sx_warn(c, n, "%s: highQualityEdges: the pixels at the film's edge weigh what the film sees only", what)))
+    return rc;
   if (w < 1 || w > PC_SCENE_MAX_FILM_DIM || h < 1 || h > PC_SCENE_MAX_FILM_DIM)
     return pc_errf(c->e, PC_EINVAL, "%s:%d: %s: width and height must lie in 1..%d", c->file, n->line, what,
                    PC_SCENE_MAX_FILM_DIM);

@@ -23,7 +23,7 @@ cat >"$tmp/root/scene/scene.xml" <<'XML'
     <transform name="toWorld"><lookat origin="0, 1, 6.8" target="0, 1, 0" up="0, 1, 0"/></transform>
     <sampler type="ldsampler"><integer name="sampleCount" value="3"/></sampler>
     <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="24"/>
-      <boolean name="banner" value="false"/><rfilter type="gaussian"/></film>
+      <boolean name="banner" value="false"/><rfilter type="catmullrom"/></film>
   </sensor>
   <shape type="obj"><string name="filename" value="meshes/00_Floor.obj"/><bsdf type="diffuse"><float name="foo" value="1"/></bsdf></shape>
   <shape type="obj"><string name="filename" value="meshes/02_BackWall.obj"/><bsdf type="diffuse"><float name="foo" value="1"/></bsdf></shape>
@@ -40,7 +40,7 @@ check strict 1 "under --strict" -- "$bin" render "$s" $r -D light=1 --strict --o
 check render-a 0 "3 iterations" -- "$bin" render "$s" $r -D light=1 -D method=bdpt --out "$tmp/a.exr"
 # each ignored setting once, on stderr, naming file and line (the two unread 'foo's are one)
 for w in "scene.xml:6: warning: sampler 'ldsampler'" "scene.xml:8: warning: film 'hdrfilm': parameter 'banner'" \
-         "scene.xml:8: warning: rfilter 'gaussian'" "integrator.xml:2: warning: integrator 'bdpt': parameter 'strictNormals'"; do
+         "scene.xml:8: warning: rfilter 'catmullrom'" "integrator.xml:2: warning: integrator 'bdpt': parameter 'strictNormals'"; do
   grep -q "$w" "$tmp/err" || { echo "FAIL warnings: lacks '$w'"; cat "$tmp/err"; fail=1; }
 done
 [ "$(grep -c "parameter 'foo'" "$tmp/err")" = 1 ] || { echo "FAIL warnings: 'foo' not warned exactly once"; cat "$tmp/err"; fail=1; }

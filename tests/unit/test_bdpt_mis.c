@@ -33,6 +33,7 @@ typedef struct fixture {
   pc_path_vertex *lbuf, *ebuf;
   int checked, strategies_checked, env_checked, at_point_checked; /* at_point: from a point or spot light */
   int directional_checked; /* counted in env_checked too */
+  int filtered_pixels;     /* t = 1 paths weighed for a pixel of a filter's footprint */
 } fixture;
 
 /* The light added to a scene: none, a point light, a spot (60 degree cutoff, 40 degree beam) or
@@ -109,6 +110,8 @@ static void unload(fixture *f) {
 typedef struct fpath {
   int k;
   pc_path_vertex x[2 * MAXV]; /* x[0]: kind LIGHT (p, ng, light); others SURFACE or CAMERA */
+  int pixel_x, pixel_y;       /* the pixel whose measurement the path is weighed for */
+  double density;             /* that pixel's filter density where the camera sees x[k-1] */
 } fpath;
 
 static bool is_delta(const fpath *fp, int i) { return i > 0 && i < fp->k && fp->x[i].delta; }
@@ -176,7 +179,7 @@ static void brute(const fixture *f, const pc_mis_counts *n, const fpath *fp, dou
     if (i + 1 == k) {
       const pc_camera *cam = &s->camera;
       double cz = v3_dot(unit(cam->pos, fp->x[i].p), cam->dir);
-      pd = 1.0 / (cam->image_area * cz * cz * cz);
+      pd = fp->density / (cam->image_area * cz * cz * cz);
     } else {
       pd = dir_pdf(f, fp, i + 1, i + 2, i);
     }
@@ -224,6 +227,7 @@ static void extend(const fixture *f, const pc_mis_counts *n, const fpath *fp, pc
     } else if (a->kind == PC_VTX_CAMERA) {
       float cz = v3_dot(dir, f->scene.camera.dir);
       pf = 1.f / (f->scene.camera.image_area * cz * cz * cz);
+      if (fp->density != 1.0) pf *= (float)fp->density;
       cos_out = 0.f;
     } else {
       const pc_light *l = &f->scene.lights[a->light];
@@ -268,7 +272,7 @@ static double replay(fixture *f, const pc_mis_counts *n, const fpath *fp, int j)
   }
   pc_connection con;
   if (!pc_connect(&f->c, n, &lv[j - 1], &ev[k - j], true, &con)) return 0.0;
-  return con.weight;
+  return j == k ? pc_lt_pixel_weight(n, &con, (float)fp->density) : con.weight;
 }
 
 static void check_path(fixture *f, const pc_mis_counts *n, const fpath *fp, int s, double w_integrator) {
@@ -318,9 +322,37 @@ static void place_env(fpath *fp) {
   if (env_at(fp, 0)) fp->x[0].p = v3_madd(fp->x[1].p, fp->x[0].wo, -ENV_FAR);
 }
 
+/* The pixels a filter spreads the camera's view of x[k-1] over, and their densities there. */
+static int footprint(const fixture *f, const fpath *fp, int *xs, int *ys, double *density) {
+  const pc_camera *cam = &f->scene.camera;
+  float px, py;
+  if (!pc_camera_raster(cam, v3_sub(fp->x[fp->k - 1].p, cam->pos), &px, &py)) return 0;
+  int x0, y0, nx, ny, n = 0;
+  float wx[PC_CAMERA_FOOTPRINT_MAX], wy[PC_CAMERA_FOOTPRINT_MAX];
+  pc_camera_footprint(cam, px, py, &x0, &nx, wx, &y0, &ny, wy);
+  for (int j = 0; j < ny; j++)
+    for (int i = 0; i < nx; i++)
+      if (wx[i] * wy[j] > 0.f) xs[n] = x0 + i, ys[n] = y0 + j, density[n++] = (double)(wx[i] * wy[j]);
+  return n;
+}
+
+/* Weighs fp for pixel (x, y), its eye sub-path's: under a filter, the density there. */
+static void for_pixel(const fixture *f, fpath *fp, int x, int y) {
+  fp->pixel_x = x, fp->pixel_y = y, fp->density = 1.0;
+  if (pc_rfilter_is_pixel(&f->scene.camera.filter)) return;
+  int xs[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX], ys[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX];
+  double d[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX];
+  int n = footprint(f, fp, xs, ys, d);
+  fp->density = 0.0;
+  for (int i = 0; i < n; i++)
+    if (xs[i] == x && ys[i] == y) fp->density = d[i];
+  assert_true(fp->density > 0.0); /* the eye sample was drawn from this pixel's filter */
+}
+
 static void run(fixture *f, pc_mis_counts n, int npaths) {
   f->c.counts = n;
   f->checked = f->strategies_checked = f->env_checked = f->at_point_checked = f->directional_checked = 0;
+  f->filtered_pixels = 0;
   for (int it = 0; it < npaths; it++) {
     f->c.iteration = (uint64_t)it;
     int nl = pc_light_subpath(&f->c, &n, (uint64_t)it, f->lbuf);
@@ -337,6 +369,7 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
       for (int u = 0; u < t; u++) fp.x[u] = f->ebuf[t - 1 - u];
       if (fp.x[0].kind != PC_VTX_ENV) fp.x[0].kind = PC_VTX_LIGHT;
       place_env(&fp);
+      for_pixel(f, &fp, x, y);
       check_path(f, &n, &fp, 0, h.w[i]);
     }
     /* s >= 1 with t >= 1, including s=1 with the light sub-path's own first vertex. */
@@ -349,13 +382,27 @@ static void run(fixture *f, pc_mis_counts n, int npaths) {
         for (int i = 0; i < s; i++) fp.x[i] = f->lbuf[i];
         for (int u = 0; u < t; u++) fp.x[s + u] = f->ebuf[t - 1 - u];
         place_env(&fp);
-        check_path(f, &n, &fp, s, con.weight);
+        if (t > 1 || pc_rfilter_is_pixel(&f->scene.camera.filter)) {
+          for_pixel(f, &fp, x, y);
+          check_path(f, &n, &fp, s, con.weight);
+          continue;
+        }
+        /* t = 1 under a filter: weighed for every pixel it reaches */
+        int xs[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX], ys[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX];
+        double d[PC_CAMERA_FOOTPRINT_MAX * PC_CAMERA_FOOTPRINT_MAX];
+        int np = footprint(f, &fp, xs, ys, d);
+        assert_true(np >= 1);
+        for (int i = 0; i < np; i++) {
+          fp.pixel_x = xs[i], fp.pixel_y = ys[i], fp.density = d[i];
+          check_path(f, &n, &fp, s, pc_lt_pixel_weight(&n, &con, (float)d[i]));
+          f->filtered_pixels++;
+        }
       }
   }
   printf("counts n_lt %.3g n_inner %.3g %s: %d paths (%d from the environment or a directional light, %d from a point or spot,"
-         " %d from a directional light), %d strategy weights checked\n",
+         " %d from a directional light), %d strategy weights checked, %d light-traced pixels of a filter\n",
          n.n_lt, n.n_inner, n.power ? "power" : "balance", f->checked, f->env_checked, f->at_point_checked,
-         f->directional_checked, f->strategies_checked);
+         f->directional_checked, f->strategies_checked, f->filtered_pixels);
   assert_true(f->checked > 50);
 }
 
@@ -427,8 +474,31 @@ static void test_mis_directional(void **state) {
   unload(&f);
 }
 
+/* Under a reconstruction filter each pixel's eye strategies sample the camera ray from its
+ * filter (a density other than 1 in their camera pdf) while light tracing splats over the
+ * filter's footprint: the weights, per pixel, against the brute force with that density; the
+ * eye samples' pixels lie at the film's corner (x, y < 32), where the film cuts the filter. */
+static void test_mis_filtered(void **state) {
+  (void)state;
+  fixture f;
+  load(&f, EXTRA_POINT);
+  assert_true(pc_rfilter_make(&f.scene.camera.filter, PC_RFILTER_GAUSSIAN, 0.5f));
+  run(&f, (pc_mis_counts){1.f, 1.f, false}, 300);
+  assert_true(f.filtered_pixels > 1000);
+  assert_true(pc_rfilter_make(&f.scene.camera.filter, PC_RFILTER_TENT, 0.f));
+  run(&f, (pc_mis_counts){0.37f, 2.f, true}, 300);
+  assert_true(f.filtered_pixels > 300);
+  unload(&f);
+  load_scene(&f, "env-objects", NO_EXTRA);
+  assert_true(pc_rfilter_make(&f.scene.camera.filter, PC_RFILTER_BOX, 1.3f));
+  run(&f, (pc_mis_counts){1.f, 1.f, true}, 800);
+  assert_true(f.filtered_pixels > 150);
+  unload(&f);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_mis_filtered),
       cmocka_unit_test(test_mis_directional),
       cmocka_unit_test(test_mis_environment),
       cmocka_unit_test(test_mis_balance),

@@ -545,7 +545,9 @@ static const bad_case warn_cases[] = {
     {"\n<integrator type=\"volpath\"/>" SENSOR, 3, "integrator 'volpath': not a pcbpt method"},
     {"<integrator type=\"path\">\n<sampler type=\"independent\"/></integrator>" SENSOR, 3, "nested <sampler>"},
     {"<integrator type=\"path\" id=\"i\"/>" SENSOR, 2, "id ignored"},
-    {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"/></film></sensor>", 3, "box filter"},
+    {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<rfilter type=\"mitchell\"/></film></sensor>", 3, "negative lobes is not modelled"},
+    {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"><float name=\"radius\" value=\"3\"/></rfilter></film></sensor>", 3, "radius 4 stddev"},
+    {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\"><rfilter type=\"tent\"/>\n<boolean name=\"highQualityEdges\" value=\"true\"/></film></sensor>", 2, "highQualityEdges"},
     {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<rfilter type=\"tent\"><float name=\"radius\" value=\"2\"/></rfilter></film></sensor>", 3, "radius"},
     {"<sensor type=\"perspective\">" FOV "\n<film type=\"ldrfilm\"/></sensor>", 3, "ldrfilm"},
     {"<sensor type=\"perspective\">" FOV "<film type=\"hdrfilm\">\n<string name=\"pixelFormat\" value=\"rgb\"/></film></sensor>", 3, "pixelFormat"},
@@ -615,7 +617,7 @@ static void test_warnings(void **state) {
   pc_err e = {0};
   int rc = load_body_opts(&t,
                           "<sensor type=\"perspective\">" FOV "<sampler type=\"independent\"><integer name=\"sampleCount\" value=\"7\"/>"
-                          "</sampler><film type=\"hdrfilm\"><boolean name=\"banner\" value=\"false\"/><rfilter type=\"gaussian\"/>"
+                          "</sampler><film type=\"hdrfilm\"><boolean name=\"banner\" value=\"false\"/><rfilter type=\"lanczos\"/>"
                           "</film></sensor>\n<shape type=\"cube\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
                           "<float name=\"samplingWeight\" value=\"3\"/></emitter></shape>"
                           "<emitter type=\"constant\"><float name=\"samplingWeight\" value=\"0.5\"/></emitter>",

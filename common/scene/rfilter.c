@@ -1,0 +1,83 @@
+/* rfilter.c: Mitsuba's reconstruction filters as tabulated steps, their integral over the film
+ * and sampling from it (rfilter.h). The tables are made as Mitsuba's ReconstructionFilter::
+ * configure makes them, in floats, so that a pixel weighs its samples as Mitsuba's does. */
+#include "rfilter.h"
+
+static float filter_eval(pc_rfilter_type type, float radius, float param, float x) {
+  switch (type) {
+  case PC_RFILTER_BOX: return fabsf(x) <= radius ? 1.f : 0.f;
+  case PC_RFILTER_TENT: return fmaxf(0.f, 1.f - fabsf(x / radius));
+  case PC_RFILTER_GAUSSIAN: {
+    float alpha = -1.f / (2.f * param * param);
+    return fmaxf(0.f, expf(alpha * x * x) - expf(alpha * radius * radius));
+  }
+  }
+  return 0.f;
+}
+
+/* Step k of the 2 PC_RFILTER_STEPS steps across [-radius, radius]. */
+static float step_value(const pc_rfilter *f, int k) {
+  return f->value[k < PC_RFILTER_STEPS ? PC_RFILTER_STEPS - 1 - k : k - PC_RFILTER_STEPS];
+}
+
+bool pc_rfilter_make(pc_rfilter *f, pc_rfilter_type type, float param) {
+  float radius = type == PC_RFILTER_BOX ? param + 1e-5f : type == PC_RFILTER_TENT ? 1.f : 4.f * param;
+  if (!(radius > 1e-5f) || !(radius <= PC_RFILTER_MAX_RADIUS + 1e-5f)) return false;
+  f->type = type;
+  f->radius = radius;
+  float sum = 0.f;
+  for (int i = 0; i < PC_RFILTER_STEPS; i++) {
+    f->value[i] = filter_eval(type, radius, param, (radius * (float)i) / PC_RFILTER_STEPS);
+    sum += f->value[i];
+  }
+  f->value[PC_RFILTER_STEPS] = 0.f;
+  sum *= 2 * radius / PC_RFILTER_STEPS;
+  if (!(sum > 0.f)) return false;
+  for (int i = 0; i < PC_RFILTER_STEPS; i++) f->value[i] *= 1.f / sum;
+  f->step = radius / PC_RFILTER_STEPS;
+  f->scale = PC_RFILTER_STEPS / radius;
+  double c = 0.0;
+  f->cdf[0] = 0.f;
+  for (int k = 0; k < 2 * PC_RFILTER_STEPS; k++) {
+    c += (double)step_value(f, k) * f->step;
+    f->cdf[k + 1] = (float)c;
+  }
+  return true;
+}
+
+bool pc_rfilter_is_pixel(const pc_rfilter *f) {
+  return f->type == PC_RFILTER_BOX && (f->radius == 0.f || fabsf(f->radius - 0.5f) < 1e-4f);
+}
+
+/* The filter's integral from -radius to t. */
+static float cdf_at(const pc_rfilter *f, float t) {
+  float x = (t + f->radius) / f->step;
+  if (!(x > 0.f)) return 0.f;
+  if (x >= 2 * PC_RFILTER_STEPS) return f->cdf[2 * PC_RFILTER_STEPS];
+  int k = (int)x;
+  return f->cdf[k] + (x - (float)k) * step_value(f, k) * f->step;
+}
+
+float pc_rfilter_mass(const pc_rfilter *f, float c, float extent) {
+  if (c - f->radius >= 0.f && c + f->radius <= extent) return f->cdf[2 * PC_RFILTER_STEPS];
+  return cdf_at(f, extent - c) - cdf_at(f, -c);
+}
+
+float pc_rfilter_sample(const pc_rfilter *f, float c, float extent, float u, float *pdf) {
+  float lo = -c, hi = extent - c;
+  float g0 = cdf_at(f, lo), g1 = cdf_at(f, hi), z = g1 - g0;
+  float t = g0 + u * z;
+  /* the step holding t: the last k with cdf[k] <= t, among the steps of non-zero value */
+  int a = 0, b = 2 * PC_RFILTER_STEPS - 1;
+  while (a < b) {
+    int m = (a + b + 1) / 2;
+    if (f->cdf[m] <= t) a = m;
+    else b = m - 1;
+  }
+  while (a > 0 && !(step_value(f, a) > 0.f)) a--;
+  float v = step_value(f, a);
+  float d = -f->radius + ((float)a + (t - f->cdf[a]) / (v * f->step)) * f->step;
+  d = fminf(fmaxf(d, fmaxf(lo, -f->radius)), fminf(hi, f->radius));
+  *pdf = v / z;
+  return c + d;
+}
