@@ -123,8 +123,9 @@ float pc_camera_pixel_point(const pc_camera *c, int x, int y, float u0, float u1
 
 /* The pixels of one axis whose filter reaches p, and their weights at p. */
 static int footprint_1d(const pc_rfilter *f, float p, int extent, int *first, float *w) {
-  int lo = (int)floorf(p - 0.5f - f->radius), hi = (int)ceilf(p - 0.5f + f->radius);
-  if (lo < 0) lo = 0;
+  /* from the first centre past p - radius to the last before p + radius (one more is 0) */
+  float from = p - 0.5f - f->radius, to = p - 0.5f + f->radius;
+  int lo = from > 0.f ? (int)from : 0, hi = to > 0.f ? (int)to + 1 : 0;
   if (hi > extent - 1) hi = extent - 1;
   if (hi - lo + 1 > PC_CAMERA_FOOTPRINT_MAX) hi = lo + PC_CAMERA_FOOTPRINT_MAX - 1;
   int n = 0;

@@ -15,11 +15,6 @@ static float filter_eval(pc_rfilter_type type, float radius, float param, float 
   return 0.f;
 }
 
-/* Step k of the 2 PC_RFILTER_STEPS steps across [-radius, radius]. */
-static float step_value(const pc_rfilter *f, int k) {
-  return f->value[k < PC_RFILTER_STEPS ? PC_RFILTER_STEPS - 1 - k : k - PC_RFILTER_STEPS];
-}
-
 bool pc_rfilter_make(pc_rfilter *f, pc_rfilter_type type, float param) {
   float radius = type == PC_RFILTER_BOX ? param + 1e-5f : type == PC_RFILTER_TENT ? 1.f : 4.f * param;
   if (!(radius > 1e-5f) || !(radius <= PC_RFILTER_MAX_RADIUS + 1e-5f)) return false;
@@ -39,8 +34,15 @@ bool pc_rfilter_make(pc_rfilter *f, pc_rfilter_type type, float param) {
   double c = 0.0;
   f->cdf[0] = 0.f;
   for (int k = 0; k < 2 * PC_RFILTER_STEPS; k++) {
-    c += (double)step_value(f, k) * f->step;
+    f->across[k] = f->value[k < PC_RFILTER_STEPS ? PC_RFILTER_STEPS - 1 - k : k - PC_RFILTER_STEPS];
+    c += (double)f->across[k] * f->step;
     f->cdf[k + 1] = (float)c;
+    f->inv_width[k] = f->across[k] > 0.f ? 1.f / (f->across[k] * f->step) : 0.f;
+  }
+  for (int g = 0, k = 0; g < 64; g++) {
+    float t = f->cdf[2 * PC_RFILTER_STEPS] * (float)g / 64.f;
+    while (k < 2 * PC_RFILTER_STEPS - 1 && f->cdf[k + 1] <= t) k++;
+    f->guide[g] = (unsigned char)k;
   }
   return true;
 }
@@ -55,28 +57,26 @@ static float cdf_at(const pc_rfilter *f, float t) {
   if (!(x > 0.f)) return 0.f;
   if (x >= 2 * PC_RFILTER_STEPS) return f->cdf[2 * PC_RFILTER_STEPS];
   int k = (int)x;
-  return f->cdf[k] + (x - (float)k) * step_value(f, k) * f->step;
+  return f->cdf[k] + (x - (float)k) * f->across[k] * f->step;
 }
 
-float pc_rfilter_mass(const pc_rfilter *f, float c, float extent) {
-  if (c - f->radius >= 0.f && c + f->radius <= extent) return f->cdf[2 * PC_RFILTER_STEPS];
-  return cdf_at(f, extent - c) - cdf_at(f, -c);
-}
+float pc_rfilter_mass_cut(const pc_rfilter *f, float c, float extent) { return cdf_at(f, extent - c) - cdf_at(f, -c); }
 
 float pc_rfilter_sample(const pc_rfilter *f, float c, float extent, float u, float *pdf) {
-  float lo = -c, hi = extent - c;
-  float g0 = cdf_at(f, lo), g1 = cdf_at(f, hi), z = g1 - g0;
-  float t = g0 + u * z;
-  /* the step holding t: the last k with cdf[k] <= t, among the steps of non-zero value */
-  int a = 0, b = 2 * PC_RFILTER_STEPS - 1;
-  while (a < b) {
-    int m = (a + b + 1) / 2;
-    if (f->cdf[m] <= t) a = m;
-    else b = m - 1;
+  float lo = -c, hi = extent - c, g0 = 0.f, z = f->cdf[2 * PC_RFILTER_STEPS];
+  if (lo > -f->radius || hi < f->radius) { /* the film cuts the filter */
+    g0 = cdf_at(f, lo);
+    z = cdf_at(f, hi) - g0;
   }
-  while (a > 0 && !(step_value(f, a) > 0.f)) a--;
-  float v = step_value(f, a);
-  float d = -f->radius + ((float)a + (t - f->cdf[a]) / (v * f->step)) * f->step;
+  float t = g0 + u * z;
+  /* the step holding t: cdf[a] <= t < cdf[a + 1], so never a step of value 0 */
+  int g = (int)(t * (64.f / f->cdf[2 * PC_RFILTER_STEPS]));
+  int a = f->guide[g < 0 ? 0 : g > 63 ? 63 : g];
+  while (a > 0 && f->cdf[a] > t) a--; /* the guide's index rounded up */
+  while (a < 2 * PC_RFILTER_STEPS - 1 && f->cdf[a + 1] <= t) a++;
+  while (a > 0 && !(f->across[a] > 0.f)) a--; /* t at the very top: the last step of value */
+  float v = f->across[a];
+  float d = -f->radius + ((float)a + (t - f->cdf[a]) * f->inv_width[a]) * f->step;
   d = fminf(fmaxf(d, fmaxf(lo, -f->radius)), fminf(hi, f->radius));
   *pdf = v / z;
   return c + d;

@@ -25,7 +25,11 @@ typedef struct pc_rfilter {
   float step;                           /* radius / PC_RFILTER_STEPS */
   float scale;                          /* PC_RFILTER_STEPS / radius, as Mitsuba indexes its steps */
   float value[PC_RFILTER_STEPS + 1];    /* the normalized steps, |x| in [i step, (i+1) step); last 0 */
-  float cdf[2 * PC_RFILTER_STEPS + 1];  /* its integral from -radius to -radius + k step */
+  /* across [-radius, radius]: step k's value, and the integral from -radius to its start */
+  float across[2 * PC_RFILTER_STEPS];
+  float cdf[2 * PC_RFILTER_STEPS + 1];
+  float inv_width[2 * PC_RFILTER_STEPS]; /* 1 / (step k's value * step) */
+  unsigned char guide[64]; /* the step holding cdf total * g / 64: where the search starts */
 } pc_rfilter;
 
 /* Mitsuba's box of `radius` (its 1e-5 margin included), tent (radius 1) or gaussian of standard
@@ -41,8 +45,12 @@ static inline float pc_rfilter_value(const pc_rfilter *f, float d) {
   int i = (int)fabsf(d * f->scale);
   return i < PC_RFILTER_STEPS ? f->value[i] : 0.f;
 }
+float pc_rfilter_mass_cut(const pc_rfilter *f, float c, float extent);
 /* The 1-D weight's integral over the film [0, extent] for the pixel centred at c. */
-float pc_rfilter_mass(const pc_rfilter *f, float c, float extent);
+static inline float pc_rfilter_mass(const pc_rfilter *f, float c, float extent) {
+  if (c - f->radius >= 0.f && c + f->radius <= extent) return f->cdf[2 * PC_RFILTER_STEPS];
+  return pc_rfilter_mass_cut(f, c, extent);
+}
 /* Draws a raster coordinate for the pixel centred at c from its 1-D weight over [0, extent], u in
  * [0, 1); *pdf is that weight at the point (the filter over pc_rfilter_mass). */
 float pc_rfilter_sample(const pc_rfilter *f, float c, float extent, float u, float *pdf);
