@@ -107,7 +107,7 @@ print("captured %d bytes in %d streams (%d upload frames of %s bytes); bundle %d
 sys.exit(1 if found else 0)
 PY
 python3 - "$PORT" "$T/cap" "$S/proto/wire_frame.h" "$T/tok" "$B" "$T" <<'PY' || fail "replay / version checks"
-import glob, hashlib, re, socket, struct, subprocess, sys, threading
+import glob, hashlib, re, socket, struct, subprocess, sys, threading, time
 port, cap, hdr, tokf, bindir, tmp = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6]
 version = int(re.search(r"PC_WIRE_PROTOCOL_VERSION (\d+)u", open(hdr).read()).group(1))
 # the handshake as auth.c computes it, so this script can also be an honest client
@@ -198,6 +198,9 @@ with open(tmp + "/wimpostor.log", "w") as log:
                         "wimpostor", "--cache-dir", tmp + "/cache-wimpostor"], stdout=log, stderr=log, timeout=30)
 assert r.returncode != 0 and "holds a different token" in open(tmp + "/wimpostor.log").read(), \
     "worker took a replayed challenge (exit %d)" % r.returncode
+# the impostor's thread records a connection's end after the process has exited: wait for it
+deadline = time.time() + 10
+while len(after_hello) < 2 and time.time() < deadline: time.sleep(0.01)
 assert after_hello == [None, None], "a peer answered a replayed challenge: %r" % after_hello
 
 # 4. a hello of the previous version (whose frames travel in the clear) is refused with the
