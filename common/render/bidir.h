@@ -43,9 +43,10 @@ typedef struct pc_connection {
   vec3 f;          /* unweighted contribution (path throughput / pdf) */
   float weight;    /* MIS weight of strategy (s,t) */
   float px, py;    /* t = 1: raster position of the splat */
-  /* t = 1, weighted: weight = mis_own / (mis_own + mis_eye), mis_eye the sum over the eye
-   * strategies, all of which scale with the camera's pdf: under a filter, pixel j's weight has
-   * mis_eye times pc_mis(its filter density at px, py). */
+  /* weighted: weight = mis_own / (mis_own + the two sides' sums); mis_eye is the light side's.
+   * At the camera (t = 1) that is every strategy with more eye vertices, all of which sample
+   * the camera ray: under a filter, pixel j's weight has mis_eye times pc_mis(its filter
+   * density at px, py) (pc_lt_pixel_weight). */
   float mis_own, mis_eye;
 } pc_connection;
 

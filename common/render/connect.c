@@ -20,12 +20,16 @@ void pc_film_queue_add_strategy(pc_film_queue *q, int strategy_layers, int layer
   }
 }
 
-/* Weight of strategy (s,t) given the sums of the strategies on the light side (sl) and on the
- * eye side (se) of its connection, each relative to its pdf. */
-static float weight_of(const pc_mis_counts *n, int s, int t, float sl, float se) {
-  float own = pc_mis(n, pc_mis_count(n, s, t));
+/* Weight of a strategy whose own term is `own` (its count under the heuristic) given the sums of
+ * the strategies on the light side (sl) and on the eye side (se) of its connection, each
+ * relative to its pdf. */
+static float weight_of(float own, float sl, float se) {
   float w = own / (own + sl + se);
   return w > 0.f && w <= 1.f ? w : 0.f; /* sl or se overflowed to Inf (or NaN): weight 0 */
+}
+
+float pc_lt_pixel_weight(const pc_mis_counts *n, const pc_connection *k, float density) {
+  return weight_of(k->mis_own, pc_mis(n, density) * k->mis_eye, 0.f);
 }
 
 void pc_connect_nee(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, const pc_path_vertex *ev, int x, int y) {
@@ -52,7 +56,7 @@ float pc_mis_weight_hit(const pc_scene *s, const pc_mis_counts *n, const pc_path
   }
   int t = v->depth;
   float se = pc_mis_side(n, v, p_area, pdf_emit, pc_mis_count(n, 1, t - 1));
-  return weight_of(n, 0, t, 0.f, se);
+  return weight_of(pc_mis(n, pc_mis_count(n, 0, t)), 0.f, se);
 }
 
 bool pc_connect(pc_tctx *c, const pc_mis_counts *n, const pc_path_vertex *lv, const pc_path_vertex *ev, bool weighted,
@@ -146,12 +150,11 @@ bool pc_connect_unoccluded(pc_tctx *c, const pc_mis_counts *n, const pc_path_ver
      * with more: lv would sample ev. */
     float sum_l = pc_mis_side(n, lv, pdf_e_fwd * cos_l / d2, pdf_l_rev, pc_mis_count(n, sl - 1, tl + 1));
     float sum_e = pc_mis_side(n, ev, pdf_l_fwd * cos_e / d2, pdf_e_rev, pc_mis_count(n, sl + 1, tl - 1));
-    weight = weight_of(n, sl, tl, sum_l, sum_e);
+    float own = pc_mis(n, pc_mis_count(n, sl, tl));
+    weight = weight_of(own, sum_l, sum_e);
     if (weight == 0.f) return false;
-    if (tl == 1) {
-      out->mis_own = pc_mis(n, pc_mis_count(n, sl, tl));
-      out->mis_eye = sum_l; /* sum_e is 0: the pinhole cannot be hit */
-    }
+    out->mis_own = own;
+    out->mis_eye = sum_l; /* at the camera (t = 1) sum_e is 0: the pinhole cannot be hit */
   }
   out->f = f;
   out->weight = weight;

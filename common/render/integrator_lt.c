@@ -6,11 +6,6 @@
  * light-traced paths have weight 1. BDPT uses the same splats with its full MIS weights. */
 #include "bidir.h"
 
-float pc_lt_pixel_weight(const pc_mis_counts *n, const pc_connection *k, float density) {
-  float w = k->mis_own / (k->mis_own + pc_mis(n, density) * k->mis_eye);
-  return w > 0.f && w <= 1.f ? w : 0.f;
-}
-
 /* A connection to the camera added to every pixel whose filter reaches its raster point: each
  * pixel's measurement is its filter density there times the pixel box's, and its eye strategies'
  * pdfs scale the same way (pc_camera_pixel_point), so their share of the MIS weight does. */
@@ -22,9 +17,7 @@ static void splat_filtered(pc_tctx *c, const pc_connection *k, bool weighted, in
   /* A footprint's pixels lie in a few short rows, so they go straight into the thread's splat
    * film (the rows fetched first) rather than through the queue, which pays for scattered adds. */
   pc_film *film = c->splat->film;
-  int layers[2] = {PC_LAYER_LT, -1}, nl = 1;
-  if (c->set->strategy_layers > 0 && s <= c->set->strategy_layers && (layers[1] = pc_film_strategy_layer(film, s, 1)) >= 0)
-    nl = 2;
+  int layers[2] = {PC_LAYER_LT, pc_film_strategy_layer(film, s, 1)}, nl = layers[1] >= 0 ? 2 : 1;
   for (int l = 0; l < nl; l++)
     for (int j = 0; j < ny; j++) {
       const double *row = film->layers[layers[l]].sum + 3 * ((size_t)(y0 + j) * film->w + x0);

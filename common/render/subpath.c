@@ -227,8 +227,7 @@ int pc_eye_subpath(pc_tctx *c, const pc_mis_counts *n, pc_rng *rng, int x, int y
   v0->mis_near = v0->mis_far = 0.f;
   /* This pixel's eye strategies sample the direction with its filter's density (1 for the
    * pixel box); light tracing does not, which the MIS weights see through this pdf. */
-  float pdf = pc_camera_dir_pdf(cam, d);
-  if (density != 1.f) pdf *= density;
+  float pdf = pc_camera_dir_pdf(cam, d) * density;
   if (!(pdf > 0.f) || !isfinite(pdf)) return 1;
   /* The pinhole cannot be hit: cos_out 0. */
   return walk(c, n, rng, v, 1, max_vertices, false, d, v3s(1.f), pdf, 0.f, false, 0.f, hit, user);

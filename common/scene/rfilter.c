@@ -15,35 +15,35 @@ static float filter_eval(pc_rfilter_type type, float radius, float param, float 
   return 0.f;
 }
 
-bool pc_rfilter_make(pc_rfilter *f, pc_rfilter_type type, float param) {
+bool pc_rfilter_make(pc_rfilter *out, pc_rfilter_type type, float param) {
+  pc_rfilter made, *f = &made; /* out changes only on success */
   float radius = type == PC_RFILTER_BOX ? param + 1e-5f : type == PC_RFILTER_TENT ? 1.f : 4.f * param;
   if (!(radius > 1e-5f) || !(radius <= PC_RFILTER_MAX_RADIUS + 1e-5f)) return false;
   f->type = type;
   f->radius = radius;
-  float sum = 0.f;
+  float value[PC_RFILTER_STEPS], sum = 0.f; /* Mitsuba's m_values: |x| in [i step, (i + 1) step) */
   for (int i = 0; i < PC_RFILTER_STEPS; i++) {
-    f->value[i] = filter_eval(type, radius, param, (radius * (float)i) / PC_RFILTER_STEPS);
-    sum += f->value[i];
+    value[i] = filter_eval(type, radius, param, (radius * (float)i) / PC_RFILTER_STEPS);
+    if (!(value[i] > 0.f)) return false;
+    sum += value[i];
   }
-  f->value[PC_RFILTER_STEPS] = 0.f;
   sum *= 2 * radius / PC_RFILTER_STEPS;
-  if (!(sum > 0.f)) return false;
-  for (int i = 0; i < PC_RFILTER_STEPS; i++) f->value[i] *= 1.f / sum;
   f->step = radius / PC_RFILTER_STEPS;
   f->scale = PC_RFILTER_STEPS / radius;
   double c = 0.0;
   f->cdf[0] = 0.f;
   for (int k = 0; k < 2 * PC_RFILTER_STEPS; k++) {
-    f->across[k] = f->value[k < PC_RFILTER_STEPS ? PC_RFILTER_STEPS - 1 - k : k - PC_RFILTER_STEPS];
+    f->across[k] = value[k < PC_RFILTER_STEPS ? PC_RFILTER_STEPS - 1 - k : k - PC_RFILTER_STEPS] * (1.f / sum);
     c += (double)f->across[k] * f->step;
     f->cdf[k + 1] = (float)c;
-    f->inv_width[k] = f->across[k] > 0.f ? 1.f / (f->across[k] * f->step) : 0.f;
+    f->inv_width[k] = 1.f / (f->across[k] * f->step);
   }
   for (int g = 0, k = 0; g < 64; g++) {
     float t = f->cdf[2 * PC_RFILTER_STEPS] * (float)g / 64.f;
     while (k < 2 * PC_RFILTER_STEPS - 1 && f->cdf[k + 1] <= t) k++;
     f->guide[g] = (unsigned char)k;
   }
+  *out = made;
   return true;
 }
 
@@ -69,12 +69,11 @@ float pc_rfilter_sample(const pc_rfilter *f, float c, float extent, float u, flo
     z = cdf_at(f, hi) - g0;
   }
   float t = g0 + u * z;
-  /* the step holding t: cdf[a] <= t < cdf[a + 1], so never a step of value 0 */
+  /* the step holding t: cdf[a] <= t < cdf[a + 1] (the last one for t at the very top) */
   int g = (int)(t * (64.f / f->cdf[2 * PC_RFILTER_STEPS]));
   int a = f->guide[g < 0 ? 0 : g > 63 ? 63 : g];
   while (a > 0 && f->cdf[a] > t) a--; /* the guide's index rounded up */
   while (a < 2 * PC_RFILTER_STEPS - 1 && f->cdf[a + 1] <= t) a++;
-  while (a > 0 && !(f->across[a] > 0.f)) a--; /* t at the very top: the last step of value */
   float v = f->across[a];
   float d = -f->radius + ((float)a + (t - f->cdf[a]) * f->inv_width[a]) * f->step;
   d = fminf(fmaxf(d, fmaxf(lo, -f->radius)), fminf(hi, f->radius));

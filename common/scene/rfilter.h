@@ -24,17 +24,17 @@ typedef struct pc_rfilter {
   float radius;                         /* in pixels */
   float step;                           /* radius / PC_RFILTER_STEPS */
   float scale;                          /* PC_RFILTER_STEPS / radius, as Mitsuba indexes its steps */
-  float value[PC_RFILTER_STEPS + 1];    /* the normalized steps, |x| in [i step, (i+1) step); last 0 */
-  /* across [-radius, radius]: step k's value, and the integral from -radius to its start */
+  /* the normalized steps across [-radius, radius] (step k covers [-radius + k step, + step),
+   * every one > 0), the integral from -radius to each step's start, and 1 / (value * step) */
   float across[2 * PC_RFILTER_STEPS];
   float cdf[2 * PC_RFILTER_STEPS + 1];
-  float inv_width[2 * PC_RFILTER_STEPS]; /* 1 / (step k's value * step) */
+  float inv_width[2 * PC_RFILTER_STEPS];
   unsigned char guide[64]; /* the step holding cdf total * g / 64: where the search starts */
 } pc_rfilter;
 
 /* Mitsuba's box of `radius` (its 1e-5 margin included), tent (radius 1) or gaussian of standard
  * deviation `param` (radius 4 stddev); param is ignored by the tent. Returns false for a radius
- * outside (0, PC_RFILTER_MAX_RADIUS]. */
+ * outside (0, PC_RFILTER_MAX_RADIUS] (or a step of value 0, which these filters never have). */
 bool pc_rfilter_make(pc_rfilter *f, pc_rfilter_type type, float param);
 /* Whether f is the pixel box (Mitsuba's box of radius 1/2, or a zeroed pc_rfilter), so that a
  * sample's pixel is the one it lies in. */
@@ -42,8 +42,8 @@ bool pc_rfilter_is_pixel(const pc_rfilter *f);
 
 /* The 1-D filter at offset d from a pixel centre (not normalized to the film). */
 static inline float pc_rfilter_value(const pc_rfilter *f, float d) {
-  int i = (int)fabsf(d * f->scale);
-  return i < PC_RFILTER_STEPS ? f->value[i] : 0.f;
+  int i = (int)fabsf(d * f->scale); /* Mitsuba's index of |d|'s step */
+  return i < PC_RFILTER_STEPS ? f->across[PC_RFILTER_STEPS + i] : 0.f;
 }
 float pc_rfilter_mass_cut(const pc_rfilter *f, float c, float extent);
 /* The 1-D weight's integral over the film [0, extent] for the pixel centred at c. */

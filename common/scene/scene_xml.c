@@ -138,24 +138,23 @@ static int rfilter(pc_sx *c, const pc_xml_node *n, pc_rfilter *out) {
   char what[PC_SX_WHAT_MAX];
   snprintf(what, sizeof what, "rfilter '%.60s'", ft);
   pc_rfilter_type type;
-  float param = 0.f;
+  float param = 0.5f; /* the box's radius, the gaussian's stddev */
   pc_param p[] = {{"radius", PC_P_FLOAT, &param, 0, 0}, {"stddev", PC_P_FLOAT, &param, 0, 0},
                   {"*", PC_P_IGNORED, "Mitsuba's filter does not read it", 0, 0}};
   if (strcmp(ft, "box") == 0) {
-    type = PC_RFILTER_BOX, param = 0.5f;
-    p[1].kind = PC_P_IGNORED, p[1].out = (void *)"Mitsuba's box does not read it";
+    type = PC_RFILTER_BOX;
+    p[1] = (pc_param){"stddev", PC_P_IGNORED, "Mitsuba's box does not read it", 0, 0};
   } else if (strcmp(ft, "tent") == 0) {
     type = PC_RFILTER_TENT;
-    p[0].kind = p[1].kind = PC_P_IGNORED;
-    p[0].out = p[1].out = (void *)"Mitsuba's tent has radius 1 whatever it says";
+    p[0] = (pc_param){"radius", PC_P_IGNORED, "Mitsuba's tent has radius 1 whatever it says", 0, 0};
+    p[1] = (pc_param){"stddev", PC_P_IGNORED, "Mitsuba's tent does not read it", 0, 0};
   } else if (strcmp(ft, "gaussian") == 0) {
-    type = PC_RFILTER_GAUSSIAN, param = 0.5f;
-    p[0].kind = PC_P_IGNORED, p[0].out = (void *)"Mitsuba's gaussian has radius 4 stddev";
+    type = PC_RFILTER_GAUSSIAN;
+    p[0] = (pc_param){"radius", PC_P_IGNORED, "Mitsuba's gaussian has radius 4 stddev", 0, 0};
   } else {
     if ((rc = pc_sx_warn(c, n, "%s: a filter with negative lobes is not modelled: each pixel is a box", what))) return rc;
-    p[0].kind = p[1].kind = PC_P_IGNORED;
-    p[0].out = p[1].out = p[2].out = (void *)"the filter is not modelled";
-    return only_params(c, n, what, p, 3);
+    p[0] = (pc_param){"*", PC_P_IGNORED, "the filter is not modelled", 0, 0};
+    return only_params(c, n, what, p, 1);
   }
   if ((rc = only_params(c, n, what, p, 3))) return rc;
   if (!pc_rfilter_make(out, type, param))
