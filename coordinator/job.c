@@ -703,7 +703,7 @@ int pc_job_activate(pc_coord *c, pc_job *j, pc_err *e) {
   pc_job_path(c, j, NULL, dir, sizeof dir);
   if (mkdir(dir, 0700) != 0 && errno != EEXIST) return pc_errf(e, PC_EIO, "%s: %s", dir, strerror(errno));
   remove_stale_ckpts(c, j, dir);
-  int rc = pc_film_init(&j->film, j->set.width, j->set.height, j->set.strategy_layers, e);
+  int rc = pc_film_init_threads(&j->film, j->set.width, j->set.height, j->set.strategy_layers, 0, e);
   if (rc) return rc;
   if (j->ckpt_gen) {
     char path[600], leaf[40];

@@ -5,7 +5,6 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -24,12 +23,6 @@ void *pc_big_alloc(size_t n) {
      * buffer is the same in small pages, so a refusal changes nothing here. */
   }
 #endif
-  return p;
-}
-
-void *pc_big_zalloc(size_t n) {
-  void *p = pc_big_alloc(n);
-  if (p) memset(p, 0, n);
   return p;
 }
 

@@ -18,9 +18,6 @@
  * huge pages when that is at least 2 MiB; otherwise plain malloc (n == 0 included: a pointer
  * to free like any other). NULL only when out of memory. Free with free(). */
 void *pc_big_alloc(size_t n);
-/* pc_big_alloc, zeroed, with every page already mapped (so that the first writes do not fault
- * page by page). */
-void *pc_big_zalloc(size_t n);
 
 /* The memory this process can ever have: the machine's RAM, or its cgroup's limit (v2's
  * memory.max) where that is lower; 0 when neither can be read. What a render's films need is

@@ -40,8 +40,7 @@ static void drain(pc_pool *p, int thread) {
 
 static void *worker_main(void *v) {
   worker_arg wa = *(worker_arg *)v;
-  free(v);
-  pc_thread_set_name("pc-render");
+  free(v); /* named as the thread that made the pool: a renderer's, or a coordinator's loop */
   pc_pool *p = wa.p;
   uint64_t seen = 0;
   pthread_mutex_lock(&p->mu);

@@ -9,7 +9,7 @@
 typedef struct pc_pool pc_pool;
 typedef void (*pc_pool_fn)(void *arg, int thread, int item);
 
-/* nthreads >= 1 (including the caller). */
+/* nthreads >= 1 (including the caller). The threads take the calling thread's name. */
 int pc_pool_create(int nthreads, pc_pool **out, pc_err *e);
 void pc_pool_destroy(pc_pool *p);
 int pc_pool_size(const pc_pool *p);

@@ -3,33 +3,44 @@
  * RGB channel triplets (HALF, FLOAT or UINT) and simple header attributes. */
 #include "image_internal.h"
 
+#include "thread_pool.h"
+
 #include <OpenEXR/openexr.h>
+#include <pthread.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-/* Where the library's error callback leaves the first (most specific) message. */
+/* Where the library's error callback leaves the first (most specific) message; a write's
+ * chunks are encoded on several threads, any of which may fail. */
 typedef struct exr_msg {
+  pthread_mutex_t mu;
   int have;
   char text[256];
 } exr_msg;
+#define EXR_MSG_INIT {.mu = PTHREAD_MUTEX_INITIALIZER}
 
 static void on_exr_error(exr_const_context_t ctxt, exr_result_t code, const char *msg) {
   (void)code;
   void *ud = NULL;
   if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud) return;
   exr_msg *m = ud;
+  pthread_mutex_lock(&m->mu);
   if (!m->have) {
     snprintf(m->text, sizeof m->text, "%s", msg ? msg : "");
     m->have = 1;
   }
+  pthread_mutex_unlock(&m->mu);
 }
 
-static int exr_fail(pc_err *e, const char *path, const char *what, exr_result_t rv,
-                    const exr_msg *m) {
-  return pc_errf(e, rv == EXR_ERR_FILE_ACCESS ? PC_EIO : PC_EEXR, "%s: %s: %s", path, what,
-                 m->have ? m->text : exr_get_default_error_message(rv));
+static int exr_fail(pc_err *e, const char *path, const char *what, exr_result_t rv, exr_msg *m) {
+  pthread_mutex_lock(&m->mu);
+  int rc = pc_errf(e, rv == EXR_ERR_FILE_ACCESS ? PC_EIO : PC_EEXR, "%s: %s: %s", path, what,
+                   m->have ? m->text : exr_get_default_error_message(rv));
+  pthread_mutex_unlock(&m->mu);
+  return rc;
 }
 
 static exr_context_initializer_t exr_init(exr_msg *m) {
@@ -73,6 +84,121 @@ static int check_layers(const char *path, const char *const *names, int nlayers,
   return PC_OK;
 }
 
+/* The pixels are encoded a chunk at a time on every core (at most ENCODE_THREADS_MAX): filling
+ * a chunk's rows from the caller's data and compressing them are independent between chunks,
+ * and only the writes must follow the file's increasing line order, which each chunk's write
+ * waits its turn for. The farm's final image is written while the render waits for it: a
+ * 512x512 film's took 0.18 s on one thread. */
+#define ENCODE_THREADS_MAX 16
+
+/* One thread's band of rows and its encode pipeline. */
+typedef struct exr_writer {
+  float *rows;
+  float **bands;
+  exr_encode_pipeline_t enc;
+  int inited;
+  exr_result_t (*write_chunk)(exr_encode_pipeline_t *); /* the library's own write */
+} exr_writer;
+
+typedef struct encode_job {
+  exr_context_t ctx;
+  int part;
+  const char *path;
+  int w, h, lines, nch, nlayers;
+  const out_channel *ch;
+  pc_exr_rows_fn fill;
+  void *user;
+  exr_msg *m;
+  exr_writer *writers;
+  pthread_mutex_t mu;
+  pthread_cond_t turn;
+  int next; /* the chunk whose write is due */
+  int rc;   /* the first failure, which ends every chunk's work and every wait */
+  pc_err err;
+} encode_job;
+
+static void job_fail(encode_job *j, int rc, const pc_err *e) {
+  pthread_mutex_lock(&j->mu);
+  if (j->rc == PC_OK) {
+    j->rc = rc;
+    j->err = *e;
+  }
+  pthread_cond_broadcast(&j->turn);
+  pthread_mutex_unlock(&j->mu);
+}
+
+static exr_result_t no_yield(exr_encode_pipeline_t *enc) {
+  (void)enc;
+  return EXR_ERR_SUCCESS;
+}
+
+/* The library's write of this chunk once every earlier chunk is written. */
+static exr_result_t ordered_write(exr_encode_pipeline_t *enc) {
+  encode_job *j = enc->encoding_user_data;
+  exr_writer *wr = NULL;
+  for (int t = 0; !wr; t++)
+    if (&j->writers[t].enc == enc) wr = &j->writers[t];
+  pthread_mutex_lock(&j->mu);
+  while (j->next != enc->chunk.idx && j->rc == PC_OK) pthread_cond_wait(&j->turn, &j->mu);
+  bool failed = j->rc != PC_OK;
+  pthread_mutex_unlock(&j->mu);
+  if (failed) return EXR_ERR_INCORRECT_CHUNK; /* another chunk failed: the file is abandoned */
+  exr_result_t rv = wr->write_chunk(enc);
+  pthread_mutex_lock(&j->mu);
+  j->next++;
+  pthread_cond_broadcast(&j->turn);
+  pthread_mutex_unlock(&j->mu);
+  return rv;
+}
+
+static void encode_chunk(void *arg, int thread, int chunk) {
+  encode_job *j = arg;
+  exr_writer *wr = &j->writers[thread];
+  pthread_mutex_lock(&j->mu);
+  bool failed = j->rc != PC_OK;
+  pthread_mutex_unlock(&j->mu);
+  if (failed) return;
+  int y = chunk * j->lines;
+  pc_err e = {0};
+  exr_chunk_info_t ci;
+  exr_result_t rv = exr_write_scanline_chunk_info(j->ctx, j->part, y, &ci);
+  if (!rv) rv = wr->inited ? exr_encoding_update(j->ctx, j->part, &ci, &wr->enc) : exr_encoding_initialize(j->ctx, j->part, &ci, &wr->enc);
+  if (rv) {
+    job_fail(j, exr_fail(&e, j->path, "cannot write pixels", rv, j->m), &e);
+    return;
+  }
+  wr->inited = 1;
+  int rc = j->fill(j->user, y, j->h - y < j->lines ? j->h - y : j->lines, wr->bands, &e);
+  if (rc != PC_OK) {
+    job_fail(j, rc, &e);
+    return;
+  }
+  for (int c = 0; c < wr->enc.channel_count; c++) {
+    exr_coding_channel_info_t *ec = &wr->enc.channels[c];
+    const float *src = NULL;
+    for (int k = 0; k < j->nch && !src; k++)
+      if (strcmp(ec->channel_name, j->ch[k].name) == 0) src = wr->bands[j->ch[k].layer] + j->ch[k].comp;
+    if (!src) {
+      job_fail(j, pc_errf(&e, PC_EEXR, "%s: OpenEXR lost channel '%s'", j->path, ec->channel_name), &e);
+      return;
+    }
+    ec->encode_from_ptr = (const uint8_t *)src;
+    ec->user_pixel_stride = 3 * sizeof(float);
+    ec->user_line_stride = 3 * sizeof(float) * j->w;
+    ec->user_data_type = EXR_PIXEL_FLOAT;
+    ec->user_bytes_per_element = sizeof(float);
+  }
+  rv = exr_encoding_choose_default_routines(j->ctx, j->part, &wr->enc);
+  if (!rv) {
+    wr->write_chunk = wr->enc.write_fn;
+    wr->enc.write_fn = ordered_write;
+    wr->enc.yield_until_ready_fn = no_yield;
+    wr->enc.encoding_user_data = j;
+    rv = exr_encoding_run(j->ctx, j->part, &wr->enc);
+  }
+  if (rv) job_fail(j, exr_fail(&e, j->path, "cannot write pixels", rv, j->m), &e);
+}
+
 /* Header and pixels into an open write context, the pixels asked of fill a chunk's band of
  * rows at a time; the caller finishes it. */
 static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_channel *ch, int nch, int nlayers,
@@ -114,54 +240,53 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
   rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
   if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
   if (lines > h) lines = h; /* a short image's one chunk */
+  int nchunks = (h + lines - 1) / lines, threads = pc_cpu_count();
+  if (threads > ENCODE_THREADS_MAX) threads = ENCODE_THREADS_MAX;
+  if (threads > nchunks) threads = nchunks;
+  encode_job j = {.ctx = ctx, .part = part, .path = path, .w = w, .h = h, .lines = lines, .ch = ch, .nch = nch,
+                  .nlayers = nlayers, .fill = fill, .user = user, .m = m};
+  j.writers = calloc((size_t)threads, sizeof *j.writers);
+  if (!j.writers) return pc_errf(e, PC_ENOMEM, "%s: out of memory for the writers", path);
   size_t band = (size_t)lines * (size_t)w * 3;
-  float *rows = malloc(band * (size_t)nlayers * sizeof *rows);
-  float **bands = malloc((size_t)nlayers * sizeof *bands);
-  if (!rows || !bands) {
-    free(rows);
-    free(bands);
-    return pc_errf(e, PC_ENOMEM, "%s: out of memory for %d rows of %d layers", path, lines, nlayers);
+  int rc = PC_OK;
+  for (int t = 0; t < threads && rc == PC_OK; t++) {
+    exr_writer *wr = &j.writers[t];
+    wr->rows = malloc(band * (size_t)nlayers * sizeof *wr->rows);
+    wr->bands = malloc((size_t)nlayers * sizeof *wr->bands);
+    if (!wr->rows || !wr->bands)
+      rc = pc_errf(e, PC_ENOMEM, "%s: out of memory for %d rows of %d layers", path, lines, nlayers);
+    else
+      for (int l = 0; l < nlayers; l++) wr->bands[l] = wr->rows + band * (size_t)l;
   }
-  for (int l = 0; l < nlayers; l++) bands[l] = rows + band * (size_t)l;
-  exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-  int inited = 0, rc = PC_OK;
-  for (int y = 0; y < h && !rv && !rc; y += lines) {
-    exr_chunk_info_t ci;
-    rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
-    if (rv) break;
-    rv = inited ? exr_encoding_update(ctx, part, &ci, &enc)
-                : exr_encoding_initialize(ctx, part, &ci, &enc);
-    if (rv) break;
-    inited = 1;
-    if ((rc = fill(user, y, h - y < lines ? h - y : lines, bands, e)) != PC_OK) break;
-    for (int c = 0; c < enc.channel_count; c++) {
-      exr_coding_channel_info_t *ec = &enc.channels[c];
-      const float *src = NULL;
-      for (int k = 0; k < nch && !src; k++)
-        if (strcmp(ec->channel_name, ch[k].name) == 0) src = bands[ch[k].layer] + ch[k].comp;
-      if (!src) {
-        rc = pc_errf(e, PC_EEXR, "%s: OpenEXR lost channel '%s'", path, ec->channel_name);
-        break;
-      }
-      ec->encode_from_ptr = (const uint8_t *)src;
-      ec->user_pixel_stride = 3 * sizeof(float);
-      ec->user_line_stride = 3 * sizeof(float) * w;
-      ec->user_data_type = EXR_PIXEL_FLOAT;
-      ec->user_bytes_per_element = sizeof(float);
+  pc_pool *pool = NULL;
+  if (rc == PC_OK && pthread_mutex_init(&j.mu, NULL) != 0) rc = pc_errf(e, PC_EIO, "%s: pthread_mutex_init failed", path);
+  else if (rc == PC_OK && pthread_cond_init(&j.turn, NULL) != 0) {
+    pthread_mutex_destroy(&j.mu);
+    rc = pc_errf(e, PC_EIO, "%s: pthread_cond_init failed", path);
+  }
+  if (rc == PC_OK) {
+    /* without the threads, the caller's alone (thread 0 of a pool of one) */
+    if (threads > 1 && pc_pool_create(threads, &pool, NULL) != PC_OK) threads = 1;
+    if (threads > 1) pc_pool_run(pool, nchunks, encode_chunk, &j);
+    else
+      for (int c = 0; c < nchunks; c++) encode_chunk(&j, 0, c);
+    pc_pool_destroy(pool);
+    pthread_cond_destroy(&j.turn);
+    pthread_mutex_destroy(&j.mu);
+    rc = j.rc;
+    if (rc != PC_OK && e) *e = j.err;
+  }
+  for (int t = 0; t < threads; t++) {
+    exr_writer *wr = &j.writers[t];
+    if (wr->inited) {
+      exr_result_t drv = exr_encoding_destroy(ctx, &wr->enc);
+      if (rc == PC_OK && drv) rc = exr_fail(e, path, "cannot write pixels", drv, m);
     }
-    if (rc) break;
-    rv = exr_encoding_choose_default_routines(ctx, part, &enc);
-    if (!rv) rv = exr_encoding_run(ctx, part, &enc);
+    free(wr->rows);
+    free(wr->bands);
   }
-  if (inited) {
-    exr_result_t drv = exr_encoding_destroy(ctx, &enc);
-    if (!rv) rv = drv;
-  }
-  free(rows);
-  free(bands);
-  if (rc) return rc;
-  if (rv) return exr_fail(e, path, "cannot write pixels", rv, m);
-  return PC_OK;
+  free(j.writers);
+  return rc;
 }
 
 int pc_exr_write_rows(const char *path, int w, int h, const char *const *names, int nlayers, pc_exr_rows_fn fill,
@@ -191,7 +316,7 @@ int pc_exr_write_rows(const char *path, int w, int h, const char *const *names, 
   /* EXR stores channel lists sorted by name. */
   qsort(ch, (size_t)nch, sizeof *ch, cmp_channel);
 
-  exr_msg m = {0};
+  exr_msg m = EXR_MSG_INIT;
   exr_context_initializer_t init = exr_init(&m);
   exr_context_t ctx = NULL;
   exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
@@ -501,7 +626,7 @@ done:
 
 static int exr_read(const char *path, int what, pc_exr_file *out, pc_err *e) {
   memset(out, 0, sizeof *out);
-  exr_msg m = {0};
+  exr_msg m = EXR_MSG_INIT;
   exr_context_initializer_t init = exr_init(&m);
   exr_context_t ctx = NULL;
   exr_result_t rv = exr_start_read(&ctx, path, &init);

@@ -4,20 +4,15 @@
 #include "film.h"
 
 #include "big_alloc.h"
+#include "thread_pool.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Zeroed sums whose pages are already written. A fresh calloc is mapped lazily, and the
- * film's first use is a read-modify-write (sum += x): the read maps the shared zero page,
- * then the write takes a second fault that copies it and flushes the TLB of every core the
- * process runs on (an IPI per 4 KiB page). pc_big_zalloc writes every page first, in huge
- * pages where it can. */
-static double *alloc_sums(size_t n) { return pc_big_zalloc(n * sizeof(double)); }
-
-/* A layer whose norm is not in `stored` (PC_FILM_NORM bits) has no storage. */
+/* A layer whose norm is not in `stored` (PC_FILM_NORM bits) has no storage. Its sums are not
+ * zeroed here (pc_film_zero_piece). */
 static int add_layer(pc_film *f, const char *name, pc_norm norm, unsigned stored, pc_err *e) {
   bool sums = stored & PC_FILM_NORM(norm);
   if (f->nlayers >= PC_FILM_MAX_LAYERS)
@@ -26,13 +21,13 @@ static int add_layer(pc_film *f, const char *name, pc_norm norm, unsigned stored
   snprintf(l->name, sizeof l->name, "%.15s", name);
   l->norm = norm;
   l->count = 0;
-  l->sum = sums ? alloc_sums((size_t)f->w * f->h * 3) : NULL;
+  l->sum = sums ? pc_big_alloc((size_t)f->w * f->h * 3 * sizeof(double)) : NULL;
   if (sums && !l->sum) return pc_errf(e, PC_ENOMEM, "film: out of memory for layer '%s' (%dx%d)", name, f->w, f->h);
   f->nlayers++;
   return PC_OK;
 }
 
-int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e) {
+int pc_film_alloc_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e) {
   memset(f, 0, sizeof *f);
   if (w < 1 || h < 1 || w > 16384 || h > 16384)
     return pc_errf(e, PC_EINVAL, "film: size %dx%d out of range 1..16384", w, h);
@@ -57,6 +52,78 @@ int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned s
   if (rc == PC_OK) rc = add_layer(f, "beauty_sq", PC_NORM_SQUARE, stored, e);
   if (rc == PC_OK) rc = add_layer(f, "beauty_max", PC_NORM_MAX, stored, e);
   if (rc != PC_OK) pc_film_free(f);
+  return rc;
+}
+
+/* Pieces of PIECE_DOUBLES sums, a layer's last one shorter; layers without storage have none. */
+#define PIECE_DOUBLES ((size_t)PC_FILM_PIECE_BYTES / sizeof(double))
+static size_t layer_pieces(const pc_film *f) { return ((size_t)f->w * f->h * 3 + PIECE_DOUBLES - 1) / PIECE_DOUBLES; }
+
+int pc_film_pieces(const pc_film *f) {
+  size_t n = 0;
+  for (int i = 0; i < f->nlayers; i++)
+    if (f->layers[i].sum) n += layer_pieces(f);
+  return (int)n;
+}
+
+void pc_film_zero_piece(pc_film *f, int piece) {
+  size_t per = layer_pieces(f), left = (size_t)piece, total = (size_t)f->w * f->h * 3;
+  for (int i = 0; i < f->nlayers; i++) {
+    if (!f->layers[i].sum) continue;
+    if (left < per) {
+      size_t at = left * PIECE_DOUBLES, n = total - at < PIECE_DOUBLES ? total - at : PIECE_DOUBLES;
+      memset(f->layers[i].sum + at, 0, n * sizeof(double));
+      return;
+    }
+    left -= per;
+  }
+}
+
+typedef struct zero_job {
+  pc_film *const *films;
+  const int *first; /* films[k]'s pieces are items first[k] .. first[k + 1] - 1 */
+} zero_job;
+
+static void zero_item(void *arg, int thread, int item) {
+  (void)thread;
+  const zero_job *j = arg;
+  int k = 0;
+  while (item >= j->first[k + 1]) k++;
+  pc_film_zero_piece(j->films[k], item - j->first[k]);
+}
+
+int pc_film_zero_on(pc_pool *pool, pc_film *const *films, int n, pc_err *e) {
+  int *first = malloc(((size_t)n + 1) * sizeof *first);
+  if (!first) return pc_errf(e, PC_ENOMEM, "film: out of memory");
+  first[0] = 0;
+  for (int k = 0; k < n; k++) first[k + 1] = first[k] + pc_film_pieces(films[k]);
+  zero_job j = {films, first};
+  pc_pool_run(pool, first[n], zero_item, &j);
+  free(first);
+  return PC_OK;
+}
+
+int pc_film_init_threads(pc_film *f, int w, int h, int strategy_depth, int threads, pc_err *e) {
+  int rc = pc_film_alloc_stored(f, w, h, strategy_depth, PC_FILM_NORMS_ALL, e);
+  if (rc != PC_OK) return rc;
+  int pieces = pc_film_pieces(f);
+  if (threads <= 0) threads = pc_cpu_count();
+  if (threads > pieces) threads = pieces > 0 ? pieces : 1;
+  pc_pool *pool = NULL;
+  if (threads > 1 && pc_pool_create(threads, &pool, NULL) == PC_OK) {
+    rc = pc_film_zero_on(pool, &f, 1, e);
+    pc_pool_destroy(pool);
+  } else { /* one thread, or no more to be had: the caller's */
+    for (int i = 0; i < pieces; i++) pc_film_zero_piece(f, i);
+  }
+  if (rc != PC_OK) pc_film_free(f);
+  return rc;
+}
+
+int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e) {
+  int rc = pc_film_alloc_stored(f, w, h, strategy_depth, stored, e);
+  if (rc == PC_OK)
+    for (int i = 0, n = pc_film_pieces(f); i < n; i++) pc_film_zero_piece(f, i);
   return rc;
 }
 

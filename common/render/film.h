@@ -65,6 +65,22 @@ int pc_film_init(pc_film *f, int w, int h, int strategy_depth, pc_err *e);
   (PC_FILM_NORM(PC_NORM_EYE) | PC_FILM_NORM(PC_NORM_LIGHT) | PC_FILM_NORM(PC_NORM_SQUARE) |          \
    PC_FILM_NORM(PC_NORM_MAX))
 int pc_film_init_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e);
+/* pc_film_init_stored's layers with their sums not yet zeroed: the caller zeroes every piece
+ * (pc_film_zero_piece) before the film is used, spread over threads where the film is large.
+ * Zeroing is a film's first write to its fresh pages, which the kernel clears and, on the VMs
+ * the farm runs on, the hypervisor backs: about 3 ms per MB (the ~75 MB of a 512x512 worker's
+ * films took 0.22 s on one thread while the other waited). */
+int pc_film_alloc_stored(pc_film *f, int w, int h, int strategy_depth, unsigned stored, pc_err *e);
+/* Pieces of a film's sums, each PC_FILM_PIECE_BYTES or less within one layer. */
+#define PC_FILM_PIECE_BYTES ((size_t)2 << 20)
+int pc_film_pieces(const pc_film *f);
+void pc_film_zero_piece(pc_film *f, int piece);
+/* Zeroes every piece of n films made by pc_film_alloc_stored on a pool's threads. */
+struct pc_pool;
+int pc_film_zero_on(struct pc_pool *pool, pc_film *const *films, int n, pc_err *e);
+/* pc_film_init, zeroed on up to `threads` threads (0: one per core) of a pool made for it: a
+ * coordinator's job film, made while the job's workers wait for their first range. */
+int pc_film_init_threads(pc_film *f, int w, int h, int strategy_depth, int threads, pc_err *e);
 /* The layers pc_film_init makes for a strategy_depth, and how many of them pc_film_init_stored
  * gives storage: the four standard (lt light, the others eye), k + 1 per path length
  * k <= strategy_depth (t = 1 light, the other k eye), beauty_sq and beauty_max. */

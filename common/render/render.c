@@ -199,39 +199,23 @@ size_t pc_renderer_film_bytes(const pc_render_settings *s, int threads) {
                           threads * pc_film_stored_layer_count(s->strategy_layers, SPLAT_NORMS));
 }
 
-typedef struct film_job {
-  pc_renderer *r;
-  int *rc;
-  pc_err *err;
-} film_job;
-
-static void make_film(void *arg, int thread, int item) {
-  (void)thread;
-  film_job *j = arg;
-  const pc_render_settings *s = &j->r->set;
-  pc_film *f = item == 0 ? &j->r->scratch : &j->r->splat[item - 1];
-  unsigned stored = item == 0 ? SCRATCH_NORMS : SPLAT_NORMS;
-  j->rc[item] = pc_film_init_stored(f, s->width, s->height, s->strategy_layers, stored, &j->err[item]);
+int pc_renderer_zero_films(pc_renderer *r, pc_film *const *films, int n, pc_err *e) {
+  return pc_film_zero_on(r->pool, films, n, e);
 }
 
 static int make_films(pc_renderer *r, int threads, pc_err *e) {
-  int *rc = calloc((size_t)threads + 1, sizeof *rc);
-  pc_err *err = calloc((size_t)threads + 1, sizeof *err);
-  if (!rc || !err) {
-    free(rc);
-    free(err);
-    return pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
-  }
-  film_job j = {r, rc, err};
-  pc_pool_run(r->pool, threads + 1, make_film, &j);
-  int bad = -1;
-  for (int i = 0; i <= threads && bad < 0; i++)
-    if (rc[i] != PC_OK) bad = i;
-  int out = bad < 0 ? PC_OK : rc[bad];
-  if (bad >= 0 && e) *e = err[bad];
-  free(rc);
-  free(err);
-  return out;
+  const pc_render_settings *s = &r->set;
+  int rc = pc_film_alloc_stored(&r->scratch, s->width, s->height, s->strategy_layers, SCRATCH_NORMS, e);
+  for (int t = 0; t < threads && rc == PC_OK; t++)
+    rc = pc_film_alloc_stored(&r->splat[t], s->width, s->height, s->strategy_layers, SPLAT_NORMS, e);
+  if (rc != PC_OK) return rc;
+  pc_film **films = malloc(((size_t)threads + 1) * sizeof *films);
+  if (!films) return pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
+  films[0] = &r->scratch;
+  for (int t = 0; t < threads; t++) films[t + 1] = &r->splat[t];
+  rc = pc_renderer_zero_films(r, films, threads + 1, e);
+  free(films);
+  return rc;
 }
 
 int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings, int threads, pc_renderer **out,

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <pthread.h>
 #include <string.h>
 
 #include <cmocka.h>
@@ -214,17 +215,22 @@ static void test_exr_write_errors(void **state) {
   free(a);
 }
 
-/* pc_exr_write_rows asks for every row once, in order, and writes what it is given; a fill
- * that fails ends the write with its error and leaves no file. */
+/* pc_exr_write_rows asks for every row once (bands on several threads at once, in any order)
+ * and writes what it is given; a fill that fails ends the write with its error and leaves no
+ * file. */
 typedef struct band_log {
-  int w, next_row, calls, fail_at;
+  int w, fail_row;
+  pthread_mutex_t mu;
+  int asked[300]; /* times each row was asked for */
 } band_log;
 
 static int fill_pattern(void *user, int y0, int ny, float *const *rows, pc_err *e) {
   band_log *b = user;
-  if (y0 != b->next_row || ny < 1) return pc_errf(e, PC_EINVAL, "band at row %d (%d rows), expected row %d", y0, ny, b->next_row);
-  if (b->calls++ == b->fail_at) return pc_errf(e, PC_EIO, "fill failed on purpose");
-  b->next_row = y0 + ny;
+  if (y0 < 0 || ny < 1 || y0 + ny > 300) return pc_errf(e, PC_EINVAL, "band at row %d (%d rows)", y0, ny);
+  pthread_mutex_lock(&b->mu);
+  for (int y = y0; y < y0 + ny; y++) b->asked[y]++;
+  pthread_mutex_unlock(&b->mu);
+  if (y0 <= b->fail_row && b->fail_row < y0 + ny) return pc_errf(e, PC_EIO, "fill failed on purpose");
   for (int l = 0; l < 2; l++)
     for (int i = 0; i < ny * b->w * 3; i++) rows[l][i] = (float)(l * 1000 + y0 * b->w * 3 + i);
   return PC_OK;
@@ -234,10 +240,10 @@ static void test_exr_write_rows(void **state) {
   enum { W = 7, H = 300 }; /* more rows than any compression's chunk */
   const char *names[] = {"", "other"};
   const char *path = path_in(state, "rows.exr");
-  band_log b = {W, 0, 0, -1};
+  band_log b = {.w = W, .fail_row = -1, .mu = PTHREAD_MUTEX_INITIALIZER};
   pc_err e = {0};
   assert_int_equal(pc_exr_write_rows(path, W, H, names, 2, fill_pattern, &b, NULL, 0, &e), PC_OK);
-  assert_int_equal(b.next_row, H);
+  for (int y = 0; y < H; y++) assert_int_equal(b.asked[y], 1);
   pc_exr_file f;
   assert_int_equal(pc_exr_read_layers(path, &f, &e), PC_OK);
   assert_int_equal(f.nlayers, 2);
@@ -246,7 +252,7 @@ static void test_exr_write_rows(void **state) {
     for (int i = 0; i < W * H * 3; i++) assert_true(f.layers[l].rgb[i] == (float)(k * 1000 + i));
   }
   pc_exr_file_free(&f);
-  band_log bad = {W, 0, 0, 3};
+  band_log bad = {.w = W, .fail_row = 150, .mu = PTHREAD_MUTEX_INITIALIZER};
   assert_int_equal(pc_exr_write_rows(path_in(state, "fail.exr"), W, H, names, 2, fill_pattern, &bad, NULL, 0, &e), PC_EIO);
   assert_non_null(strstr(e.msg, "on purpose"));
   assert_int_equal(access(path_in(state, "fail.exr"), F_OK), -1);
