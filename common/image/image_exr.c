@@ -8,6 +8,7 @@
 #include <OpenEXR/openexr.h>
 #include <pthread.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -135,9 +136,7 @@ static exr_result_t no_yield(exr_encode_pipeline_t *enc) {
 /* The library's write of this chunk once every earlier chunk is written. */
 static exr_result_t ordered_write(exr_encode_pipeline_t *enc) {
   encode_job *j = enc->encoding_user_data;
-  exr_writer *wr = NULL;
-  for (int t = 0; !wr; t++)
-    if (&j->writers[t].enc == enc) wr = &j->writers[t];
+  exr_writer *wr = (exr_writer *)((char *)enc - offsetof(exr_writer, enc));
   pthread_mutex_lock(&j->mu);
   while (j->next != enc->chunk.idx && j->rc == PC_OK) pthread_cond_wait(&j->turn, &j->mu);
   bool failed = j->rc != PC_OK;
@@ -240,16 +239,16 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
   rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
   if (rv || lines < 1) return exr_fail(e, path, "cannot query the chunk size", rv, m);
   if (lines > h) lines = h; /* a short image's one chunk */
-  int nchunks = (h + lines - 1) / lines, threads = pc_cpu_count();
-  if (threads > ENCODE_THREADS_MAX) threads = ENCODE_THREADS_MAX;
-  if (threads > nchunks) threads = nchunks;
+  int nchunks = (h + lines - 1) / lines, nwriters = pc_cpu_count();
+  if (nwriters > ENCODE_THREADS_MAX) nwriters = ENCODE_THREADS_MAX;
+  if (nwriters > nchunks) nwriters = nchunks;
   encode_job j = {.ctx = ctx, .part = part, .path = path, .w = w, .h = h, .lines = lines, .ch = ch, .nch = nch,
                   .nlayers = nlayers, .fill = fill, .user = user, .m = m};
-  j.writers = calloc((size_t)threads, sizeof *j.writers);
+  j.writers = calloc((size_t)nwriters, sizeof *j.writers);
   if (!j.writers) return pc_errf(e, PC_ENOMEM, "%s: out of memory for the writers", path);
   size_t band = (size_t)lines * (size_t)w * 3;
   int rc = PC_OK;
-  for (int t = 0; t < threads && rc == PC_OK; t++) {
+  for (int t = 0; t < nwriters && rc == PC_OK; t++) {
     exr_writer *wr = &j.writers[t];
     wr->rows = malloc(band * (size_t)nlayers * sizeof *wr->rows);
     wr->bands = malloc((size_t)nlayers * sizeof *wr->bands);
@@ -265,9 +264,8 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
     rc = pc_errf(e, PC_EIO, "%s: pthread_cond_init failed", path);
   }
   if (rc == PC_OK) {
-    /* without the threads, the caller's alone (thread 0 of a pool of one) */
-    if (threads > 1 && pc_pool_create(threads, &pool, NULL) != PC_OK) threads = 1;
-    if (threads > 1) pc_pool_run(pool, nchunks, encode_chunk, &j);
+    /* without more threads, the caller's alone (as thread 0) */
+    if (nwriters > 1 && pc_pool_create(nwriters, &pool, NULL) == PC_OK) pc_pool_run(pool, nchunks, encode_chunk, &j);
     else
       for (int c = 0; c < nchunks; c++) encode_chunk(&j, 0, c);
     pc_pool_destroy(pool);
@@ -276,7 +274,7 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
     rc = j.rc;
     if (rc != PC_OK && e) *e = j.err;
   }
-  for (int t = 0; t < threads; t++) {
+  for (int t = 0; t < nwriters; t++) {
     exr_writer *wr = &j.writers[t];
     if (wr->inited) {
       exr_result_t drv = exr_encoding_destroy(ctx, &wr->enc);
