@@ -121,12 +121,9 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     r = &c->kept[c->nkept];
     memset(r, 0, sizeof *r);
     int rc = pc_renderer_create(&c->scene, set, w->threads, &r->rend, e);
-    pc_film *pending = &r->pending;
-    if (!rc && ((rc = pc_film_alloc_stored(pending, set->width, set->height, set->strategy_layers, PC_FILM_NORMS_ALL, e)) != 0 ||
-                (rc = pc_renderer_zero_films(r->rend, &pending, 1, e)) != 0)) {
-      pc_film_free(pending);
+    if (!rc && (rc = pc_film_alloc_stored(&r->pending, set->width, set->height, set->strategy_layers, PC_FILM_NORMS_ALL, e)) != 0)
       pc_renderer_destroy(r->rend);
-    }
+    if (!rc) pc_renderer_zero_film(r->rend, &r->pending);
     if (rc) {
       ctx_free(c, w);
       return rc;

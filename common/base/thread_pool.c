@@ -121,6 +121,19 @@ void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg) {
   pthread_mutex_unlock(&p->mu);
 }
 
+void pc_pool_run_once(int threads, int nitems, pc_pool_fn fn, void *arg) {
+  if (nitems <= 0) return;
+  if (threads <= 0) threads = pc_cpu_count();
+  if (threads > nitems) threads = nitems;
+  pc_pool *p = NULL;
+  if (threads > 1 && pc_pool_create(threads, &p, NULL) == PC_OK) {
+    pc_pool_run(p, nitems, fn, arg);
+    pc_pool_destroy(p);
+    return;
+  }
+  for (int i = 0; i < nitems; i++) fn(arg, 0, i); /* one thread, or no more to be had */
+}
+
 static double clock_seconds(clockid_t id) {
   struct timespec ts;
   if (clock_gettime(id, &ts) != 0) return -1.0;

@@ -15,6 +15,10 @@ void pc_pool_destroy(pc_pool *p);
 int pc_pool_size(const pc_pool *p);
 /* Runs fn(arg, thread, item) for item in [0, nitems) and returns when all are done. */
 void pc_pool_run(pc_pool *p, int nitems, pc_pool_fn fn, void *arg);
+/* pc_pool_run on a pool made for the call, of up to `threads` threads (0: one per core; never
+ * more than nitems), destroyed after; where no other thread can be had, on the caller's alone
+ * (as thread 0). */
+void pc_pool_run_once(int threads, int nitems, pc_pool_fn fn, void *arg);
 /* CPU seconds the pool's threads (the caller as thread 0 when it is the calling thread) have
  * run so far, from the kernel's per-thread clocks: unlike wall time, it does not grow while
  * another process or thread holds the cores. < 0 when a clock cannot be read. */

@@ -257,18 +257,13 @@ static int exr_encode(exr_context_t ctx, const char *path, int w, int h, out_cha
     else
       for (int l = 0; l < nlayers; l++) wr->bands[l] = wr->rows + band * (size_t)l;
   }
-  pc_pool *pool = NULL;
   if (rc == PC_OK && pthread_mutex_init(&j.mu, NULL) != 0) rc = pc_errf(e, PC_EIO, "%s: pthread_mutex_init failed", path);
   else if (rc == PC_OK && pthread_cond_init(&j.turn, NULL) != 0) {
     pthread_mutex_destroy(&j.mu);
     rc = pc_errf(e, PC_EIO, "%s: pthread_cond_init failed", path);
   }
   if (rc == PC_OK) {
-    /* without more threads, the caller's alone (as thread 0) */
-    if (nwriters > 1 && pc_pool_create(nwriters, &pool, NULL) == PC_OK) pc_pool_run(pool, nchunks, encode_chunk, &j);
-    else
-      for (int c = 0; c < nchunks; c++) encode_chunk(&j, 0, c);
-    pc_pool_destroy(pool);
+    pc_pool_run_once(nwriters, nchunks, encode_chunk, &j);
     pthread_cond_destroy(&j.turn);
     pthread_mutex_destroy(&j.mu);
     rc = j.rc;

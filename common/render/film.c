@@ -79,44 +79,16 @@ void pc_film_zero_piece(pc_film *f, int piece) {
   }
 }
 
-typedef struct zero_job {
-  pc_film *const *films;
-  const int *first; /* films[k]'s pieces are items first[k] .. first[k + 1] - 1 */
-} zero_job;
-
-static void zero_item(void *arg, int thread, int item) {
+static void zero_one(void *arg, int thread, int piece) {
   (void)thread;
-  const zero_job *j = arg;
-  int k = 0;
-  while (item >= j->first[k + 1]) k++;
-  pc_film_zero_piece(j->films[k], item - j->first[k]);
+  pc_film_zero_piece(arg, piece);
 }
 
-int pc_film_zero_on(pc_pool *pool, pc_film *const *films, int n, pc_err *e) {
-  int *first = malloc(((size_t)n + 1) * sizeof *first);
-  if (!first) return pc_errf(e, PC_ENOMEM, "film: out of memory");
-  first[0] = 0;
-  for (int k = 0; k < n; k++) first[k + 1] = first[k] + pc_film_pieces(films[k]);
-  zero_job j = {films, first};
-  pc_pool_run(pool, first[n], zero_item, &j);
-  free(first);
-  return PC_OK;
-}
+void pc_film_zero_on(pc_pool *pool, pc_film *f) { pc_pool_run(pool, pc_film_pieces(f), zero_one, f); }
 
 int pc_film_init_threads(pc_film *f, int w, int h, int strategy_depth, int threads, pc_err *e) {
   int rc = pc_film_alloc_stored(f, w, h, strategy_depth, PC_FILM_NORMS_ALL, e);
-  if (rc != PC_OK) return rc;
-  int pieces = pc_film_pieces(f);
-  if (threads <= 0) threads = pc_cpu_count();
-  if (threads > pieces) threads = pieces > 0 ? pieces : 1;
-  pc_pool *pool = NULL;
-  if (threads > 1 && pc_pool_create(threads, &pool, NULL) == PC_OK) {
-    rc = pc_film_zero_on(pool, &f, 1, e);
-    pc_pool_destroy(pool);
-  } else { /* one thread, or no more to be had: the caller's */
-    for (int i = 0; i < pieces; i++) pc_film_zero_piece(f, i);
-  }
-  if (rc != PC_OK) pc_film_free(f);
+  if (rc == PC_OK) pc_pool_run_once(threads, pc_film_pieces(f), zero_one, f);
   return rc;
 }
 

@@ -75,9 +75,9 @@ int pc_film_alloc_stored(pc_film *f, int w, int h, int strategy_depth, unsigned 
 #define PC_FILM_PIECE_BYTES ((size_t)2 << 20)
 int pc_film_pieces(const pc_film *f);
 void pc_film_zero_piece(pc_film *f, int piece);
-/* Zeroes every piece of n films made by pc_film_alloc_stored on a pool's threads. */
+/* Zeroes every piece of a film made by pc_film_alloc_stored on a pool's threads. */
 struct pc_pool;
-int pc_film_zero_on(struct pc_pool *pool, pc_film *const *films, int n, pc_err *e);
+void pc_film_zero_on(struct pc_pool *pool, pc_film *f);
 /* pc_film_init, zeroed on up to `threads` threads (0: one per core) of a pool made for it: a
  * coordinator's job film, made while the job's workers wait for their first range. */
 int pc_film_init_threads(pc_film *f, int w, int h, int strategy_depth, int threads, pc_err *e);

@@ -199,9 +199,7 @@ size_t pc_renderer_film_bytes(const pc_render_settings *s, int threads) {
                           threads * pc_film_stored_layer_count(s->strategy_layers, SPLAT_NORMS));
 }
 
-int pc_renderer_zero_films(pc_renderer *r, pc_film *const *films, int n, pc_err *e) {
-  return pc_film_zero_on(r->pool, films, n, e);
-}
+void pc_renderer_zero_film(pc_renderer *r, pc_film *f) { pc_film_zero_on(r->pool, f); }
 
 static int make_films(pc_renderer *r, int threads, pc_err *e) {
   const pc_render_settings *s = &r->set;
@@ -209,13 +207,9 @@ static int make_films(pc_renderer *r, int threads, pc_err *e) {
   for (int t = 0; t < threads && rc == PC_OK; t++)
     rc = pc_film_alloc_stored(&r->splat[t], s->width, s->height, s->strategy_layers, SPLAT_NORMS, e);
   if (rc != PC_OK) return rc;
-  pc_film **films = malloc(((size_t)threads + 1) * sizeof *films);
-  if (!films) return pc_errf(e, PC_ENOMEM, "out of memory for the renderer");
-  films[0] = &r->scratch;
-  for (int t = 0; t < threads; t++) films[t + 1] = &r->splat[t];
-  rc = pc_renderer_zero_films(r, films, threads + 1, e);
-  free(films);
-  return rc;
+  pc_renderer_zero_film(r, &r->scratch);
+  for (int t = 0; t < threads; t++) pc_renderer_zero_film(r, &r->splat[t]);
+  return PC_OK;
 }
 
 int pc_renderer_create(const pc_scene *scene, const pc_render_settings *settings, int threads, pc_renderer **out,

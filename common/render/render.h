@@ -96,9 +96,9 @@ int pc_renderer_check(const pc_scene *scene, const pc_render_settings *settings,
 /* Bytes of the films a renderer of these settings and threads (0: one per core) holds: its
  * scratch and its per-thread light splats. */
 size_t pc_renderer_film_bytes(const pc_render_settings *settings, int threads);
-/* Zeroes films made by pc_film_alloc_stored on the renderer's threads (a worker's pending film
+/* Zeroes a film made by pc_film_alloc_stored on the renderer's threads (a worker's pending film
  * beside the renderer's own, which pc_renderer_create zeroes so). */
-int pc_renderer_zero_films(pc_renderer *r, pc_film *const *films, int n, pc_err *e);
+void pc_renderer_zero_film(pc_renderer *r, pc_film *f);
 void pc_renderer_destroy(pc_renderer *r);
 int pc_renderer_threads(const pc_renderer *r);
 /* How much of the iteration being rendered is done, in [0, 1) (0 between iterations); safe

@@ -504,8 +504,7 @@ static void test_film_pieces(void **state) {
         memset(f.layers[l].sum, 0xff, n * sizeof(double));
       }
     assert_int_equal(pc_film_pieces(&f), held * (int)per);
-    pc_film *films[] = {&f};
-    assert_int_equal(pc_film_zero_on(pool, films, 1, &e), PC_OK);
+    pc_film_zero_on(pool, &f);
     for (int l = 0; l < f.nlayers; l++)
       for (size_t k = 0; f.layers[l].sum && k < n; k++) assert_true(f.layers[l].sum[k] == 0.0);
     pc_film_free(&f);

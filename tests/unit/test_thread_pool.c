@@ -61,6 +61,22 @@ static void test_every_item_once_on_named_threads(void **state) {
   pc_pool_destroy(p);
 }
 
+/* A pool made for one loop runs every item once on THREADS threads, each taking part (record
+ * waits for all of them), and never more threads than items: with one item, thread 0 alone. */
+static void test_run_once(void **state) {
+  (void)state;
+  static loop_state s;
+  memset(&s, 0, sizeof s);
+  pc_pool_run_once(THREADS, ITEMS, record, &s);
+  for (int i = 0; i < ITEMS; i++) assert_int_equal(atomic_load(&s.runs[i]), 1);
+  for (int t = 0; t < THREADS; t++) assert_true(atomic_load(&s.by_thread[t]) > 0);
+  memset(&s, 0, sizeof s);
+  atomic_store(&s.arrived, THREADS - 1); /* one thread to wait for */
+  pc_pool_run_once(0, 1, record, &s);
+  assert_int_equal(atomic_load(&s.runs[0]), 1);
+  assert_int_equal(atomic_load(&s.by_thread[0]), 1);
+}
+
 static void *name_long(void *arg) {
   char *got = arg;
   pc_thread_set_name("pc-a-name-longer-than-fifteen");
@@ -80,6 +96,7 @@ static void test_long_name_is_cut(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_every_item_once_on_named_threads),
+      cmocka_unit_test(test_run_once),
       cmocka_unit_test(test_long_name_is_cut),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
