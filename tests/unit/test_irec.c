@@ -507,6 +507,46 @@ static bool same_lookup(const pc_irec_lookup *a, const pc_irec_lookup *b) {
   return true;
 }
 
+/* Thousands of scattered queries, most in a cell of their own, so that many cells share a memo
+ * entry; visited three times in three orders, every lookup still equals a cold one (a second
+ * store rebuilt over the same records before each reference lookup, so its memo holds nothing).
+ * test_lookup_is_pure's few hundred queries meet no collision: a memo that checked the build
+ * but not the cell passed it. */
+static void test_lookup_pure_under_collisions(void **state) {
+  (void)state;
+  enum { Q = 4000 };
+  scene a = make_scene(10, 1000, 9);
+  pc_irec_store *s = NULL, *cold = NULL;
+  pc_err e = {0};
+  assert_int_equal(pc_irec_create(1, 6, 64u << 20, &s, &e), PC_OK);
+  assert_int_equal(pc_irec_create(1, 6, 64u << 20, &cold, &e), PC_OK);
+  assert_int_equal(pc_irec_build(s, a.sites, a.R, a.V, importance, &a, NULL, &e), PC_OK);
+  pc_irec_site *z = malloc(Q * sizeof *z);
+  int (*ref)[PC_IREC_MAX_KNN + 1] = malloc(Q * sizeof *ref); /* the records' order in each lookup */
+  pc_rng r = pc_rng_make(9, 0, PC_STREAM_MISC, 2);
+  for (int q = 0; q < Q; q++) {
+    z[q] = (pc_irec_site){rand_point(&r), rand_dir_up(&r), rand_dir_up(&r), NULL, false};
+    assert_int_equal(pc_irec_build(cold, a.sites, a.R, a.V, importance, &a, NULL, &e), PC_OK);
+    pc_irec_lookup L;
+    pc_irec_lookup_cached(cold, 0, &z[q], 6, 0.1f, &L);
+    ref[q][0] = L.n;
+    for (int j = 0; j < L.n; j++) ref[q][j + 1] = (int)((L.pmf[j] - pc_irec_pmf(cold, 0)) / (2 * a.V));
+  }
+  for (int pass = 0; pass < 3; pass++)
+    for (int i = 0; i < Q; i++) {
+      int q = pass == 0 ? i : pass == 1 ? Q - 1 - i : (int)(((long)i * 2593) % Q); /* 2593 is prime to Q */
+      pc_irec_lookup L;
+      pc_irec_lookup_cached(s, 0, &z[q], 6, 0.1f, &L);
+      assert_int_equal(L.n, ref[q][0]);
+      for (int j = 0; j < L.n; j++) assert_int_equal((L.pmf[j] - pc_irec_pmf(s, 0)) / (2 * a.V), ref[q][j + 1]);
+    }
+  free(z);
+  free(ref);
+  pc_irec_destroy(s);
+  pc_irec_destroy(cold);
+  free_scene(&a);
+}
+
 /* A lookup is a pure function of the eye vertex: the same whichever thread asks, in whatever
  * order, with the per-thread memo of neighbour sets warm or cold, and never a stale set from
  * the previous build. */
@@ -671,7 +711,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_record_rows),       cmocka_unit_test(test_interpolated_pmf),
       cmocka_unit_test(test_sampling_matches_pconn), cmocka_unit_test(test_mixture_draw_equals_scan),
-      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_memo_grows),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_bad_importance),
+      cmocka_unit_test(test_memory_and_limit),  cmocka_unit_test(test_memo_grows),  cmocka_unit_test(test_lookup_is_pure),  cmocka_unit_test(test_lookup_pure_under_collisions),  cmocka_unit_test(test_bad_importance),
       cmocka_unit_test(test_fallbacks),         cmocka_unit_test(test_dark),         cmocka_unit_test(test_resample),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
