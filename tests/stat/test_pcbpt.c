@@ -220,13 +220,16 @@ static void test_unseen_rate_agrees(void **state) {
 
 /* Resampling whose target takes visibility from the records (--pcbpt-candidate-visibility
  * records): where no interpolated record sees a light vertex the target keeps a floor, since
- * the eye vertex may see it all the same; a target of 0 there never chooses such a candidate
- * and biases the estimate. ajar-door is the scene where the records' visibility is most often
- * wrong (they see ~2% of the light vertices; the eye vertices' connections come mostly from the
- * others), so its inner layer with the records' visibility must agree block by block with the
- * same method's with traced candidates (both PCBPT: far less noise than BDPT's there). Over
- * three offsets of the records run's iterations the worst block's |z| was 1.4-3.3 with the
- * floor and 5.5-7.5 with a target of 0 there (640 iterations a side). */
+ * the eye vertex may see it all the same. A target of 0 there never chooses such a candidate and
+ * biases the estimate; a vanishing one (seen x h alone, which the target's underflow guard
+ * turns into FLT_MIN) chooses it almost never and then with a weight of ~1/FLT_MIN, unbiased on
+ * paper but with its mean in a tail no run reaches. ajar-door is the scene where the records'
+ * visibility is most often wrong (they see ~2% of the light vertices; the eye vertices'
+ * connections come mostly from the others), so its inner layer with the records' visibility
+ * must agree block by block with the same method's with traced candidates (both PCBPT: far less
+ * noise than BDPT's there). 640 iterations a side: worst block |z| 1.70 with the floor (1.4-3.3
+ * over three offsets of the records run's iterations), 17.2 with a target of 0 there, and
+ * 5.5-7.5 with the vanishing one. */
 static void test_records_visibility_agrees(void **state) {
   (void)state;
   pc_render_request req = request(PC_METHOD_PCBPT, 32, -1);
