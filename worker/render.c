@@ -121,13 +121,13 @@ static int ctx_films(job_ctx *c, pc_wrender *w, uint64_t job, const pc_render_se
     r = &c->kept[c->nkept];
     memset(r, 0, sizeof *r);
     int rc = pc_renderer_create(&c->scene, set, w->threads, &r->rend, e);
-    if (!rc && (rc = pc_film_alloc_stored(&r->pending, set->width, set->height, set->strategy_layers, PC_FILM_NORMS_ALL, e)) != 0)
+    if (!rc) rc = pc_film_alloc_stored(&r->pending, set->width, set->height, set->strategy_layers, PC_FILM_NORMS_ALL, e);
+    if (rc) { /* the pending film frees itself on failure; r->rend is NULL unless it was made */
       pc_renderer_destroy(r->rend);
-    if (!rc) pc_renderer_zero_film(r->rend, &r->pending);
-    if (rc) {
       ctx_free(c, w);
       return rc;
     }
+    pc_renderer_zero_film(r->rend, &r->pending);
     r->job = job;
     r->film_bytes = r->bytes = bytes;
     c->nkept++;

@@ -507,6 +507,11 @@ static bool same_lookup(const pc_irec_lookup *a, const pc_irec_lookup *b) {
   return true;
 }
 
+/* The record whose PMF row a lookup entry reads. */
+static int record_of(const pc_irec_store *s, const float *pmf) {
+  return (int)((pmf - pc_irec_pmf(s, 0)) / (pc_irec_pmf(s, 1) - pc_irec_pmf(s, 0)));
+}
+
 /* Thousands of scattered queries, most in a cell of their own, so that many cells share a memo
  * entry; visited three times in three orders, every lookup still equals a cold one (a second
  * store rebuilt over the same records before each reference lookup, so its memo holds nothing).
@@ -530,7 +535,7 @@ static void test_lookup_pure_under_collisions(void **state) {
     pc_irec_lookup L;
     pc_irec_lookup_cached(cold, 0, &z[q], 6, 0.1f, &L);
     ref[q][0] = L.n;
-    for (int j = 0; j < L.n; j++) ref[q][j + 1] = (int)((L.pmf[j] - pc_irec_pmf(cold, 0)) / (2 * a.V));
+    for (int j = 0; j < L.n; j++) ref[q][j + 1] = record_of(cold, L.pmf[j]);
   }
   for (int pass = 0; pass < 3; pass++)
     for (int i = 0; i < Q; i++) {
@@ -538,7 +543,7 @@ static void test_lookup_pure_under_collisions(void **state) {
       pc_irec_lookup L;
       pc_irec_lookup_cached(s, 0, &z[q], 6, 0.1f, &L);
       assert_int_equal(L.n, ref[q][0]);
-      for (int j = 0; j < L.n; j++) assert_int_equal((L.pmf[j] - pc_irec_pmf(s, 0)) / (2 * a.V), ref[q][j + 1]);
+      for (int j = 0; j < L.n; j++) assert_int_equal(record_of(s, L.pmf[j]), ref[q][j + 1]);
     }
   free(z);
   free(ref);
