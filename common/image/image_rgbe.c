@@ -12,18 +12,17 @@
 
 #include "image_internal.h"
 
-/* Skips the header: lines up to the empty one, then the resolution line (as stb reads them). */
+/* Skips the header as stb reads it: lines up to one that is empty as a C string (its first
+ * byte a newline or a NUL: stb keeps a line in a C string), then the resolution line. */
 static bool skip_header(FILE *f) {
-  int c, len = 0;
-  bool empty_seen = false;
+  int c;
+  bool line_start = true, empty = false, end_seen = false;
   while ((c = getc(f)) != EOF) {
-    if (c != '\n') {
-      len++;
-      continue;
-    }
-    if (empty_seen) return true; /* the end of the resolution line */
-    empty_seen = len == 0;
-    len = 0;
+    if (line_start) empty = c == '\n' || c == '\0';
+    line_start = c == '\n';
+    if (c != '\n') continue;
+    if (end_seen) return true; /* the end of the resolution line */
+    end_seen = empty;
   }
   return false;
 }
