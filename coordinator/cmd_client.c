@@ -10,6 +10,7 @@
 
 #include "bundle.h"
 #include "client.h"
+#include "json_text.h"
 #include "pilot_farm.h"
 #include "render.h"
 #include "render_flags.h"
@@ -130,28 +131,18 @@ int pc_cmd_submit(int argc, char **argv) {
   return 0;
 }
 
-static void json_str(const char *s) {
-  putchar('"');
-  for (; *s; s++) {
-    if (*s == '"' || *s == '\\') printf("\\%c", *s);
-    else if ((unsigned char)*s < 0x20) printf("\\u%04x", *s);
-    else putchar(*s);
-  }
-  putchar('"');
-}
-
 static void print_job(const Pcbpt__JobStatus *j, bool json) {
   if (json) {
     printf("{\"job\": %llu, \"name\": ", (unsigned long long)j->job_id);
-    json_str(j->name);
+    pc_json_string(stdout, j->name);
     printf(", \"state\": \"%s\", \"method\": \"%s\", \"iterations\": %llu, \"halt_iterations\": %llu, "
            "\"halt_seconds\": %.3f, \"elapsed\": %.3f, \"iterations_per_second\": %.3f, \"eta_seconds\": %.3f, "
            "\"workers\": %u, \"error\": ",
            j->state, j->method, (unsigned long long)j->iterations_done, (unsigned long long)j->halt_iterations,
            j->halt_seconds, j->elapsed, j->iterations_per_second, j->eta_seconds, j->workers);
-    json_str(j->error);
+    pc_json_string(stdout, j->error);
     printf(", \"image\": ");
-    json_str(j->image);
+    pc_json_string(stdout, j->image);
     /* null while the image cannot tell its error (fewer than 2 iterations ...) */
     if (j->relmse_estimate >= 0) printf(", \"relmse_estimate\": %.6g", j->relmse_estimate);
     else printf(", \"relmse_estimate\": null");
@@ -159,7 +150,7 @@ static void print_job(const Pcbpt__JobStatus *j, bool json) {
            "\"snapshots\": %u, \"ranges_rerun\": %u, \"auto\": ",
            (unsigned long long)j->iterations_rendered, j->halt_noise, j->worker_seconds, j->cpu_seconds, j->snapshots,
            j->ranges_rerun);
-    if (*j->auto_report) json_str(j->auto_report);
+    if (*j->auto_report) pc_json_string(stdout, j->auto_report);
     else printf("null");
     printf("}");
     return;
@@ -203,7 +194,7 @@ static int status_like(const char *verb, int argc, char **argv, bool workers) {
       Pcbpt__WorkerStatus *w = s->workers[i];
       if (o.json) {
         printf("%s{\"name\": ", i ? ", " : "");
-        json_str(w->name);
+        pc_json_string(stdout, w->name);
         printf(", \"address\": \"%s\", \"threads\": %u, \"iterations_per_second\": %.3f, \"job\": %llu, \"range\": %llu}",
                w->address, w->threads, w->iterations_per_second, (unsigned long long)w->job_id, (unsigned long long)w->range_id);
       } else {

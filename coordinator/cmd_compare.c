@@ -1,12 +1,16 @@
 /* cmd_compare.c: `pcbpt-coord compare A.exr REF.exr`: RMSE, relMSE and L1 of A against the
  * reference REF, for the beauty and every layer present in both files, and the relMSE each
- * image estimated for itself (docs/variance.md) when its header has it. */
+ * image estimated for itself (docs/variance.md) when its header has it. Strategy layers whose
+ * MIS weights differ between the two (their headers' pcbpt.weights) are flagged: they share
+ * the image out differently, so their difference is not an error. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "image.h"
+#include "json_text.h"
 #include "metrics.h"
+#include "render.h"
 #include "verbs.h"
 
 static const char compare_help[] =
@@ -14,13 +18,16 @@ static const char compare_help[] =
     "Error of A against the reference REF for the beauty and every layer present in both:\n"
     "RMSE, relMSE = mean (a-b)^2/(b^2+0.01), L1 = mean |a-b|, and both means; then each image's own\n"
     "estimate of its beauty relMSE when its header has one (pcbpt.relmse_estimate): for independent\n"
-    "renders the measured relMSE is about the sum of the two.\n";
+    "renders the measured relMSE is about the sum of the two.\n"
+    "The strategy layers (pt, nee, lt, inner, sNtM) are the shares of the image each kind of strategy\n"
+    "carries under the method's MIS weights: where the two headers' weights differ (pcbpt.weights,\n"
+    "e.g. PT against BDPT, or PCBPT's inner strategies counting 2 against BDPT's 1) those rows are\n"
+    "marked as not comparable (\"comparable\": false in JSON); the beauty always compares.\n";
 
 /* The image's own relMSE estimate from its header, or -1. */
 static double own_estimate(const pc_exr_file *x) {
-  for (int i = 0; i < x->nattrs; i++)
-    if (strcmp(x->attr_names[i], "pcbpt.relmse_estimate") == 0) return strtod(x->attr_values[i], NULL);
-  return -1;
+  const char *v = pc_exr_attr_get(x, "pcbpt.relmse_estimate");
+  return v ? strtod(v, NULL) : -1;
 }
 
 int pc_cmd_compare(int argc, char **argv) {
@@ -56,22 +63,42 @@ int pc_cmd_compare(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord compare: %s\n", err.msg);
     goto done;
   }
-  if (json) printf("{\"a\": \"%s\", \"reference\": \"%s\", \"layers\": [", paths[0], paths[1]);
+  const char *wa = pc_exr_attr_get(&a, PC_WEIGHTS_ATTR), *wb = pc_exr_attr_get(&b, PC_WEIGHTS_ATTR);
+  bool unlike = pc_weights_unlike(wa, wb);
+  if (json) {
+    printf("{\"a\": ");
+    pc_json_string(stdout, paths[0]);
+    printf(", \"reference\": ");
+    pc_json_string(stdout, paths[1]);
+    printf(", \"layers\": [");
+  }
   else printf("%-10s %14s %14s %14s %12s %12s\n", "layer", "RMSE", "relMSE", "L1", "mean", "mean(ref)");
   for (int i = 0; i < n; i++) {
     const pc_metrics *m = &lm[i].m;
     const char *name = lm[i].name[0] ? lm[i].name : "beauty";
-    if (json)
-      printf("%s{\"layer\": \"%s\", \"rmse\": %.9g, \"relmse\": %.9g, \"l1\": %.9g, \"mean\": %.9g, \"mean_ref\": %.9g, "
-             "\"nonfinite\": %llu}",
-             i ? ", " : "", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b, (unsigned long long)m->nonfinite);
-    else
-      printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
-             m->nonfinite ? "  (non-finite samples skipped)" : "");
+    bool comparable = !(unlike && pc_weights_layer(lm[i].name));
+    if (json) {
+      printf("%s{\"layer\": ", i ? ", " : "");
+      pc_json_string(stdout, name);
+      printf(", \"rmse\": %.9g, \"relmse\": %.9g, \"l1\": %.9g, \"mean\": %.9g, \"mean_ref\": %.9g, \"nonfinite\": %llu, "
+             "\"comparable\": %s}",
+             m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b, (unsigned long long)m->nonfinite, comparable ? "true" : "false");
+    } else
+      printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
+             m->nonfinite ? "  (non-finite samples skipped)" : "", comparable ? "" : "  (not comparable: weighted unlike)");
   }
+  if (unlike && !json)
+    printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
+           "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);
   double ea = own_estimate(&a), eb = own_estimate(&b);
   if (json) {
-    printf("], \"relmse_estimate\": ");
+    printf("], \"weights\": ");
+    if (wa) pc_json_string(stdout, wa);
+    else printf("null");
+    printf(", \"weights_ref\": ");
+    if (wb) pc_json_string(stdout, wb);
+    else printf("null");
+    printf(", \"relmse_estimate\": ");
     if (ea >= 0) printf("%.9g", ea);
     else printf("null");
     printf(", \"relmse_estimate_ref\": ");

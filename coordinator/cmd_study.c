@@ -38,9 +38,12 @@ static const char study_help[] =
     "study_inner.png/.svg, with --workers study_scaling.png/.svg, and DIR/report.html (every scene:\n"
     "charts, images side by side with the reference, a zoomed crop of the noisiest region, tables).\n"
     "Ratios are to the first method listed: put the method to compare against first.\n"
-    "Per-layer errors compare like with like only when the methods share the reference's strategies\n"
-    "(e.g. inner of bdpt and pcbpt against a bdpt reference); a method that leaves a layer empty is\n"
-    "left out of that layer's comparison.\n"
+    "The strategy layers (pt, nee, lt, inner) are the shares of the image the method's MIS weights give\n"
+    "each kind of strategy, so they compare only between images that weigh their strategies alike\n"
+    "(the headers' pcbpt.weights): PT against a BDPT reference does not, nor PCBPT, whose inner\n"
+    "strategies count 2 by default where BDPT's count 1 (--mis 1 weighs them alike). A method weighted\n"
+    "unlike the reference is left out of those layers' comparisons (said before it renders), as one\n"
+    "that leaves a layer empty is; the beauty always compares.\n"
     "Without a reference the beauty's relMSE and RMSE are each image's own estimates from the spread of\n"
     "its iterations (docs/variance.md; L1 and the other layers are not measured), and the output says so.\n\n"
     "  --methods LIST        comma-separated, from pt, lt, bdpt, cbdpt, pcbpt, pcbpt-kN (pcbpt with K=N),\n"
@@ -258,6 +261,7 @@ static int reference_slots(const pc_exr_file *ref, const char *path, pc_study_re
     if (slot >= 0 && strcmp(ref->names[i], "beauty") != 0) out->rgb[slot] = ref->layers[i].rgb;
   }
   if (!out->rgb[PC_STUDY_BEAUTY]) return pc_errf(e, PC_EINVAL, "%s: the reference has no beauty R,G,B channels", path);
+  out->weights = pc_exr_attr_get(ref, PC_WEIGHTS_ATTR);
   return PC_OK;
 }
 
@@ -266,10 +270,10 @@ static int reference_slots(const pc_exr_file *ref, const char *path, pc_study_re
 static void warn_same_seed(const pc_exr_file *ref, const char *path, uint64_t seed) {
   char mine[32];
   snprintf(mine, sizeof mine, "%llu", (unsigned long long)seed);
-  for (int i = 0; i < ref->nattrs; i++)
-    if (strcmp(ref->attr_names[i], "pcbpt.seed") == 0 && strcmp(ref->attr_values[i], mine) == 0)
-      fprintf(stderr, "pcbpt-coord study: warning: %s was rendered with seed %s too; use another --seed for one of them\n",
-              path, mine);
+  const char *theirs = pc_exr_attr_get(ref, "pcbpt.seed");
+  if (theirs && strcmp(theirs, mine) == 0)
+    fprintf(stderr, "pcbpt-coord study: warning: %s was rendered with seed %s too; use another --seed for one of them\n",
+            path, mine);
 }
 
 /* Every method must be renderable before any budget is spent: an unimplemented one is an
@@ -309,6 +313,24 @@ static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int r
 
 /* Seeds: run r of the study uses seed + r; the reference render a seed no run uses. */
 static uint64_t run_seed(const study_args *a, int r) { return a->req.set.seed + (uint64_t)r; }
+
+/* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
+ * (auto's image is told from its header when it is done: its pilot's films are in it). */
+static void say_unlike(const study_args *a, const scene_study *s) {
+  for (int m = 0; m < a->nmethods; m++) {
+    if (a->methods[m].method == PC_METHOD_AUTO) continue;
+    pc_render_settings set = s->req.set;
+    pc_study_method_apply(&a->methods[m], &set);
+    char w[96];
+    pc_render_settings_weights(&set, w, sizeof w);
+    if (!pc_weights_unlike(w, s->ref.weights)) continue;
+    bool inner_count = set.method == PC_METHOD_PCBPT || set.method == PC_METHOD_CBDPT;
+    printf("%s: %s weighs its strategies unlike the reference (%s against %s): its pt, nee, lt and inner layers are "
+           "left out of those layers' comparisons, the beauty compares%s\n",
+           s->name, a->methods[m].name, w, s->ref.weights,
+           inner_count ? " (--mis sets the count PCBPT's inner strategies carry; BDPT's is 1)" : "");
+  }
+}
 
 static int load_reference(const study_args *a, pc_study_farm *farm, scene_study *s, int k, int farm_size, pc_err *e) {
   const char *path = NULL;
@@ -352,6 +374,7 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
     rc = pc_errf(e, PC_EINVAL, "reference %s is %dx%d but the study renders %dx%d (set --width/--height to match)", path,
                  s->ref.w, s->ref.h, s->req.set.width, s->req.set.height);
   for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(&s->ref_file, path, run_seed(a, r));
+  if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;
 }
@@ -374,8 +397,9 @@ static void print_spread(FILE *f, const study_args *a, const scene_study *s, int
       }
       pc_study_spread c;
       pc_study_spread_cell(runs, (int)a->runs, first, t->slot[row], t->target[row], false, a->seconds, &c);
-      if (runs[0].layer_empty[t->slot[row]]) {
-        fprintf(f, "%-7s %-6s  (layer empty)\n", pc_study_layer_name(t->slot[row]), a->methods[m].name);
+      if (pc_study_excluded(&runs[0], t->slot[row])) {
+        fprintf(f, "%-7s %-6s  (%s)\n", pc_study_layer_name(t->slot[row]), a->methods[m].name,
+                runs[0].layer_empty[t->slot[row]] ? "layer empty" : "weighted unlike the reference");
         continue;
       }
       char fin[64], tim[64], rat[64] = "-";
@@ -477,7 +501,7 @@ static int scaling(const study_args *a, scene_study *s, FILE *f, pc_err *e) {
       double fm = pc_study_median(fin, (int)a->runs, NULL, NULL);
       if (isfinite(fm)) target = fmax(target, fm);
     }
-    if (per[0][0].layer_empty[slot]) continue;
+    if (pc_study_excluded(&per[0][0], slot)) continue;
     double t_base = NAN;
     for (int size = 0; size < a->nsizes; size++) {
       pc_study_spread c;

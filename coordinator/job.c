@@ -269,13 +269,16 @@ static void snap_work(uv_work_t *w) {
 /* The same header as a standalone `render` writes, plus the job id and, for studies, the
  * worker-seconds behind the film. */
 static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, double snap_at, pc_err *e) {
-  char idbuf[32], seed[32], version[64], pcbpt_flags[320];
+  char idbuf[32], seed[32], version[64], pcbpt_flags[320], weights[96];
   pc_film mix;
   const pc_film *shown;
   double pilot_weight = pc_prior_weight(j, snap_at > 0 ? snap_at : st->t_total, wall);
   int rc = pc_prior_shown(j, pilot_weight, &mix, &shown, e);
   if (rc) return rc;
   pc_render_settings_pcbpt_flags(&j->set, pcbpt_flags, sizeof pcbpt_flags);
+  /* a pilot's films in the image weigh their strategies as their own methods do */
+  if (shown != &j->film) snprintf(weights, sizeof weights, "%s", PC_WEIGHTS_MIXED);
+  else pc_render_settings_weights(&j->set, weights, sizeof weights);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
   snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
@@ -285,6 +288,7 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.iterations", .type = PC_ATTR_DOUBLE, .d = (double)j->film.layers[PC_LAYER_PT].count},
     {.name = "pcbpt.seed", .type = PC_ATTR_STRING, .s = seed},
     {.name = "pcbpt.max_depth", .type = PC_ATTR_DOUBLE, .d = j->set.max_depth},
+    {.name = PC_WEIGHTS_ATTR, .type = PC_ATTR_STRING, .s = weights},
     {.name = "pcbpt.render_seconds", .type = PC_ATTR_DOUBLE, .d = wall},
     {.name = "pcbpt.worker_seconds", .type = PC_ATTR_DOUBLE, .d = st->t_total},
     {.name = "pcbpt.cpu_seconds", .type = PC_ATTR_DOUBLE, .d = st->t_cpu},

@@ -221,6 +221,7 @@ static int fetch_point(pc_client *cl, const pc_study_group *g, uint64_t job, uin
     if (!rc && k == 0) run->stats.rays = (uint64_t)pc_study_exr_number(&x, "pcbpt.rays");
     if (!rc && k == 0) rc = pc_study_tails_exr(&x, &run->tails, e);
     if (!rc && k == 0) pc_study_shares_exr(&x, &run->shares);
+    if (!rc && k == 0) pc_study_weights_exr(&x, g->ref, run);
   }
   if (!rc && keep) rc = write_png(&x, path, e);
   pc_exr_file_free(&x);

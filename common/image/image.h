@@ -78,6 +78,8 @@ int pc_exr_read_layers(const char *path, pc_exr_file *out, pc_err *e);
  * attribute: what a render's summary and preview need, without the other layers' memory. */
 int pc_exr_read_beauty_attrs(const char *path, pc_exr_file *out, pc_err *e);
 void pc_exr_file_free(pc_exr_file *f);
+/* The text of the attribute called name, or NULL. */
+const char *pc_exr_attr_get(const pc_exr_file *f, const char *name);
 
 /* 8-bit sRGB PNG of rgb * 2^exposure (clamped), atomically written. */
 int pc_png_write_preview(const char *path, int w, int h, const float *rgb, float exposure, pc_err *e);

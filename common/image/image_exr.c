@@ -651,6 +651,12 @@ int pc_exr_read_beauty(const char *path, pc_image *out, pc_err *e) {
   return PC_OK;
 }
 
+const char *pc_exr_attr_get(const pc_exr_file *f, const char *name) {
+  for (int i = 0; i < f->nattrs; i++)
+    if (strcmp(f->attr_names[i], name) == 0) return f->attr_values[i];
+  return NULL;
+}
+
 void pc_exr_file_free(pc_exr_file *f) {
   if (!f) return;
   for (int i = 0; i < f->nlayers; i++) {

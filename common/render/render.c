@@ -8,6 +8,7 @@
 #include "render.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -162,6 +163,27 @@ float pc_render_settings_inner_count(const pc_render_settings *s) {
   case PC_MIS_COUNT: return s->mis_count < (float)s->pcbpt_m ? s->mis_count : (float)s->pcbpt_m;
   default: return 1.f;
   }
+}
+
+int pc_render_settings_weights(const pc_render_settings *s, char *buf, size_t size) {
+  if (s->unweighted) return snprintf(buf, size, "unweighted");
+  const char *h = s->mis_heuristic == PC_MIS_POWER ? "power" : "balance";
+  if (s->method == PC_METHOD_PT) return snprintf(buf, size, "pt %s", h);
+  /* as pc_mis_counts_bdpt makes it, so that equal counts print equally */
+  pc_mis_counts n = pc_mis_counts_bdpt(s, s->light_paths ? s->light_paths : (uint64_t)s->width * (uint64_t)s->height);
+  if (s->method == PC_METHOD_LT) return snprintf(buf, size, "lt %s n_lt=%.9g", h, (double)n.n_lt);
+  if (s->method == PC_METHOD_CBDPT || s->method == PC_METHOD_PCBPT) n.n_inner = pc_render_settings_inner_count(s);
+  return snprintf(buf, size, "bidirectional %s n_lt=%.9g n_inner=%.9g", h, (double)n.n_lt, (double)n.n_inner);
+}
+
+bool pc_weights_unlike(const char *a, const char *b) { return a && b && strcmp(a, b) != 0; }
+
+bool pc_weights_layer(const char *name) {
+  static const char *const std[] = {"pt", "nee", "lt", "inner"};
+  for (size_t i = 0; i < sizeof std / sizeof std[0]; i++)
+    if (strcmp(name, std[i]) == 0) return true;
+  int s, t, k = 0;
+  return sscanf(name, "s%dt%d%n", &s, &t, &k) == 2 && name[k] == '\0';
 }
 
 void pc_render_stats_add(pc_render_stats *dst, const pc_render_stats *src) {

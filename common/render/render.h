@@ -63,6 +63,24 @@ int pc_render_settings_check(const pc_render_settings *s, pc_err *e);
 /* The sample count of the inner strategies in the MIS weights (pc_mis_counts.n_inner). */
 float pc_render_settings_inner_count(const pc_render_settings *s);
 
+/* How an image's strategy layers (pt, nee, lt, inner and the per-(s,t) ones) are weighted: the
+ * strategies the method has, the heuristic and the counts it weighs them with, e.g.
+ * "bidirectional balance n_lt=1 n_inner=2". Two images estimate the same layers only where
+ * these agree: PCBPT's inner layer at count 2 carries more of the image than BDPT's, and PT's
+ * nee layer more than BDPT's. Written into every image's header as PC_WEIGHTS_ATTR; an image
+ * that mixes films of other weightings (--method auto's pilot) says PC_WEIGHTS_MIXED. Returns
+ * the length snprintf would write. */
+#define PC_WEIGHTS_ATTR "pcbpt.weights"
+#define PC_WEIGHTS_MIXED "mixed"
+int pc_render_settings_weights(const pc_render_settings *s, char *buf, size_t size);
+/* Whether two images' strategy layers estimate different things: both weightings known
+ * (non-NULL, from their headers) and different. An image without one (another renderer's, or
+ * pcbpt's before the attribute) is taken as comparable. */
+bool pc_weights_unlike(const char *a, const char *b);
+/* Whether an EXR layer is a strategy layer, weighted as pc_render_settings_weights says:
+ * "pt", "nee", "lt", "inner", "s<S>t<T>". */
+bool pc_weights_layer(const char *name);
+
 /* Time (seconds) and work spent, summed over iterations; printed and stored in headers. */
 typedef struct pc_render_stats {
   uint64_t iterations;

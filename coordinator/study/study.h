@@ -34,6 +34,7 @@ typedef struct pc_study_ref {
   int w, h;
   const float *rgb[PC_STUDY_NLAYERS];
   bool estimated;
+  const char *weights; /* how its strategy layers are weighted (PC_WEIGHTS_ATTR); NULL: unknown */
 } pc_study_ref;
 
 /* Whether the study measures layer slot. */
@@ -111,6 +112,11 @@ typedef struct pc_study_run {
   int nsnaps;
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
+  /* The method's final image weighs its strategies unlike the reference (pc_weights_unlike):
+   * its strategy layers estimate other shares of the image, so they are left out of those
+   * layers' comparisons as empty ones are. weights: what its header says ("" if nothing). */
+  bool layer_unlike[PC_STUDY_NLAYERS];
+  char weights[96];
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
   pc_study_tails tails;  /* of the final image */
@@ -118,6 +124,12 @@ typedef struct pc_study_run {
 } pc_study_run;
 
 void pc_study_run_free(pc_study_run *run);
+/* Whether run is left out of layer slot's comparisons: empty, or weighted unlike the reference. */
+static inline bool pc_study_excluded(const pc_study_run *run, int slot) {
+  return run->layer_empty[slot] || run->layer_unlike[slot];
+}
+/* From the method's final image: run->weights, and run->layer_unlike against ref's weighting. */
+void pc_study_weights_exr(const pc_exr_file *x, const pc_study_ref *ref, pc_study_run *run);
 /* One point of a farm study's curve from an image the farm wrote (study_measure.c): errors
  * against ref per layer (or the beauty's own estimate without one), its worker-seconds,
  * render time and iterations from the header; seconds is worker-seconds / workers. With
@@ -164,6 +176,7 @@ typedef enum {
   PC_REACH_BY_FIRST,     /* already at the first snapshot: the time is an upper bound */
   PC_REACH_NEVER,        /* not within the budget */
   PC_REACH_EXCLUDED,     /* the method leaves this layer empty */
+  PC_REACH_UNLIKE,       /* the method weighs this layer's strategies unlike the reference */
 } pc_reach;
 
 typedef struct pc_study_cell {

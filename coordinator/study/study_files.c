@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "chart.h"
+#include "json_text.h"
 #include "study.h"
 
 typedef struct out_file {
@@ -58,16 +59,6 @@ int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, co
   return out_commit(&o, e);
 }
 
-static void json_string(FILE *f, const char *s) {
-  fputc('"', f);
-  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-    if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
-    else if (*p < 0x20) fprintf(f, "\\u%04x", *p);
-    else fputc(*p, f);
-  }
-  fputc('"', f);
-}
-
 /* JSON has no NaN: unknown numbers are null. */
 static void json_number(FILE *f, double v) {
   if (isfinite(v)) fprintf(f, "%.9g", v);
@@ -80,6 +71,7 @@ static const char *reach_name(pc_reach r) {
   case PC_REACH_BY_FIRST: return "by_first_snapshot";
   case PC_REACH_NEVER: return "not_reached";
   case PC_REACH_EXCLUDED: return "layer_empty";
+  case PC_REACH_UNLIKE: return "weighted_unlike_reference";
   }
   return "?";
 }
@@ -150,10 +142,15 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
             (unsigned long long)run->stats.rays, run->method.name, run->method.name);
     for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
       if (run->layer_empty[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
-    fputs("]", f);
+    fputs("], \"unlike_layers\": [", f);
+    for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
+      if (run->layer_unlike[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
+    fputs("], \"weights\": ", f);
+    if (run->weights[0]) pc_json_string(f, run->weights);
+    else fputs("null", f);
     if (run->auto_report[0]) {
       fputs(", \"auto\": ", f);
-      json_string(f, run->auto_report);
+      pc_json_string(f, run->auto_report);
     }
     fputs(",\n     \"tails\": ", f);
     json_tails(f, &run->tails);
@@ -209,7 +206,7 @@ static void json_table(FILE *f, const pc_study_table *t) {
     char line[512];
     pc_study_headline(t, m, line, sizeof line);
     if (m > 1) fputs(", ", f);
-    json_string(f, line);
+    pc_json_string(f, line);
   }
   fputs("]\n", f);
 }
@@ -221,11 +218,11 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
   if (rc != PC_OK) return rc;
   FILE *f = o.f;
   fputs("{\n  \"scene\": ", f);
-  json_string(f, info->scene_path);
+  pc_json_string(f, info->scene_path);
   fputs(", \"scene_name\": ", f);
-  json_string(f, info->scene_name);
+  pc_json_string(f, info->scene_name);
   fputs(", \"reference\": ", f);
-  if (info->reference_path) json_string(f, info->reference_path);
+  if (info->reference_path) pc_json_string(f, info->reference_path);
   else fputs("null", f);
   /* where the errors come from: a reference, or each image's own iterations (docs/variance.md) */
   fprintf(f, ", \"errors\": \"%s\"", info->reference_path ? "measured" : "estimated");
@@ -233,7 +230,7 @@ int pc_study_write_json(const char *path, const pc_study_info *info, const pc_st
           info->seconds, info->width, info->height, (unsigned long long)info->seed, info->max_snaps);
   /* the table and the charts: the median curves of this farm size over the runs */
   fprintf(f, "  \"farm\": ");
-  if (info->host) json_string(f, info->host);
+  if (info->host) pc_json_string(f, info->host);
   else fputs("\"embedded\"", f);
   fprintf(f, ", \"table_workers\": %d, \"runs\": %d, \"time\": \"worker_seconds / workers\",\n", info->workers,
           info->runs);
@@ -262,7 +259,7 @@ int pc_study_write_chart(const char *dir, const pc_study_info *info, const pc_st
   if (!xy) return pc_errf(e, PC_ENOMEM, "out of memory for the chart");
   int ns = 0;
   for (int r = 0; r < nruns; r++) {
-    if (runs[r].layer_empty[slot]) continue;
+    if (pc_study_excluded(&runs[r], slot)) continue;
     double *x = xy + (size_t)ns * 2 * PC_STUDY_MAX_SNAPSHOTS, *y = x + PC_STUDY_MAX_SNAPSHOTS;
     for (int s = 0; s < runs[r].nsnaps; s++) {
       x[s] = runs[r].snaps[s].seconds;

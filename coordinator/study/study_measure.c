@@ -2,19 +2,14 @@
  * snapshot or its final image): its errors against the reference per layer, or without one
  * the beauty's own estimate from its header and variance layer, and the times in its header. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "study.h"
 
-static const char *attr(const pc_exr_file *x, const char *name) {
-  for (int i = 0; i < x->nattrs; i++)
-    if (strcmp(x->attr_names[i], name) == 0) return x->attr_values[i];
-  return NULL;
-}
-
 double pc_study_exr_number(const pc_exr_file *x, const char *name) {
-  const char *v = attr(x, name);
+  const char *v = pc_exr_attr_get(x, name);
   if (!v) return NAN;
   char *end;
   double d = strtod(v, &end);
@@ -25,6 +20,14 @@ static const pc_image *layer(const pc_exr_file *x, const char *name) {
   for (int i = 0; i < x->nlayers; i++)
     if (strcmp(x->names[i], name) == 0) return &x->layers[i];
   return NULL;
+}
+
+void pc_study_weights_exr(const pc_exr_file *x, const pc_study_ref *ref, pc_study_run *run) {
+  const char *w = pc_exr_attr_get(x, PC_WEIGHTS_ATTR);
+  snprintf(run->weights, sizeof run->weights, "%s", w ? w : "");
+  bool unlike = !ref->estimated && pc_weights_unlike(w, ref->weights);
+  for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++)
+    run->layer_unlike[slot] = unlike && slot != PC_STUDY_BEAUTY && pc_weights_layer(pc_study_layer_name(slot));
 }
 
 int pc_study_measure_exr(const pc_exr_file *x, const char *path, const pc_study_ref *ref, int workers,

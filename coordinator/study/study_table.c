@@ -7,8 +7,8 @@
 #include "study.h"
 
 double pc_study_time_to_error(const pc_study_run *run, int slot, double target, pc_reach *how) {
-  if (run->layer_empty[slot]) {
-    *how = PC_REACH_EXCLUDED;
+  if (pc_study_excluded(run, slot)) {
+    *how = run->layer_empty[slot] ? PC_REACH_EXCLUDED : PC_REACH_UNLIKE;
     return NAN;
   }
   for (int i = 0; i < run->nsnaps; i++) {
@@ -49,7 +49,7 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
       t->target_given[row] = true;
     } else {
       for (int m = 0; m < nruns; m++)
-        if (!runs[m].layer_empty[slot]) target = fmax(target, final_relmse(&runs[m], slot));
+        if (!pc_study_excluded(&runs[m], slot)) target = fmax(target, final_relmse(&runs[m], slot));
     }
     t->target[row] = isfinite(target) ? target : NAN;
     for (int m = 0; m < nruns; m++) {
@@ -57,7 +57,7 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
       c->final_relmse = final_relmse(&runs[m], slot);
       c->time = pc_study_time_to_error(&runs[m], slot, t->target[row], &c->reach);
       const pc_study_cell *c0 = &t->cell[row][0];
-      bool comparable = c->reach != PC_REACH_EXCLUDED && c0->reach != PC_REACH_EXCLUDED;
+      bool comparable = !pc_study_excluded(&runs[m], slot) && !pc_study_excluded(&runs[0], slot);
       c->relmse_ratio = comparable && c0->final_relmse > 0 ? c->final_relmse / c0->final_relmse : NAN;
       c->time_ratio = c0->time > 0 ? c->time / c0->time : NAN; /* NAN propagates from unreached */
     }
@@ -65,6 +65,12 @@ void pc_study_table_build(const pc_study_run *runs, int nruns, const pc_study_re
 }
 
 static const char *method_name(const pc_study_table *t, int m) { return t->name[m]; }
+
+static bool left_out(const pc_study_cell *c) { return c->reach == PC_REACH_EXCLUDED || c->reach == PC_REACH_UNLIKE; }
+
+static const char *left_out_why(const pc_study_cell *c) {
+  return c->reach == PC_REACH_EXCLUDED ? "  (layer empty)" : c->reach == PC_REACH_UNLIKE ? "  (weighted unlike the reference)" : "";
+}
 
 static bool is_bound(const pc_study_table *t, int row, int m) {
   return t->cell[row][m].reach == PC_REACH_BY_FIRST || t->cell[row][0].reach == PC_REACH_BY_FIRST;
@@ -81,10 +87,10 @@ void pc_study_table_print(FILE *f, const pc_study_table *t) {
       char ratio[32] = "-", time[32] = "-", tratio[32] = "-";
       if (isfinite(c->relmse_ratio)) snprintf(ratio, sizeof ratio, "%.2fx", c->relmse_ratio);
       if (c->reach == PC_REACH_NEVER) snprintf(time, sizeof time, "not reached");
-      else if (c->reach != PC_REACH_EXCLUDED) snprintf(time, sizeof time, "%s%.3g s", c->reach == PC_REACH_BY_FIRST ? "<=" : "", c->time);
+      else if (!left_out(c)) snprintf(time, sizeof time, "%s%.3g s", c->reach == PC_REACH_BY_FIRST ? "<=" : "", c->time);
       if (isfinite(c->time_ratio)) snprintf(tratio, sizeof tratio, "%s%.2fx", is_bound(t, row, m) ? "~" : "", c->time_ratio);
       fprintf(f, "%-7s %-6s %13.4e %10s %12.4e %13s %10s%s\n", pc_study_layer_name(t->slot[row]), method_name(t, m),
-              c->final_relmse, ratio, t->target[row], time, tratio, c->reach == PC_REACH_EXCLUDED ? "  (layer empty)" : "");
+              c->final_relmse, ratio, t->target[row], time, tratio, left_out_why(c));
     }
 }
 
@@ -97,9 +103,11 @@ void pc_study_headline(const pc_study_table *t, int m, char *buf, size_t size) {
     int k = snprintf(buf, size, "%s/%s %s relMSE %.2fx; ", a, b, layer, c->relmse_ratio);
     n = k > 0 && (size_t)k < size ? (size_t)k : 0;
   }
-  if (c->reach == PC_REACH_EXCLUDED || c0->reach == PC_REACH_EXCLUDED)
-    snprintf(buf + n, size - n, "%s leaves the %s layer empty: no time comparison", c->reach == PC_REACH_EXCLUDED ? a : b,
-             layer);
+  if (left_out(c) || left_out(c0)) {
+    const pc_study_cell *out = left_out(c) ? c : c0;
+    snprintf(buf + n, size - n, "%s %s the %s layer: no time comparison", out == c ? a : b,
+             out->reach == PC_REACH_EXCLUDED ? "leaves empty" : "weighs unlike the reference", layer);
+  }
   else if (!isfinite(c->time_ratio))
     snprintf(buf + n, size - n, "%s does not reach %s relMSE %.3g within the budget", c->reach == PC_REACH_NEVER ? a : b,
              layer, t->target[row]);

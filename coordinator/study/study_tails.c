@@ -42,9 +42,7 @@ static void iteration_errors(const pc_exr_file *x, pc_study_tails *t) {
     if (!(v[i] >= 0) || !isfinite(v[i])) return;
   ie->n = (uint32_t)n;
   ie->worst = (uint32_t)worst;
-  const char *s = NULL;
-  for (int i = 0; i < x->nattrs; i++)
-    if (strcmp(x->attr_names[i], "pcbpt.iteration_error.tail") == 0) s = x->attr_values[i];
+  const char *s = pc_exr_attr_get(x, "pcbpt.iteration_error.tail");
   while (s && *s && ie->ntail < PC_TRACE_TAIL_MAX) {
     char *end;
     double d = strtod(s, &end);

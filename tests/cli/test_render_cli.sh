@@ -57,6 +57,19 @@ check halt-noise 0 "est. relMSE" -- "$bin" render "$scene" --method pt --halt-no
 sed -n 's/^pt: \([0-9]*\) iterations.*est. relMSE \([0-9.e-]*\).*/\1 \2/p' "$tmp/out" | {
   read -r it est; awk -v it="$it" -v est="$est" 'BEGIN { exit !(it >= 16 && est > 0 && est <= 0.06) }'; } ||
   { echo "FAIL halt-noise: $(cat "$tmp/out")"; fail=1; }
+# Strategy layers compare only between images that weigh their strategies alike (the header's
+# pcbpt.weights): PCBPT's inner strategies count 2 by default, BDPT's 1; --mis 1 makes them alike.
+for m in "bdpt" "pcbpt" "pcbpt --mis 1"; do
+  check "weights-$m" 0 "iterations" -- "$bin" render "$scene" --method $m --spp 2 --width 16 --height 16 --threads 2 \
+    --out "$tmp/w-${m// /}.exr"
+done
+grep -aq "bidirectional balance n_lt=1 n_inner=2" "$tmp/w-pcbpt.exr" || { echo "FAIL weights: pcbpt's header"; fail=1; }
+check compare-unlike 0 "strategy layers weighted unlike" -- "$bin" compare "$tmp/w-pcbpt.exr" "$tmp/w-bdpt.exr"
+grep -Eq "^inner .*\(not comparable: weighted unlike\)" "$tmp/out" && ! grep -Eq "^beauty .*not comparable" "$tmp/out" ||
+  { echo "FAIL compare-unlike: rows"; cat "$tmp/out"; fail=1; }
+check compare-alike 0 "inner" -- "$bin" compare "$tmp/w-pcbpt--mis1.exr" "$tmp/w-bdpt.exr" --json
+python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert all(l["comparable"] for l in d["layers"]), d; assert d["weights"] == d["weights_ref"] == "bidirectional balance n_lt=1 n_inner=1", d' "$tmp/out" ||
+  { echo "FAIL compare-alike: $(cat "$tmp/out")"; fail=1; }
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

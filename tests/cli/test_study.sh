@@ -116,6 +116,21 @@ for m in d["methods"]:
     if m["method"] == "pt": assert s["lt"] == 0 and s["inner"] == 0 and s["nee"] > 0.5, s
     if m["method"] == "bdpt": assert s["lt"] > 0 and s["inner"] > 0, s
 PY
+  # pt weighs its strategies unlike the bdpt reference (its nee layer carries what bdpt's inner
+  # and lt carry there): its strategy layers are left out of those comparisons, said before the
+  # run and in the table; the beauty compares.
+  python3 - "$tmp/s/cornell-box/study.json" <<'PY' || { echo "FAIL unlike layers json"; fail=1; }
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = {x["method"]: x for x in d["methods"]}
+assert m["pt"]["weights"] == "pt balance" and m["pt"]["unlike_layers"] == ["pt", "nee", "lt", "inner"], m["pt"]
+assert m["bdpt"]["weights"] == "bidirectional balance n_lt=1 n_inner=1" and m["bdpt"]["unlike_layers"] == [], m["bdpt"]
+PY
+  grep -q "^cornell-box: pt weighs its strategies unlike the reference (pt balance against bidirectional" "$tmp/out" ||
+    { echo "FAIL study: no notice of pt's weights"; cat "$tmp/out"; fail=1; }
+  grep -Eq "^nee +pt .*\(weighted unlike the reference\)" "$tmp/out" && grep -Eq "^nee +bdpt .* [0-9.]+ s " "$tmp/out" &&
+    ! grep -Eq "^nee +bdpt .*unlike" "$tmp/out" ||
+    { echo "FAIL study: pt's nee layer compared with bdpt's"; cat "$tmp/out"; fail=1; }
   grep -q "^strategies carrying the final images" "$tmp/out" || { echo "FAIL study: no strategy shares"; fail=1; }
   grep -q "strategies carrying the final images" "$tmp/s/report.html" || { echo "FAIL study: no strategy shares in report.html"; fail=1; }
   grep -q "<h3>Strategies carrying the final images</h3>" "$tmp/s/report.html" || { echo "FAIL study: no strategy shares chart in report.html"; fail=1; }

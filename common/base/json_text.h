@@ -1,0 +1,11 @@
+/* json_text.h: text written into JSON output. Strings come from scene files, image headers and
+ * the network, so every one is escaped, never printed raw. */
+#ifndef PC_JSON_TEXT_H
+#define PC_JSON_TEXT_H
+
+#include <stdio.h>
+
+/* s as a JSON string, quotes included: '"' and '\' escaped, control bytes as \u00XX. */
+void pc_json_string(FILE *f, const char *s);
+
+#endif
