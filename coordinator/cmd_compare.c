@@ -3,6 +3,7 @@
  * image estimated for itself (docs/variance.md) when its header has it. Strategy layers whose
  * MIS weights differ between the two (their headers' pcbpt.weights) are flagged: they share
  * the image out differently, so their difference is not an error. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -80,9 +81,13 @@ int pc_cmd_compare(int argc, char **argv) {
     if (json) {
       printf("%s{\"layer\": ", i ? ", " : "");
       pc_json_string(stdout, name);
-      printf(", \"rmse\": %.9g, \"relmse\": %.9g, \"l1\": %.9g, \"mean\": %.9g, \"mean_ref\": %.9g, \"nonfinite\": %llu, "
-             "\"comparable\": %s}",
-             m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b, (unsigned long long)m->nonfinite, comparable ? "true" : "false");
+      const char *keys[] = {"rmse", "relmse", "l1", "mean", "mean_ref"};
+      double vals[] = {m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b};
+      for (int k = 0; k < 5; k++) {
+        printf(", \"%s\": ", keys[k]);
+        pc_json_number(stdout, vals[k]);
+      }
+      printf(", \"nonfinite\": %llu, \"comparable\": %s}", (unsigned long long)m->nonfinite, comparable ? "true" : "false");
     } else
       printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
              m->nonfinite ? "  (non-finite samples skipped)" : "", comparable ? "" : "  (not comparable: weighted unlike)");
@@ -99,11 +104,9 @@ int pc_cmd_compare(int argc, char **argv) {
     if (wb) pc_json_string(stdout, wb);
     else printf("null");
     printf(", \"relmse_estimate\": ");
-    if (ea >= 0) printf("%.9g", ea);
-    else printf("null");
+    pc_json_number(stdout, ea >= 0 ? ea : NAN);
     printf(", \"relmse_estimate_ref\": ");
-    if (eb >= 0) printf("%.9g", eb);
-    else printf("null");
+    pc_json_number(stdout, eb >= 0 ? eb : NAN);
     printf("}\n");
   } else if (ea >= 0 || eb >= 0) {
     char sa[32] = "-", sb[32] = "-";

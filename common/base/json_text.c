@@ -1,6 +1,8 @@
 /* json_text.c: JSON string escaping for the verbs' --json output and the study's files. */
 #include "json_text.h"
 
+#include <math.h>
+
 void pc_json_string(FILE *f, const char *s) {
   fputc('"', f);
   for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
@@ -9,4 +11,9 @@ void pc_json_string(FILE *f, const char *s) {
     else fputc(*p, f);
   }
   fputc('"', f);
+}
+
+void pc_json_number(FILE *f, double v) {
+  if (isfinite(v)) fprintf(f, "%.9g", v);
+  else fputs("null", f);
 }

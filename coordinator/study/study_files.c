@@ -59,12 +59,6 @@ int pc_study_write_csv(const char *path, const pc_study_run *runs, int nruns, co
   return out_commit(&o, e);
 }
 
-/* JSON has no NaN: unknown numbers are null. */
-static void json_number(FILE *f, double v) {
-  if (isfinite(v)) fprintf(f, "%.9g", v);
-  else fputs("null", f);
-}
-
 static const char *reach_name(pc_reach r) {
   switch (r) {
   case PC_REACH_INTERPOLATED: return "interpolated";
@@ -84,11 +78,11 @@ static void json_tails(FILE *f, const pc_study_tails *t) {
   }
   fprintf(f, "{\"iterations\": %llu, \"lit_fraction_of_mean\": %g, \"pixels\": %zu, \"max_over_mean_p50\": ",
           (unsigned long long)t->iterations, PC_STUDY_TAILS_LIT, t->pixels);
-  json_number(f, t->p50);
+  pc_json_number(f, t->p50);
   fputs(", \"max_over_mean_p99\": ", f);
-  json_number(f, t->p99);
+  pc_json_number(f, t->p99);
   fputs(", \"max_over_mean_max\": ", f);
-  json_number(f, t->max);
+  pc_json_number(f, t->max);
   fprintf(f, ", \"max_pixel\": [%d, %d]}", t->max_x, t->max_y);
 }
 
@@ -104,12 +98,12 @@ static void json_iteration_errors(FILE *f, const pc_study_tails *t) {
   double v[] = {ie->mean, ie->p50, ie->p90, ie->p99, ie->max, ie->top1};
   for (int i = 0; i < 6; i++) {
     fprintf(f, ", \"%s\": ", names[i]);
-    json_number(f, v[i]);
+    pc_json_number(f, v[i]);
   }
   fputs(", \"tail\": [", f);
   for (int k = 0; k < ie->ntail; k++) {
     if (k) fputs(", ", f);
-    json_number(f, ie->tail[k]);
+    pc_json_number(f, ie->tail[k]);
   }
   fputs("]}", f);
 }
@@ -123,7 +117,7 @@ static void json_shares(FILE *f, const pc_study_shares *sh) {
   fputc('{', f);
   for (int l = 0; l < PC_LAYER_STD_COUNT; l++) {
     fprintf(f, "%s\"%s\": ", l ? ", " : "", pc_study_layer_name(1 + l));
-    json_number(f, sh->share[l]);
+    pc_json_number(f, sh->share[l]);
   }
   fputc('}', f);
 }
@@ -137,7 +131,7 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
                "\"group_wall_seconds\": %.6f, \"threads\": %d, \"iterations\": %llu, \"render_seconds\": ",
             run->method.name, run->workers, run->run + 1, (unsigned long long)run->seed, run->ranges_rerun,
             run->group_wall, run->threads, last ? (unsigned long long)last->iterations : 0ULL);
-    json_number(f, last ? last->seconds : NAN);
+    pc_json_number(f, last ? last->seconds : NAN);
     fprintf(f, ", \"rays\": %llu, \"exr\": \"%s.exr\", \"png\": \"%s.png\", \"empty_layers\": [",
             (unsigned long long)run->stats.rays, run->method.name, run->method.name);
     for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
@@ -167,11 +161,11 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++) {
         if (!pc_study_ref_has(ref, slot)) continue;
         fprintf(f, "%s\"%s\": {\"relmse\": ", k++ ? ", " : "", pc_study_layer_name(slot));
-        json_number(f, sn->m[slot].relmse);
+        pc_json_number(f, sn->m[slot].relmse);
         fputs(", \"rmse\": ", f);
-        json_number(f, sn->m[slot].rmse);
+        pc_json_number(f, sn->m[slot].rmse);
         fputs(", \"l1\": ", f);
-        json_number(f, sn->m[slot].l1);
+        pc_json_number(f, sn->m[slot].l1);
         fputc('}', f);
       }
       fprintf(f, "}}%s\n", s + 1 < run->nsnaps ? "," : "");
@@ -185,18 +179,18 @@ static void json_table(FILE *f, const pc_study_table *t) {
   fputs("  \"table\": [\n", f);
   for (int row = 0; row < t->nlayers; row++) {
     fprintf(f, "    {\"layer\": \"%s\", \"target_relmse\": ", pc_study_layer_name(t->slot[row]));
-    json_number(f, t->target[row]);
+    pc_json_number(f, t->target[row]);
     fprintf(f, ", \"target_from\": \"%s\", \"rows\": [\n", t->target_given[row] ? "--target-error" : "worst final relmse");
     for (int m = 0; m < t->nmethods; m++) {
       const pc_study_cell *c = &t->cell[row][m];
       fprintf(f, "      {\"method\": \"%s\", \"final_relmse\": ", t->name[m]);
-      json_number(f, c->final_relmse);
+      pc_json_number(f, c->final_relmse);
       fprintf(f, ", \"relmse_ratio_to_%s\": ", t->name[0]);
-      json_number(f, c->relmse_ratio);
+      pc_json_number(f, c->relmse_ratio);
       fputs(", \"time_to_target\": ", f);
-      json_number(f, c->time);
+      pc_json_number(f, c->time);
       fprintf(f, ", \"reached\": \"%s\", \"time_ratio_to_%s\": ", reach_name(c->reach), t->name[0]);
-      json_number(f, c->time_ratio);
+      pc_json_number(f, c->time_ratio);
       fprintf(f, "}%s\n", m + 1 < t->nmethods ? "," : "");
     }
     fprintf(f, "    ]}%s\n", row + 1 < t->nlayers ? "," : "");
