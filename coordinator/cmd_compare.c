@@ -92,6 +92,10 @@ int pc_cmd_compare(int argc, char **argv) {
       printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
              m->nonfinite ? "  (non-finite samples skipped)" : "", comparable ? "" : "  (not comparable: weighted unlike)");
   }
+  const char *da = pc_exr_attr_get(&a, "pcbpt.max_depth"), *db = pc_exr_attr_get(&b, "pcbpt.max_depth");
+  if (da && db && strtod(da, NULL) != strtod(db, NULL))
+    fprintf(stderr, "pcbpt-coord compare: warning: max depth %s against the reference's %s: the images are of "
+            "different path lengths, so their difference is not an error\n", da, db);
   if (unlike && !json)
     printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
            "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);

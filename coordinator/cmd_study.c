@@ -267,13 +267,13 @@ static int reference_slots(const pc_exr_file *ref, const char *path, pc_study_re
 
 /* A reference rendered with the study's seed shares its first iterations' samples with every
  * method of the same kind, so their early errors would be biased low: say so. */
-static void warn_same_seed(const pc_exr_file *ref, const char *path, uint64_t seed) {
+static void warn_same_seed(int fd, const pc_exr_file *ref, const char *path, uint64_t seed) {
   char mine[32];
   snprintf(mine, sizeof mine, "%llu", (unsigned long long)seed);
   const char *theirs = pc_exr_attr_get(ref, "pcbpt.seed");
   if (theirs && strcmp(theirs, mine) == 0)
-    fprintf(stderr, "pcbpt-coord study: warning: %s was rendered with seed %s too; use another --seed for one of them\n",
-            path, mine);
+    dprintf(fd, "pcbpt-coord study: warning: %s was rendered with seed %s too; use another --seed for one of them\n", path,
+            mine);
 }
 
 /* Every method must be renderable before any budget is spent: an unimplemented one is an
@@ -313,6 +313,16 @@ static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int r
 
 /* Seeds: run r of the study uses seed + r; the reference render a seed no run uses. */
 static uint64_t run_seed(const study_args *a, int r) { return a->req.set.seed + (uint64_t)r; }
+
+/* A reference of other path lengths is an image of another quantity: every error against it
+ * has a floor its renders cannot go below. */
+static void warn_other_depth(int fd, const pc_exr_file *ref, const char *path, int max_depth) {
+  double theirs = pc_study_exr_number(ref, "pcbpt.max_depth");
+  if (isfinite(theirs) && theirs != (double)max_depth)
+    dprintf(fd, "pcbpt-coord study: warning: %s was rendered with max depth %g, the study renders %d: their images are of "
+            "different path lengths, so the errors measured have a floor (use --max-depth %g)\n",
+            path, theirs, max_depth, theirs);
+}
 
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
  * (auto's image is told from its header when it is done: its pilot's films are in it). */
@@ -373,7 +383,9 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
   if (!rc && (s->req.set.width != s->ref.w || s->req.set.height != s->ref.h))
     rc = pc_errf(e, PC_EINVAL, "reference %s is %dx%d but the study renders %dx%d (set --width/--height to match)", path,
                  s->ref.w, s->ref.h, s->req.set.width, s->req.set.height);
-  for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(&s->ref_file, path, run_seed(a, r));
+  /* the embedded farm's log has stderr meanwhile: the warnings go where the user reads */
+  for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(farm->log_fd, &s->ref_file, path, run_seed(a, r));
+  if (!rc) warn_other_depth(farm->log_fd, &s->ref_file, path, s->req.set.max_depth);
   if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;

@@ -70,6 +70,10 @@ grep -Eq "^inner .*\(not comparable: weighted unlike\)" "$tmp/out" && ! grep -Eq
 check compare-alike 0 "inner" -- "$bin" compare "$tmp/w-pcbpt--mis1.exr" "$tmp/w-bdpt.exr" --json
 python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert all(l["comparable"] for l in d["layers"]), d; assert d["weights"] == d["weights_ref"] == "bidirectional balance n_lt=1 n_inner=1", d' "$tmp/out" ||
   { echo "FAIL compare-alike: $(cat "$tmp/out")"; fail=1; }
+# ... and images of other path lengths are different quantities: said, the figures still printed
+check weights-depth2 0 "iterations" -- "$bin" render "$scene" --method bdpt --max-depth 2 --spp 2 --width 16 --height 16 \
+  --threads 2 --out "$tmp/w-d2.exr"
+check compare-depth 0 "max depth 2 against the reference's 11" -- "$bin" compare "$tmp/w-d2.exr" "$tmp/w-bdpt.exr"
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

@@ -149,6 +149,13 @@ if command -v python3 >/dev/null; then
     "$tmp/e/cornell-box/study.json" || { echo "FAIL estimated json"; fail=1; }
 fi
 [ $fail = 0 ] && echo "ok   study without a reference"
+# A reference that is an image of something else is said, where the user reads it (the embedded
+# farm's log holds stderr meanwhile): other path lengths, and the study's own seed.
+check reference-d3 0 "" -- "$bin" render "$scene" --method bdpt --spp 4 "${size[@]}" --max-depth 3 --seed 5 --threads 2 --quiet \
+  --out "$tmp/d3.exr"
+check other-reference 0 "rendered with max depth 3, the study renders 11" -- "$bin" study "$scene" --methods bdpt --seconds 0.5 \
+  --reference "$tmp/d3.exr" --seed 5 --out "$tmp/d" "${size[@]}" --threads 2
+grep -q "d3.exr was rendered with seed 5 too" "$tmp/err" || { echo "FAIL other-reference: no same-seed warning"; cat "$tmp/err"; fail=1; }
 # Method auto in a study: its pilot runs as farm jobs charged to its own budget, so its curve
 # starts after the pilot's worker-seconds and ends at the same budget as bdpt's; study.json
 # says what the pilot chose.
