@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bundle.h"
 #include "image.h"
 #include "json_text.h"
 #include "metrics.h"
@@ -96,6 +97,10 @@ int pc_cmd_compare(int argc, char **argv) {
   if (da && db && strtod(da, NULL) != strtod(db, NULL))
     fprintf(stderr, "pcbpt-coord compare: warning: max depth %s against the reference's %s: the images are of "
             "different path lengths, so their difference is not an error\n", da, db);
+  const char *ha = pc_exr_attr_get(&a, PC_SCENE_BUNDLE_ATTR), *hb = pc_exr_attr_get(&b, PC_SCENE_BUNDLE_ATTR);
+  if (ha && hb && strcmp(ha, hb) != 0)
+    fprintf(stderr, "pcbpt-coord compare: warning: the images were rendered from different scene files (%s: the scene, a "
+            "mesh or a texture changed, or another scene), so their difference is not an error\n", PC_SCENE_BUNDLE_ATTR);
   if (unlike && !json)
     printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
            "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);

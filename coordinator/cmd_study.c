@@ -324,6 +324,17 @@ static void warn_other_depth(int fd, const pc_exr_file *ref, const char *path, i
             path, theirs, max_depth, theirs);
 }
 
+/* A reference of other scene files (the scene or a mesh edited since, or another scene of the
+ * same size) is an image of something else too. */
+static void warn_other_scene(int fd, const pc_exr_file *ref, const char *path, const uint8_t hash[PC_BUNDLE_HASH]) {
+  char mine[2 * PC_BUNDLE_HASH + 1];
+  pc_bundle_hex(hash, mine);
+  const char *theirs = pc_exr_attr_get(ref, PC_SCENE_BUNDLE_ATTR);
+  if (theirs && strcmp(theirs, mine) != 0)
+    dprintf(fd, "pcbpt-coord study: warning: %s was rendered from other scene files than the study's (the scene, a mesh or "
+            "a texture changed since, or another scene): the errors measured compare different images\n", path);
+}
+
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
  * (auto's image is told from its header when it is done: its pilot's films are in it). */
 static void say_unlike(const study_args *a, const scene_study *s) {
@@ -386,6 +397,7 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
   /* the embedded farm's log has stderr meanwhile: the warnings go where the user reads */
   for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(farm->log_fd, &s->ref_file, path, run_seed(a, r));
   if (!rc) warn_other_depth(farm->log_fd, &s->ref_file, path, s->req.set.max_depth);
+  if (!rc) warn_other_scene(farm->log_fd, &s->ref_file, path, s->hash);
   if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;

@@ -269,7 +269,7 @@ static void snap_work(uv_work_t *w) {
 /* The same header as a standalone `render` writes, plus the job id and, for studies, the
  * worker-seconds behind the film. */
 static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, double snap_at, pc_err *e) {
-  char idbuf[32], seed[32], version[64], pcbpt_flags[320], weights[96];
+  char idbuf[32], seed[32], version[64], pcbpt_flags[320], weights[96], bundle[2 * PC_BUNDLE_HASH + 1];
   pc_film mix;
   const pc_film *shown;
   double pilot_weight = pc_prior_weight(j, snap_at > 0 ? snap_at : st->t_total, wall);
@@ -280,6 +280,7 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
   if (shown != &j->film) snprintf(weights, sizeof weights, "%s", PC_WEIGHTS_MIXED);
   else pc_render_settings_weights(&j->set, weights, sizeof weights);
   snprintf(idbuf, sizeof idbuf, "%llu", (unsigned long long)j->id);
+  pc_bundle_hex(j->bundle, bundle);
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)j->set.seed);
   snprintf(version, sizeof version, "pcbpt %s", PCBPT_VERSION);
   pc_exr_attr attrs[] = {
@@ -299,6 +300,8 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.time_connect", .type = PC_ATTR_DOUBLE, .d = st->t_connect},
     {.name = "pcbpt.pmf_bytes", .type = PC_ATTR_DOUBLE, .d = (double)st->pmf_bytes},
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
+    /* the scene's files as shipped: an image of an edited scene or mesh is told apart */
+    {.name = PC_SCENE_BUNDLE_ATTR, .type = PC_ATTR_STRING, .s = bundle},
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     /* how much of the image is the pilot's (docs/auto.md) */
     {.name = "pcbpt.pilot_weight", .type = PC_ATTR_DOUBLE, .d = pilot_weight},

@@ -74,6 +74,18 @@ python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert all(l["compa
 check weights-depth2 0 "iterations" -- "$bin" render "$scene" --method bdpt --max-depth 2 --spp 2 --width 16 --height 16 \
   --threads 2 --out "$tmp/w-d2.exr"
 check compare-depth 0 "max depth 2 against the reference's 11" -- "$bin" compare "$tmp/w-d2.exr" "$tmp/w-bdpt.exr"
+# ... and so are images of other scene files (the header's hash of the scene's bundle): an edited
+# copy is told apart, an unchanged copy elsewhere is the same scene
+cp -r "$(dirname "$scene")" "$tmp/copy" && cp -r "$(dirname "$scene")" "$tmp/edited" &&
+  sed -i 's/value="17, 12, 4"/value="17, 12, 5"/' "$tmp/edited/scene.xml" && ! cmp -s "$scene" "$tmp/edited/scene.xml" ||
+  { echo "FAIL: could not make an edited copy of the scene"; fail=1; }
+for v in copy edited; do
+  check "render-$v" 0 "iterations" -- "$bin" render "$tmp/$v/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
+    --out "$tmp/w-$v.exr"
+done
+check compare-edited 0 "rendered from different scene files" -- "$bin" compare "$tmp/w-edited.exr" "$tmp/w-bdpt.exr"
+check compare-copy 0 "beauty" -- "$bin" compare "$tmp/w-copy.exr" "$tmp/w-bdpt.exr"
+grep -q "different scene files" "$tmp/err" && { echo "FAIL compare-copy: an unchanged copy taken for another scene"; fail=1; }
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

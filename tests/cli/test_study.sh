@@ -156,6 +156,12 @@ check reference-d3 0 "" -- "$bin" render "$scene" --method bdpt --spp 4 "${size[
 check other-reference 0 "rendered with max depth 3, the study renders 11" -- "$bin" study "$scene" --methods bdpt --seconds 0.5 \
   --reference "$tmp/d3.exr" --seed 5 --out "$tmp/d" "${size[@]}" --threads 2
 grep -q "d3.exr was rendered with seed 5 too" "$tmp/err" || { echo "FAIL other-reference: no same-seed warning"; cat "$tmp/err"; fail=1; }
+grep -q "d3.exr was rendered from other scene files" "$tmp/err" && { echo "FAIL other-reference: same scene taken for another"; fail=1; }
+cp -r "$(dirname "$scene")" "$tmp/edited" && sed -i 's/value="17, 12, 4"/value="17, 12, 5"/' "$tmp/edited/scene.xml"
+check reference-edited 0 "" -- "$bin" render "$tmp/edited/scene.xml" --method bdpt --spp 4 "${size[@]}" --seed 5 --threads 2 --quiet \
+  --out "$tmp/edited.exr"
+check edited-reference 0 "edited.exr was rendered from other scene files than the study's" -- "$bin" study "$scene" --methods bdpt \
+  --seconds 0.5 --reference "$tmp/edited.exr" --out "$tmp/d" "${size[@]}" --threads 2
 # Method auto in a study: its pilot runs as farm jobs charged to its own budget, so its curve
 # starts after the pilot's worker-seconds and ends at the same budget as bdpt's; study.json
 # says what the pilot chose.
