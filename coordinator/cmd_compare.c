@@ -101,6 +101,10 @@ int pc_cmd_compare(int argc, char **argv) {
   if (ha && hb && strcmp(ha, hb) != 0)
     fprintf(stderr, "pcbpt-coord compare: warning: the images were rendered from different scene files (%s: the scene, a "
             "mesh or a texture changed, or another scene), so their difference is not an error\n", PC_SCENE_BUNDLE_ATTR);
+  const char *pa = pc_exr_attr_get(&a, PC_SCENE_DEFINES_ATTR), *pb = pc_exr_attr_get(&b, PC_SCENE_DEFINES_ATTR);
+  if (pa && pb && strcmp(pa, pb) != 0)
+    fprintf(stderr, "pcbpt-coord compare: warning: the scene's parameters differ ('%.200s' against the reference's '%.200s', -D), "
+            "so their difference is not an error\n", pa, pb);
   if (unlike && !json)
     printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
            "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);

@@ -335,6 +335,15 @@ static void warn_other_scene(int fd, const pc_exr_file *ref, const char *path, c
             "a texture changed since, or another scene): the errors measured compare different images\n", path);
 }
 
+static void warn_other_defines(int fd, const pc_exr_file *ref, const char *path, const pc_scene_defines *d) {
+  char mine[PC_SCENE_DEFINES_TEXT];
+  pc_scene_defines_text(d, mine, sizeof mine);
+  const char *theirs = pc_exr_attr_get(ref, PC_SCENE_DEFINES_ATTR);
+  if (theirs && strcmp(theirs, mine) != 0)
+    dprintf(fd, "pcbpt-coord study: warning: %s was rendered with the scene's parameters '%.200s', the study gives '%.200s' (-D): "
+            "the errors measured compare different images\n", path, theirs, mine);
+}
+
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
  * (auto's image is told from its header when it is done: its pilot's films are in it). */
 static void say_unlike(const study_args *a, const scene_study *s) {
@@ -398,6 +407,7 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
   for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(farm->log_fd, &s->ref_file, path, run_seed(a, r));
   if (!rc) warn_other_depth(farm->log_fd, &s->ref_file, path, s->req.set.max_depth);
   if (!rc) warn_other_scene(farm->log_fd, &s->ref_file, path, s->hash);
+  if (!rc) warn_other_defines(farm->log_fd, &s->ref_file, path, &s->req.set.defines);
   if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;

@@ -269,6 +269,8 @@ static void snap_work(uv_work_t *w) {
 /* The same header as a standalone `render` writes, plus the job id and, for studies, the
  * worker-seconds behind the film. */
 static int write_image(const pc_job *j, const char *img, const pc_render_stats *st, double wall, double snap_at, pc_err *e) {
+  char defines[PC_SCENE_DEFINES_TEXT];
+  pc_scene_defines_text(&j->set.defines, defines, sizeof defines);
   char idbuf[32], seed[32], version[64], pcbpt_flags[320], weights[96], bundle[2 * PC_BUNDLE_HASH + 1];
   pc_film mix;
   const pc_film *shown;
@@ -302,6 +304,7 @@ static int write_image(const pc_job *j, const char *img, const pc_render_stats *
     {.name = "pcbpt.scene", .type = PC_ATTR_STRING, .s = j->name},
     /* the scene's files as shipped: an image of an edited scene or mesh is told apart */
     {.name = PC_SCENE_BUNDLE_ATTR, .type = PC_ATTR_STRING, .s = bundle},
+    {.name = PC_SCENE_DEFINES_ATTR, .type = PC_ATTR_STRING, .s = defines}, /* its -D values: "" for none */
     {.name = "pcbpt.halt_noise", .type = PC_ATTR_DOUBLE, .d = j->halt_noise},
     /* how much of the image is the pilot's (docs/auto.md) */
     {.name = "pcbpt.pilot_weight", .type = PC_ATTR_DOUBLE, .d = pilot_weight},

@@ -125,6 +125,12 @@ typedef struct pc_scene_defines {
 int pc_scene_defines_add(pc_scene_defines *d, const char *name_eq_value, pc_err *e);
 /* The i-th definition. */
 void pc_scene_defines_get(const pc_scene_defines *d, int i, const char **name, const char **value);
+/* The definitions as one line, "a=1 b=x y", in the order of their names (so two sets of the same
+ * values print alike whatever order they were given in); "" for none. Returns the length
+ * snprintf would write; PC_SCENE_DEFINES_TEXT bytes always suffice. */
+#define PC_SCENE_DEFINES_TEXT (PC_SCENE_DEFINES_BYTES + 2 * PC_SCENE_MAX_DEFINES)
+#define PC_SCENE_DEFINES_ATTR "pcbpt.defines"
+int pc_scene_defines_text(const pc_scene_defines *d, char *buf, size_t size);
 
 /* Receives one warning line ("file:line: what"), already without repeats. */
 typedef void (*pc_scene_warn_fn)(void *ud, const char *line);

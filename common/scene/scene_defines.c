@@ -1,4 +1,5 @@
 /* scene_defines.c: the -D name=value parameters of a scene, in a flat bounded buffer. */
+#include <stdio.h>
 #include <string.h>
 
 #include "scene.h"
@@ -51,4 +52,28 @@ void pc_scene_defines_get(const pc_scene_defines *d, int i, const char **name, c
   }
   *name = p;
   *value = p + strlen(p) + 1;
+}
+
+int pc_scene_defines_text(const pc_scene_defines *d, char *buf, size_t size) {
+  bool taken[PC_SCENE_MAX_DEFINES] = {false};
+  size_t len = 0;
+  if (size) buf[0] = 0;
+  for (int k = 0; k < d->n; k++) {
+    int first = -1;
+    const char *fn = NULL, *fv = NULL;
+    for (int i = 0; i < d->n; i++) {
+      const char *n, *v;
+      pc_scene_defines_get(d, i, &n, &v);
+      if (!taken[i] && (first < 0 || strcmp(n, fn) < 0)) {
+        first = i;
+        fn = n;
+        fv = v;
+      }
+    }
+    taken[first] = true;
+    int w = snprintf(len < size ? buf + len : NULL, len < size ? size - len : 0, "%s%s=%s", k ? " " : "", fn, fv);
+    if (w < 0) return w;
+    len += (size_t)w;
+  }
+  return (int)len;
 }

@@ -86,6 +86,11 @@ done
 check compare-edited 0 "rendered from different scene files" -- "$bin" compare "$tmp/w-edited.exr" "$tmp/w-bdpt.exr"
 check compare-copy 0 "beauty" -- "$bin" compare "$tmp/w-copy.exr" "$tmp/w-bdpt.exr"
 grep -q "different scene files" "$tmp/err" && { echo "FAIL compare-copy: an unchanged copy taken for another scene"; fail=1; }
+# ... and images of other -D values of the same files
+check render-defines 0 "iterations" -- "$bin" render "$tmp/copy/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
+  -D zeta=1 -D alpha="a b" --out "$tmp/w-defines.exr"
+check compare-defines 0 "parameters differ ('alpha=a b zeta=1' against the reference's '', -D)" -- "$bin" compare \
+  "$tmp/w-defines.exr" "$tmp/w-copy.exr"
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

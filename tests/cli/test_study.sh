@@ -150,12 +150,15 @@ if command -v python3 >/dev/null; then
 fi
 [ $fail = 0 ] && echo "ok   study without a reference"
 # A reference that is an image of something else is said, where the user reads it (the embedded
-# farm's log holds stderr meanwhile): other path lengths, and the study's own seed.
+# farm's log holds stderr meanwhile): other path lengths, other -D values, other scene files, and
+# the study's own seed.
 check reference-d3 0 "" -- "$bin" render "$scene" --method bdpt --spp 4 "${size[@]}" --max-depth 3 --seed 5 --threads 2 --quiet \
   --out "$tmp/d3.exr"
 check other-reference 0 "rendered with max depth 3, the study renders 11" -- "$bin" study "$scene" --methods bdpt --seconds 0.5 \
-  --reference "$tmp/d3.exr" --seed 5 --out "$tmp/d" "${size[@]}" --threads 2
+  --reference "$tmp/d3.exr" --seed 5 --out "$tmp/d" "${size[@]}" --threads 2 -D zeta=1
 grep -q "d3.exr was rendered with seed 5 too" "$tmp/err" || { echo "FAIL other-reference: no same-seed warning"; cat "$tmp/err"; fail=1; }
+grep -q "d3.exr was rendered with the scene's parameters '', the study gives 'zeta=1'" "$tmp/err" ||
+  { echo "FAIL other-reference: no warning of other -D values"; cat "$tmp/err"; fail=1; }
 grep -q "d3.exr was rendered from other scene files" "$tmp/err" && { echo "FAIL other-reference: same scene taken for another"; fail=1; }
 cp -r "$(dirname "$scene")" "$tmp/edited" && sed -i 's/value="17, 12, 4"/value="17, 12, 5"/' "$tmp/edited/scene.xml"
 check reference-edited 0 "" -- "$bin" render "$tmp/edited/scene.xml" --method bdpt --spp 4 "${size[@]}" --seed 5 --threads 2 --quiet \
