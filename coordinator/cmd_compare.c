@@ -95,7 +95,7 @@ int pc_cmd_compare(int argc, char **argv) {
   }
   const char *da = pc_exr_attr_get(&a, "pcbpt.max_depth"), *db = pc_exr_attr_get(&b, "pcbpt.max_depth");
   if (da && db && strtod(da, NULL) != strtod(db, NULL))
-    fprintf(stderr, "pcbpt-coord compare: warning: max depth %s against the reference's %s: the images are of "
+    fprintf(stderr, "pcbpt-coord compare: warning: max depth %.40s against the reference's %.40s: the images are of "
             "different path lengths, so their difference is not an error\n", da, db);
   const char *ha = pc_exr_attr_get(&a, PC_SCENE_BUNDLE_ATTR), *hb = pc_exr_attr_get(&b, PC_SCENE_BUNDLE_ATTR);
   if (ha && hb && strcmp(ha, hb) != 0)
@@ -106,7 +106,7 @@ int pc_cmd_compare(int argc, char **argv) {
     fprintf(stderr, "pcbpt-coord compare: warning: the scene's parameters differ ('%.200s' against the reference's '%.200s', -D), "
             "so their difference is not an error\n", pa, pb);
   if (unlike && !json)
-    printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
+    printf("strategy layers weighted unlike: %.200s against the reference's %.200s; each shares the image out among its "
            "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);
   double ea = own_estimate(&a), eb = own_estimate(&b);
   if (json) {

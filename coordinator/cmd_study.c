@@ -355,7 +355,7 @@ static void say_unlike(const study_args *a, const scene_study *s) {
     pc_render_settings_weights(&set, w, sizeof w);
     if (!pc_weights_unlike(w, s->ref.weights)) continue;
     bool inner_count = set.method == PC_METHOD_PCBPT || set.method == PC_METHOD_CBDPT;
-    printf("%s: %s weighs its strategies unlike the reference (%s against %s): its pt, nee, lt and inner layers are "
+    printf("%s: %s weighs its strategies unlike the reference (%s against %.200s): its pt, nee, lt and inner layers are "
            "left out of those layers' comparisons, the beauty compares%s\n",
            s->name, a->methods[m].name, w, s->ref.weights,
            inner_count ? " (--mis sets the count PCBPT's inner strategies carry; BDPT's is 1)" : "");
