@@ -314,34 +314,29 @@ static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int r
 /* Seeds: run r of the study uses seed + r; the reference render a seed no run uses. */
 static uint64_t run_seed(const study_args *a, int r) { return a->req.set.seed + (uint64_t)r; }
 
-/* A reference of other path lengths is an image of another quantity: every error against it
- * has a floor its renders cannot go below. */
-static void warn_other_depth(int fd, const pc_exr_file *ref, const char *path, int max_depth) {
-  double theirs = pc_study_exr_number(ref, "pcbpt.max_depth");
-  if (isfinite(theirs) && theirs != (double)max_depth)
-    dprintf(fd, "pcbpt-coord study: warning: %s was rendered with max depth %g, the study renders %d: their images are of "
-            "different path lengths, so the errors measured have a floor (use --max-depth %g)\n",
-            path, theirs, max_depth, theirs);
-}
-
-/* A reference of other scene files (the scene or a mesh edited since, or another scene of the
- * same size) is an image of something else too. */
-static void warn_other_scene(int fd, const pc_exr_file *ref, const char *path, const uint8_t hash[PC_BUNDLE_HASH]) {
+/* What makes a reference an image of something else than the study renders, as its header
+ * tells: other path lengths (every error would have a floor), other scene files (the scene, a
+ * mesh or a texture changed since, or another scene of the same size: an unchanged copy of the
+ * scene's folder has the same hash) or other -D values. why is "" when nothing differs. */
+static void reference_differs(const pc_exr_file *ref, const scene_study *s, char *why, size_t n) {
+  size_t k = 0;
+  why[0] = 0;
+  double depth = pc_study_exr_number(ref, "pcbpt.max_depth");
+  if (isfinite(depth) && depth != (double)s->req.set.max_depth)
+    k += (size_t)snprintf(why + k, n - k, "rendered with max depth %g, the study renders %d (--max-depth)", depth,
+                          s->req.set.max_depth);
   char mine[2 * PC_BUNDLE_HASH + 1];
-  pc_bundle_hex(hash, mine);
-  const char *theirs = pc_exr_attr_get(ref, PC_SCENE_BUNDLE_ATTR);
-  if (theirs && strcmp(theirs, mine) != 0)
-    dprintf(fd, "pcbpt-coord study: warning: %s was rendered from other scene files than the study's (the scene, a mesh or "
-            "a texture changed since, or another scene): the errors measured compare different images\n", path);
-}
-
-static void warn_other_defines(int fd, const pc_exr_file *ref, const char *path, const pc_scene_defines *d) {
-  char mine[PC_SCENE_DEFINES_TEXT];
-  pc_scene_defines_text(d, mine, sizeof mine);
+  pc_bundle_hex(s->hash, mine);
+  const char *bundle = pc_exr_attr_get(ref, PC_SCENE_BUNDLE_ATTR);
+  if (k < n && bundle && strcmp(bundle, mine) != 0)
+    k += (size_t)snprintf(why + k, n - k, "%srendered from other scene files than the study's (the scene, a mesh or a "
+                          "texture changed since, or another scene)", k ? "; " : "");
+  char defines[PC_SCENE_DEFINES_TEXT];
+  pc_scene_defines_text(&s->req.set.defines, defines, sizeof defines);
   const char *theirs = pc_exr_attr_get(ref, PC_SCENE_DEFINES_ATTR);
-  if (theirs && strcmp(theirs, mine) != 0)
-    dprintf(fd, "pcbpt-coord study: warning: %s was rendered with the scene's parameters '%.200s', the study gives '%.200s' (-D): "
-            "the errors measured compare different images\n", path, theirs, mine);
+  if (k < n && theirs && strcmp(theirs, defines) != 0)
+    snprintf(why + k, n - k, "%srendered with the scene's parameters '%.200s', the study gives '%.200s' (-D)", k ? "; " : "",
+             theirs, defines);
 }
 
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
@@ -371,7 +366,19 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
                      a->ref_seconds);
     if (n < 0 || (size_t)n >= sizeof s->ref_path) return pc_errf(e, PC_EINVAL, "--out: path too long");
     path = s->ref_path;
-    if (access(path, R_OK) == 0) {
+    /* A kept reference of another scene, -D or max depth (the study's earlier run with other
+     * flags, or the scene edited since) is rendered again, not reused. */
+    pc_exr_file kept = {0};
+    pc_err ignored = {0};
+    char why[1024] = "";
+    bool reuse = access(path, R_OK) == 0 && pc_exr_read_beauty_attrs(path, &kept, &ignored) == PC_OK;
+    if (reuse) reference_differs(&kept, s, why, sizeof why);
+    pc_exr_file_free(&kept);
+    if (reuse && why[0]) {
+      dprintf(farm->log_fd, "%s: the kept reference %s was %s: rendering it again\n", s->name, path, why);
+      reuse = false;
+    }
+    if (reuse) {
       dprintf(farm->log_fd, "%s: reusing the reference %s\n", s->name, path);
     } else {
       pc_study_run run = {0};
@@ -405,9 +412,10 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
                  s->ref.w, s->ref.h, s->req.set.width, s->req.set.height);
   /* the embedded farm's log has stderr meanwhile: the warnings go where the user reads */
   for (int r = 0; !rc && r < a->runs; r++) warn_same_seed(farm->log_fd, &s->ref_file, path, run_seed(a, r));
-  if (!rc) warn_other_depth(farm->log_fd, &s->ref_file, path, s->req.set.max_depth);
-  if (!rc) warn_other_scene(farm->log_fd, &s->ref_file, path, s->hash);
-  if (!rc) warn_other_defines(farm->log_fd, &s->ref_file, path, &s->req.set.defines);
+  char why[1024];
+  if (!rc) reference_differs(&s->ref_file, s, why, sizeof why);
+  if (!rc && why[0])
+    dprintf(farm->log_fd, "pcbpt-coord study: warning: %s was %s: the errors measured compare different images\n", path, why);
   if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;
