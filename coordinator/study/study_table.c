@@ -105,10 +105,12 @@ void pc_study_headline(const pc_study_table *t, int m, char *buf, size_t size) {
   }
   if (left_out(c) || left_out(c0)) {
     const pc_study_cell *out = left_out(c) ? c : c0;
-    snprintf(buf + n, size - n, "%s %s the %s layer: no time comparison", out == c ? a : b,
-             out->reach == PC_REACH_EXCLUDED ? "leaves empty" : "weighs unlike the reference", layer);
-  }
-  else if (!isfinite(c->time_ratio))
+    if (out->reach == PC_REACH_EXCLUDED)
+      snprintf(buf + n, size - n, "%s leaves the %s layer empty: no time comparison", out == c ? a : b, layer);
+    else
+      snprintf(buf + n, size - n, "%s weighs the %s layer's strategies unlike the reference: no time comparison",
+               out == c ? a : b, layer);
+  } else if (!isfinite(c->time_ratio))
     snprintf(buf + n, size - n, "%s does not reach %s relMSE %.3g within the budget", c->reach == PC_REACH_NEVER ? a : b,
              layer, t->target[row]);
   else
