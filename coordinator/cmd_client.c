@@ -10,7 +10,7 @@
 
 #include "bundle.h"
 #include "client.h"
-#include "json_text.h"
+#include "text_out.h"
 #include "pilot_farm.h"
 #include "render.h"
 #include "render_flags.h"

@@ -10,7 +10,7 @@
 
 #include "bundle.h"
 #include "image.h"
-#include "json_text.h"
+#include "text_out.h"
 #include "metrics.h"
 #include "render.h"
 #include "verbs.h"
@@ -67,6 +67,7 @@ int pc_cmd_compare(int argc, char **argv) {
   }
   const char *wa = pc_exr_attr_get(&a, PC_WEIGHTS_ATTR), *wb = pc_exr_attr_get(&b, PC_WEIGHTS_ATTR);
   bool unlike = pc_weights_unlike(wa, wb);
+  char t1[256], t2[256]; /* a header's text as printed: bounded, no control bytes */
   if (json) {
     printf("{\"a\": ");
     pc_json_string(stdout, paths[0]);
@@ -96,18 +97,20 @@ int pc_cmd_compare(int argc, char **argv) {
   const char *da = pc_exr_attr_get(&a, "pcbpt.max_depth"), *db = pc_exr_attr_get(&b, "pcbpt.max_depth");
   if (da && db && strtod(da, NULL) != strtod(db, NULL))
     fprintf(stderr, "pcbpt-coord compare: warning: max depth %.40s against the reference's %.40s: the images are of "
-            "different path lengths, so their difference is not an error\n", da, db);
+            "different path lengths, so their difference is not an error\n", pc_text_printable(da, t1, sizeof t1),
+            pc_text_printable(db, t2, sizeof t2));
   const char *ha = pc_exr_attr_get(&a, PC_SCENE_BUNDLE_ATTR), *hb = pc_exr_attr_get(&b, PC_SCENE_BUNDLE_ATTR);
   if (ha && hb && strcmp(ha, hb) != 0)
     fprintf(stderr, "pcbpt-coord compare: warning: the images were rendered from different scene files (%s: the scene, a "
             "mesh or a texture changed, or another scene), so their difference is not an error\n", PC_SCENE_BUNDLE_ATTR);
   const char *pa = pc_exr_attr_get(&a, PC_SCENE_DEFINES_ATTR), *pb = pc_exr_attr_get(&b, PC_SCENE_DEFINES_ATTR);
   if (pa && pb && strcmp(pa, pb) != 0)
-    fprintf(stderr, "pcbpt-coord compare: warning: the scene's parameters differ ('%.200s' against the reference's '%.200s', -D), "
-            "so their difference is not an error\n", pa, pb);
+    fprintf(stderr, "pcbpt-coord compare: warning: the scene's parameters differ ('%s' against the reference's '%s', -D), "
+            "so their difference is not an error\n", pc_text_printable(pa, t1, sizeof t1), pc_text_printable(pb, t2, sizeof t2));
   if (unlike && !json)
-    printf("strategy layers weighted unlike: %.200s against the reference's %.200s; each shares the image out among its "
-           "strategies otherwise, so their differences are not errors (the beauty compares)\n", wa, wb);
+    printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
+           "strategies otherwise, so their differences are not errors (the beauty compares)\n",
+           pc_text_printable(wa, t1, sizeof t1), pc_text_printable(wb, t2, sizeof t2));
   double ea = own_estimate(&a), eb = own_estimate(&b);
   if (json) {
     printf("], \"weights\": ");

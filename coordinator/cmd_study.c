@@ -13,6 +13,7 @@
 
 #include "film.h"
 #include "image.h"
+#include "text_out.h"
 #include "render_flags.h"
 #include "cli_scene.h"
 #include "scene.h"
@@ -334,9 +335,10 @@ static void reference_differs(const pc_exr_file *ref, const scene_study *s, char
   char defines[PC_SCENE_DEFINES_TEXT];
   pc_scene_defines_text(&s->req.set.defines, defines, sizeof defines);
   const char *theirs = pc_exr_attr_get(ref, PC_SCENE_DEFINES_ATTR);
+  char shown[256];
   if (k < n && theirs && strcmp(theirs, defines) != 0)
-    snprintf(why + k, n - k, "%srendered with the scene's parameters '%.200s', the study gives '%.200s' (-D)", k ? "; " : "",
-             theirs, defines);
+    snprintf(why + k, n - k, "%srendered with the scene's parameters '%s', the study gives '%.200s' (-D)", k ? "; " : "",
+             pc_text_printable(theirs, shown, sizeof shown), defines);
 }
 
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
@@ -346,13 +348,13 @@ static void say_unlike(const study_args *a, const scene_study *s) {
     if (a->methods[m].method == PC_METHOD_AUTO) continue;
     pc_render_settings set = s->req.set;
     pc_study_method_apply(&a->methods[m], &set);
-    char w[96];
+    char w[96], shown[256];
     pc_render_settings_weights(&set, w, sizeof w);
     if (!pc_weights_unlike(w, s->ref.weights)) continue;
     bool inner_count = set.method == PC_METHOD_PCBPT || set.method == PC_METHOD_CBDPT;
-    printf("%s: %s weighs its strategies unlike the reference (%s against %.200s): its pt, nee, lt and inner layers are "
+    printf("%s: %s weighs its strategies unlike the reference (%s against %s): its pt, nee, lt and inner layers are "
            "left out of those layers' comparisons, the beauty compares%s\n",
-           s->name, a->methods[m].name, w, s->ref.weights,
+           s->name, a->methods[m].name, w, pc_text_printable(s->ref.weights, shown, sizeof shown),
            inner_count ? " (--mis sets the count PCBPT's inner strategies carry; BDPT's is 1)" : "");
   }
 }

@@ -10,7 +10,7 @@
 #include <unistd.h>
 
 #include "chart.h"
-#include "json_text.h"
+#include "text_out.h"
 #include "study.h"
 
 typedef struct out_file {

@@ -1,6 +1,6 @@
 /* test_layer_weights.c: what an image's header says of how it weighs its strategies
  * (pc_render_settings_weights), which layers that concerns, and the JSON text the verbs print
- * from untrusted headers and layer names (base/json_text). */
+ * from untrusted headers and layer names (base/text_out). */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -10,7 +10,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "json_text.h"
+#include "text_out.h"
 #include "render.h"
 
 static void weights_of(pc_method m, void (*change)(pc_render_settings *), char *buf, size_t n) {
@@ -83,6 +83,11 @@ static void json_text(void **st) {
   assert_int_equal(fclose(f), 0);
   assert_string_equal(buf, "\"a\\\"b\\\\c\\u000ad\\u0001\" 0.25 null null null");
   free(buf);
+  /* for a terminal: no escape sequence gets through, and the length is bounded */
+  char out[8];
+  assert_string_equal(pc_text_printable("a\x1b[2Jb\x7f", out, sizeof out), "a?[2Jb?");
+  assert_string_equal(pc_text_printable("0123456789", out, sizeof out), "0123456");
+  assert_string_equal(pc_text_printable("", out, sizeof out), "");
 }
 
 int main(void) {
