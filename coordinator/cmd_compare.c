@@ -8,10 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bundle.h"
 #include "image.h"
 #include "text_out.h"
 #include "metrics.h"
+#include "study.h"
 #include "render.h"
 #include "verbs.h"
 
@@ -94,19 +94,12 @@ int pc_cmd_compare(int argc, char **argv) {
       printf("%-10s %14.6e %14.6e %14.6e %12.6g %12.6g%s%s\n", name, m->rmse, m->relmse, m->l1, m->mean_a, m->mean_b,
              m->nonfinite ? "  (non-finite samples skipped)" : "", comparable ? "" : "  (not comparable: weighted unlike)");
   }
-  const char *da = pc_exr_attr_get(&a, "pcbpt.max_depth"), *db = pc_exr_attr_get(&b, "pcbpt.max_depth");
-  if (da && db && strtod(da, NULL) != strtod(db, NULL))
-    fprintf(stderr, "pcbpt-coord compare: warning: max depth %.40s against the reference's %.40s: the images are of "
-            "different path lengths, so their difference is not an error\n", pc_text_printable(da, t1, sizeof t1),
-            pc_text_printable(db, t2, sizeof t2));
-  const char *ha = pc_exr_attr_get(&a, PC_SCENE_BUNDLE_ATTR), *hb = pc_exr_attr_get(&b, PC_SCENE_BUNDLE_ATTR);
-  if (ha && hb && strcmp(ha, hb) != 0)
-    fprintf(stderr, "pcbpt-coord compare: warning: the images were rendered from different scene files (%s: the scene, a "
-            "mesh or a texture changed, or another scene), so their difference is not an error\n", PC_SCENE_BUNDLE_ATTR);
-  const char *pa = pc_exr_attr_get(&a, PC_SCENE_DEFINES_ATTR), *pb = pc_exr_attr_get(&b, PC_SCENE_DEFINES_ATTR);
-  if (pa && pb && strcmp(pa, pb) != 0)
-    fprintf(stderr, "pcbpt-coord compare: warning: the scene's parameters differ ('%s' against the reference's '%s', -D), "
-            "so their difference is not an error\n", pc_text_printable(pa, t1, sizeof t1), pc_text_printable(pb, t2, sizeof t2));
+  char why[1024];
+  pc_image_kind ka = pc_image_kind_exr(&a), kb = pc_image_kind_exr(&b);
+  pc_image_kind_differs(&kb, &ka, why, sizeof why);
+  if (why[0])
+    fprintf(stderr, "pcbpt-coord compare: warning: the images are of different things (%s), so their difference is not an "
+            "error\n", why);
   if (unlike && !json)
     printf("strategy layers weighted unlike: %s against the reference's %s; each shares the image out among its "
            "strategies otherwise, so their differences are not errors (the beauty compares)\n",

@@ -315,30 +315,13 @@ static pc_study_run *run_at(const study_args *a, scene_study *s, int size, int r
 /* Seeds: run r of the study uses seed + r; the reference render a seed no run uses. */
 static uint64_t run_seed(const study_args *a, int r) { return a->req.set.seed + (uint64_t)r; }
 
-/* What makes a reference an image of something else than the study renders, as its header
- * tells: other path lengths (every error would have a floor), other scene files (the scene, a
- * mesh or a texture changed since, or another scene of the same size: an unchanged copy of the
- * scene's folder has the same hash) or other -D values. why is "" when nothing differs. */
+/* How a reference is of something else than the study renders (pc_image_kind_differs). */
 static void reference_differs(const pc_exr_file *ref, const scene_study *s, char *why, size_t n) {
-  size_t k = 0;
-  why[0] = 0;
-  double depth = pc_study_exr_number(ref, "pcbpt.max_depth");
-  if (isfinite(depth) && depth != (double)s->req.set.max_depth)
-    k += (size_t)snprintf(why + k, n - k, "rendered with max depth %g, the study renders %d (--max-depth)", depth,
-                          s->req.set.max_depth);
-  char mine[2 * PC_BUNDLE_HASH + 1];
-  pc_bundle_hex(s->hash, mine);
-  const char *bundle = pc_exr_attr_get(ref, PC_SCENE_BUNDLE_ATTR);
-  if (k < n && bundle && strcmp(bundle, mine) != 0)
-    k += (size_t)snprintf(why + k, n - k, "%srendered from other scene files than the study's (the scene, a mesh or a "
-                          "texture changed since, or another scene)", k ? "; " : "");
-  char defines[PC_SCENE_DEFINES_TEXT];
+  char bundle[2 * PC_BUNDLE_HASH + 1], defines[PC_SCENE_DEFINES_TEXT];
+  pc_bundle_hex(s->hash, bundle);
   pc_scene_defines_text(&s->req.set.defines, defines, sizeof defines);
-  const char *theirs = pc_exr_attr_get(ref, PC_SCENE_DEFINES_ATTR);
-  char shown[256];
-  if (k < n && theirs && strcmp(theirs, defines) != 0)
-    snprintf(why + k, n - k, "%srendered with the scene's parameters '%s', the study gives '%.200s' (-D)", k ? "; " : "",
-             pc_text_printable(theirs, shown, sizeof shown), defines);
+  pc_image_kind theirs = pc_image_kind_exr(ref), mine = {s->req.set.max_depth, bundle, defines};
+  pc_image_kind_differs(&theirs, &mine, why, n);
 }
 
 /* Before any budget is spent: the methods whose strategy layers the reference weighs otherwise
@@ -377,7 +360,8 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
     if (reuse) reference_differs(&kept, s, why, sizeof why);
     pc_exr_file_free(&kept);
     if (reuse && why[0]) {
-      dprintf(farm->log_fd, "%s: the kept reference %s was %s: rendering it again\n", s->name, path, why);
+      dprintf(farm->log_fd, "%s: the kept reference %s is of something else than the study renders (%s): rendering it again\n",
+              s->name, path, why);
       reuse = false;
     }
     if (reuse) {
@@ -417,7 +401,8 @@ static int load_reference(const study_args *a, pc_study_farm *farm, scene_study 
   char why[1024];
   if (!rc) reference_differs(&s->ref_file, s, why, sizeof why);
   if (!rc && why[0])
-    dprintf(farm->log_fd, "pcbpt-coord study: warning: %s was %s: the errors measured compare different images\n", path, why);
+    dprintf(farm->log_fd, "pcbpt-coord study: warning: %s is of something else than the study renders (%s): the errors measured "
+            "compare different images\n", path, why);
   if (!rc) say_unlike(a, s);
   snprintf(s->ref_path, sizeof s->ref_path, "%s", path);
   return rc;

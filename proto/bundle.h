@@ -25,8 +25,6 @@ int pc_bundle_create(const char *const *files, const char *const *names, int nfi
 int pc_bundle_dir(const char *cache_dir, const uint8_t hash[PC_BUNDLE_HASH], char *out, size_t out_size);
 int pc_bundle_hash(const uint8_t *blob, size_t n, uint8_t hash[PC_BUNDLE_HASH], pc_err *e);
 void pc_bundle_hex(const uint8_t hash[PC_BUNDLE_HASH], char out[2 * PC_BUNDLE_HASH + 1]);
-/* The image header attribute holding the hex hash of the bundle an image was rendered from. */
-#define PC_SCENE_BUNDLE_ATTR "pcbpt.scene_bundle"
 /* Parses 64 hex digits; returns PC_EINVAL otherwise. */
 int pc_bundle_unhex(const char *hex, uint8_t hash[PC_BUNDLE_HASH]);
 /* True if rel is a safe relative path: no leading '/', no "." or ".." or empty component, no

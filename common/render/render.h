@@ -80,6 +80,12 @@ bool pc_weights_unlike(const char *a, const char *b);
 /* Whether an EXR layer is a strategy layer, weighted as pc_render_settings_weights says:
  * "pt", "nee", "lt", "inner", "s<S>t<T>". */
 bool pc_weights_layer(const char *name);
+/* What else an image's header says it is of, beside its size and "pcbpt.max_depth": the hex
+ * hash of the scene's files as a job ships them (an edited scene, mesh or texture, or another
+ * scene, hashes otherwise; an unchanged copy of the folder alike), and its -D values
+ * (pc_scene_defines_text, "" for none). */
+#define PC_SCENE_BUNDLE_ATTR "pcbpt.scene_bundle"
+#define PC_SCENE_DEFINES_ATTR "pcbpt.defines"
 
 /* Time (seconds) and work spent, summed over iterations; printed and stored in headers. */
 typedef struct pc_render_stats {

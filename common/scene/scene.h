@@ -129,7 +129,6 @@ void pc_scene_defines_get(const pc_scene_defines *d, int i, const char **name, c
  * values print alike whatever order they were given in); "" for none. Returns the length
  * snprintf would write; PC_SCENE_DEFINES_TEXT bytes always suffice. */
 #define PC_SCENE_DEFINES_TEXT (PC_SCENE_DEFINES_BYTES + 2 * PC_SCENE_MAX_DEFINES)
-#define PC_SCENE_DEFINES_ATTR "pcbpt.defines"
 int pc_scene_defines_text(const pc_scene_defines *d, char *buf, size_t size);
 
 /* Receives one warning line ("file:line: what"), already without repeats. */

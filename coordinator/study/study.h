@@ -113,9 +113,10 @@ typedef struct pc_study_run {
   pc_study_snap *snaps;
   bool layer_empty[PC_STUDY_NLAYERS]; /* the method adds nothing to this layer (e.g. pt: inner) */
   /* The method's final image weighs its strategies unlike the reference (pc_weights_unlike):
-   * its strategy layers estimate other shares of the image, so they are left out of those
-   * layers' comparisons as empty ones are. weights: what its header says ("" if nothing). */
-  bool layer_unlike[PC_STUDY_NLAYERS];
+   * its strategy layers (every slot but the beauty) estimate other shares of the image, so they
+   * are left out of those layers' comparisons as empty ones are. weights: what its header says
+   * ("" if nothing). */
+  bool unlike;
   char weights[96];
   pc_render_stats stats;
   char auto_report[1024]; /* method auto: the pilot's choice and candidates (pilot.h); else "" */
@@ -126,9 +127,9 @@ typedef struct pc_study_run {
 void pc_study_run_free(pc_study_run *run);
 /* Whether run is left out of layer slot's comparisons: empty, or weighted unlike the reference. */
 static inline bool pc_study_excluded(const pc_study_run *run, int slot) {
-  return run->layer_empty[slot] || run->layer_unlike[slot];
+  return run->layer_empty[slot] || (run->unlike && slot != PC_STUDY_BEAUTY);
 }
-/* From the method's final image: run->weights, and run->layer_unlike against ref's weighting. */
+/* From the method's final image: run->weights, and run->unlike against ref's weighting. */
 void pc_study_weights_exr(const pc_exr_file *x, const pc_study_ref *ref, pc_study_run *run);
 /* One point of a farm study's curve from an image the farm wrote (study_measure.c): errors
  * against ref per layer (or the beauty's own estimate without one), its worker-seconds,
@@ -138,6 +139,20 @@ int pc_study_measure_exr(const pc_exr_file *x, const char *path, const pc_study_
                          pc_study_snap *s, bool layer_empty[PC_STUDY_NLAYERS], pc_err *e);
 /* A numeric header attribute, NAN when absent. */
 double pc_study_exr_number(const pc_exr_file *x, const char *name);
+
+/* What an image is of beside its size, as far as it is known (NAN or NULL: not said): an image
+ * that differs in any of these is of something else, so errors against it have a floor. */
+typedef struct pc_image_kind {
+  double max_depth;    /* path lengths */
+  const char *bundle;  /* PC_SCENE_BUNDLE_ATTR: the scene's files */
+  const char *defines; /* PC_SCENE_DEFINES_ATTR: its -D values */
+} pc_image_kind;
+/* The kind an image's header says. */
+pc_image_kind pc_image_kind_exr(const pc_exr_file *x);
+/* Into why (at most n bytes), how ref differs from mine in what both say ("" when in nothing):
+ * "max depth 11 in the reference, 4 here; other scene files in the reference (...); -D ''
+ * in the reference, 'a=1' here", the header's text without control bytes. */
+void pc_image_kind_differs(const pc_image_kind *ref, const pc_image_kind *mine, char *why, size_t n);
 
 /* --runs (study_spread.c). */
 #define PC_STUDY_MAX_RUNS 100

@@ -138,7 +138,7 @@ static void json_runs(FILE *f, const pc_study_run *runs, int nruns, const pc_stu
       if (run->layer_empty[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
     fputs("], \"unlike_layers\": [", f);
     for (int slot = 0, k = 0; slot < PC_STUDY_NLAYERS; slot++)
-      if (run->layer_unlike[slot]) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
+      if (run->unlike && slot != PC_STUDY_BEAUTY) fprintf(f, "%s\"%s\"", k++ ? ", " : "", pc_study_layer_name(slot));
     fputs("], \"weights\": ", f);
     if (run->weights[0]) pc_json_string(f, run->weights);
     else fputs("null", f);

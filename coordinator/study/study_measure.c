@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "study.h"
+#include "text_out.h"
 
 double pc_study_exr_number(const pc_exr_file *x, const char *name) {
   const char *v = pc_exr_attr_get(x, name);
@@ -22,12 +23,29 @@ static const pc_image *layer(const pc_exr_file *x, const char *name) {
   return NULL;
 }
 
+pc_image_kind pc_image_kind_exr(const pc_exr_file *x) {
+  return (pc_image_kind){pc_study_exr_number(x, "pcbpt.max_depth"), pc_exr_attr_get(x, PC_SCENE_BUNDLE_ATTR),
+                         pc_exr_attr_get(x, PC_SCENE_DEFINES_ATTR)};
+}
+
+void pc_image_kind_differs(const pc_image_kind *ref, const pc_image_kind *mine, char *why, size_t n) {
+  size_t k = 0;
+  why[0] = 0;
+  if (isfinite(ref->max_depth) && isfinite(mine->max_depth) && ref->max_depth != mine->max_depth)
+    k += (size_t)snprintf(why, n, "max depth %g in the reference, %g here", ref->max_depth, mine->max_depth);
+  if (k < n && ref->bundle && mine->bundle && strcmp(ref->bundle, mine->bundle) != 0)
+    k += (size_t)snprintf(why + k, n - k, "%sother scene files in the reference (the scene, a mesh or a texture changed, or "
+                          "another scene)", k ? "; " : "");
+  char a[256], b[256];
+  if (k < n && ref->defines && mine->defines && strcmp(ref->defines, mine->defines) != 0)
+    snprintf(why + k, n - k, "%s-D '%s' in the reference, '%s' here", k ? "; " : "", pc_text_printable(ref->defines, a, sizeof a),
+             pc_text_printable(mine->defines, b, sizeof b));
+}
+
 void pc_study_weights_exr(const pc_exr_file *x, const pc_study_ref *ref, pc_study_run *run) {
   const char *w = pc_exr_attr_get(x, PC_WEIGHTS_ATTR);
   snprintf(run->weights, sizeof run->weights, "%s", w ? w : "");
-  bool unlike = !ref->estimated && pc_weights_unlike(w, ref->weights);
-  for (int slot = 0; slot < PC_STUDY_NLAYERS; slot++)
-    run->layer_unlike[slot] = unlike && slot != PC_STUDY_BEAUTY && pc_weights_layer(pc_study_layer_name(slot));
+  run->unlike = !ref->estimated && pc_weights_unlike(w, ref->weights);
 }
 
 int pc_study_measure_exr(const pc_exr_file *x, const char *path, const pc_study_ref *ref, int workers,

@@ -64,7 +64,7 @@ int pc_study_median_run(const pc_study_run *runs, int nruns, int npoints, double
   out->threads = runs[0].threads;
   out->workers = runs[0].workers;
   memcpy(out->layer_empty, runs[0].layer_empty, sizeof out->layer_empty);
-  memcpy(out->layer_unlike, runs[0].layer_unlike, sizeof out->layer_unlike);
+  out->unlike = runs[0].unlike;
   memcpy(out->weights, runs[0].weights, sizeof out->weights);
   out->snaps = calloc((size_t)npoints, sizeof *out->snaps);
   double *v = malloc((size_t)nruns * sizeof *v);

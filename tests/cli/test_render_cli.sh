@@ -73,7 +73,7 @@ python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert all(l["compa
 # ... and images of other path lengths are different quantities: said, the figures still printed
 check weights-depth2 0 "iterations" -- "$bin" render "$scene" --method bdpt --max-depth 2 --spp 2 --width 16 --height 16 \
   --threads 2 --out "$tmp/w-d2.exr"
-check compare-depth 0 "max depth 2 against the reference's 11" -- "$bin" compare "$tmp/w-d2.exr" "$tmp/w-bdpt.exr"
+check compare-depth 0 "of different things (max depth 11 in the reference, 2 here)" -- "$bin" compare "$tmp/w-d2.exr" "$tmp/w-bdpt.exr"
 # ... and so are images of other scene files (the header's hash of the scene's bundle): an edited
 # copy is told apart, an unchanged copy elsewhere is the same scene
 cp -r "$(dirname "$scene")" "$tmp/copy" && cp -r "$(dirname "$scene")" "$tmp/edited" &&
@@ -83,13 +83,13 @@ for v in copy edited; do
   check "render-$v" 0 "iterations" -- "$bin" render "$tmp/$v/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
     --out "$tmp/w-$v.exr"
 done
-check compare-edited 0 "rendered from different scene files" -- "$bin" compare "$tmp/w-edited.exr" "$tmp/w-bdpt.exr"
+check compare-edited 0 "of different things (other scene files in the reference" -- "$bin" compare "$tmp/w-edited.exr" "$tmp/w-bdpt.exr"
 check compare-copy 0 "beauty" -- "$bin" compare "$tmp/w-copy.exr" "$tmp/w-bdpt.exr"
-grep -q "different scene files" "$tmp/err" && { echo "FAIL compare-copy: an unchanged copy taken for another scene"; fail=1; }
+grep -q "other scene files" "$tmp/err" && { echo "FAIL compare-copy: an unchanged copy taken for another scene"; fail=1; }
 # ... and images of other -D values of the same files
 check render-defines 0 "iterations" -- "$bin" render "$tmp/copy/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
   -D zeta=1 -D alpha="a b" --out "$tmp/w-defines.exr"
-check compare-defines 0 "parameters differ ('alpha=a b zeta=1' against the reference's '', -D)" -- "$bin" compare \
+check compare-defines 0 "of different things (-D '' in the reference, 'alpha=a b zeta=1' here)" -- "$bin" compare \
   "$tmp/w-defines.exr" "$tmp/w-copy.exr"
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
