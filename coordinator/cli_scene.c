@@ -18,6 +18,9 @@ int pc_cli_load_scene(const char *verb, pc_render_request *req, const char *path
   o.max_file_bytes = PC_BUNDLE_MAX; /* every verb that loads a scene ships it as a bundle */
   int rc = pc_scene_load_with(path, &o, s, e);
   if (rc) return rc;
+  /* the job carries the -D values the scene uses (the loader warned of the others), so that its
+   * image's pcbpt.defines is what it was rendered with */
+  req->set.defines = s->defines_used;
   pc_render_request_apply_scene(req, s);
   if (req->spp == 0 && req->seconds == 0 && req->halt_noise == 0) req->spp = 64;
   return 0;

@@ -73,6 +73,16 @@ typedef enum { PC_METHOD_PT, PC_METHOD_LT, PC_METHOD_BDPT, PC_METHOD_CBDPT, PC_M
 #define PC_SCENE_MAX_LIGHTS 65536
 #define PC_SCENE_MAX_FILM_DIM 16384
 
+/* Command-line $name parameters (Mitsuba's -D name=value), kept in one flat buffer so render
+ * settings that carry them stay plain data: "name\0value\0name\0value\0...". */
+#define PC_SCENE_MAX_DEFINES 64
+#define PC_SCENE_DEFINES_BYTES 4096
+typedef struct pc_scene_defines {
+  int n;
+  int used;                    /* bytes of buf in use */
+  char buf[PC_SCENE_DEFINES_BYTES];
+} pc_scene_defines;
+
 typedef struct pc_scene {
   char *path;                 /* scene file as given */
   pc_shape *shapes; int nshapes;
@@ -109,17 +119,9 @@ typedef struct pc_scene {
    * through Embree alone): shadow rays test t in [0, tfar) of o + t d. */
   void (*ray_hook)(void *user, bool shadow, vec3 o, vec3 d, float tfar);
   void *ray_hook_user;
+  pc_scene_defines defines_used; /* the load's -D values that a $name of the scene substituted */
 } pc_scene;
 
-/* Command-line $name parameters (Mitsuba's -D name=value), kept in one flat buffer so render
- * settings that carry them stay plain data: "name\0value\0name\0value\0...". */
-#define PC_SCENE_MAX_DEFINES 64
-#define PC_SCENE_DEFINES_BYTES 4096
-typedef struct pc_scene_defines {
-  int n;
-  int used;                    /* bytes of buf in use */
-  char buf[PC_SCENE_DEFINES_BYTES];
-} pc_scene_defines;
 
 /* Adds "name=value" (name: letters, digits, _; a later -D of the same name replaces it). */
 int pc_scene_defines_add(pc_scene_defines *d, const char *name_eq_value, pc_err *e);

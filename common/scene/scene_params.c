@@ -450,6 +450,7 @@ static int substitute(pc_sx *c, const pc_xml_node *n, char **value) {
         free(out);
         return pc_errf(c->e, PC_EINVAL, "%s:%d: <%s> refers to an undefined parameter in '%.60s'", c->file, n->line, n->name, v);
       }
+      if (best < c->ndefines) c->define_used[best] = true;
       piece = c->pvalues[best];
       plen = strlen(piece);
       p += 1 + blen;
@@ -591,6 +592,28 @@ static int subst_list(pc_sx *c, pc_xml_node **link, const pc_xml_node *stop, int
   return 0;
 }
 
+/* A -D value no $name of the scene (or of its included files) substitutes changes nothing: a
+ * warning (a misspelt name is otherwise silent), and the scene keeps only the values it used, so
+ * that what an image says it was rendered with (pcbpt.defines) does not differ between two
+ * renders of the same scene for a value neither used. */
+static int note_defines_used(pc_sx *c, const pc_xml_node *root) {
+  const pc_scene_defines *d = c->opts->defines;
+  for (int i = 0; d && i < d->n; i++) {
+    const char *name, *value;
+    pc_scene_defines_get(d, i, &name, &value);
+    int rc = 0;
+    if (!c->define_used[i])
+      rc = pc_sx_warn(c, root, "-D %.60s=%.60s: the scene names no $%.60s, so the value changes nothing", name, value, name);
+    else {
+      char nv[PC_SCENE_DEFINES_BYTES + 2];
+      snprintf(nv, sizeof nv, "%s=%s", name, value);
+      rc = pc_scene_defines_add(&c->s->defines_used, nv, c->e);
+    }
+    if (rc) return rc;
+  }
+  return 0;
+}
+
 int pc_sx_substitute(pc_sx *c, pc_xml_node *root) {
   const pc_scene_defines *d = c->opts->defines;
   for (int i = 0; d && i < d->n; i++) {
@@ -599,7 +622,12 @@ int pc_sx_substitute(pc_sx *c, pc_xml_node *root) {
     int rc = add_param(c, NULL, name, value);
     if (rc) return rc;
   }
-  return subst_rec(c, root, 0);
+  /* -D names are distinct (pc_scene_defines_add), so they are the first d->n parameters */
+  c->ndefines = d ? d->n : 0;
+  int rc = subst_rec(c, root, 0);
+  if (rc) return rc;
+  c->file = c->main_file;
+  return note_defines_used(c, root);
 }
 
 int pc_sx_name_below(pc_sx *c, const pc_xml_node *n, const char *base, const char *rel, char out[PATH_MAX]) {

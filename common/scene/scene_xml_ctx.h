@@ -40,6 +40,8 @@ typedef struct pc_sx {
   int id_table_size;
   char **pnames, **pvalues; /* <default> parameters */
   int nparams, cap_params;
+  int ndefines;             /* the first ndefines parameters are the -D values */
+  bool define_used[PC_SCENE_MAX_DEFINES]; /* whether a $name substituted that -D value */
   int default_material;     /* Mitsuba's diffuse 0.5 for shapes without a BSDF, -1 until needed */
   bool have_env;            /* an environment emitter was declared (Mitsuba allows one) */
   int cap_shapes, cap_materials, cap_textures, cap_lights, cap_motions;

@@ -86,11 +86,31 @@ done
 check compare-edited 0 "of different things (other scene files in the reference" -- "$bin" compare "$tmp/w-edited.exr" "$tmp/w-bdpt.exr"
 check compare-copy 0 "beauty" -- "$bin" compare "$tmp/w-copy.exr" "$tmp/w-bdpt.exr"
 grep -q "other scene files" "$tmp/err" && { echo "FAIL compare-copy: an unchanged copy taken for another scene"; fail=1; }
-# ... and images of other -D values of the same files
-check render-defines 0 "iterations" -- "$bin" render "$tmp/copy/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
-  -D zeta=1 -D alpha="a b" --out "$tmp/w-defines.exr"
-check compare-defines 0 "of different things (-D '' in the reference, 'alpha=a b zeta=1' here)" -- "$bin" compare \
-  "$tmp/w-defines.exr" "$tmp/w-copy.exr"
+# ... and images of other -D values of the same files: a value the scene uses is told apart (even
+# one equal to its <default>); one it never names is warned of at the render and is no difference
+cp -r "$(dirname "$scene")" "$tmp/param" &&
+  sed -i 's/value="17, 12, 4"/value="$light"/; s|^<scene version="0.6.0">|&<default name="light" value="17, 12, 4"/>|' \
+    "$tmp/param/scene.xml" && grep -q '<default name="light"' "$tmp/param/scene.xml" ||
+  { echo "FAIL: could not make a copy of the scene with a parameter"; fail=1; }
+for d in none light; do
+  defs=(); [ $d = light ] && defs=(-D "light=17, 12, 4" -D zeta=1 -D alpha="a b")
+  check "render-param-$d" 0 "iterations" -- "$bin" render "$tmp/param/scene.xml" --method bdpt --spp 2 --width 16 --height 16 \
+    --threads 2 "${defs[@]}" --out "$tmp/w-param-$d.exr"
+done
+for v in zeta alpha; do
+  grep -q "scene.xml:4: warning: -D $v=.*: the scene names no \$$v, so the value changes nothing" "$tmp/err" ||
+    { echo "FAIL render-param-light: no warning of the unused -D $v"; cat "$tmp/err"; fail=1; }
+done
+grep -q "names no \$light" "$tmp/err" && { echo "FAIL render-param-light: the used -D light warned of"; fail=1; }
+check compare-defines 0 "of different things (-D '' in the reference, 'light=17, 12, 4' here)" -- "$bin" compare \
+  "$tmp/w-param-light.exr" "$tmp/w-param-none.exr"
+grep -q "^beauty *0.000000e+00" "$tmp/out" || { echo "FAIL compare-defines: -D equal to the default changed the image"; fail=1; }
+check render-unused 0 "iterations" -- "$bin" render "$tmp/copy/scene.xml" --method bdpt --spp 2 --width 16 --height 16 --threads 2 \
+  -D zeta=1 --out "$tmp/w-unused.exr"
+check compare-unused 0 "beauty" -- "$bin" compare "$tmp/w-unused.exr" "$tmp/w-copy.exr"
+grep -q "of different things" "$tmp/err" && { echo "FAIL compare-unused: an unused -D taken for another image"; cat "$tmp/err"; fail=1; }
+check strict-unused 1 "-D zeta=1: the scene names no \$zeta, so the value changes nothing (an error under --strict)" -- \
+  "$bin" render "$tmp/copy/scene.xml" --spp 1 --width 16 --height 16 --threads 2 -D zeta=1 --strict --out "$tmp/w-strict.exr"
 check compare-missing 1 "nope.exr" -- "$bin" compare "$tmp/cb.exr" "$tmp/nope.exr"
 check compare-one 2 "two EXR" -- "$bin" compare "$tmp/cb.exr"
 # Interrupted twice: the render stops at once, writes nothing, says so in one line and removes

@@ -932,12 +932,17 @@ static void test_include_and_defines(void **state) {
   assert_non_null(strstr(e.msg, "expands to itself"));
   assert_int_equal(pc_scene_defines_add(&d, "=1", &e), PC_EINVAL);
   assert_int_equal(pc_scene_defines_add(&d, "a-b=1", &e), PC_EINVAL);
+  assert_int_equal(pc_scene_defines_add(&d, "zeta=1", &e), 0); /* no $zeta in the scene */
   pc_scene_load_opts o = {.defines = &d};
   pc_scene s;
   int rc = load_body_opts(&t, body, &o, &s, &e);
   if (rc) print_error("%s\n", e.msg);
   assert_int_equal(rc, 0);
   assert_int_equal(s.max_depth, 3);
+  /* the scene keeps the -D values a $name used, in an included file too, and not zeta */
+  char used[PC_SCENE_DEFINES_TEXT];
+  pc_scene_defines_text(&s.defines_used, used, sizeof used);
+  assert_string_equal(used, "depth=3 mesh=quad.obj");
   assert_int_equal(s.nshapes, 1);
   assert_int_equal(s.nfiles, 4); /* scene.xml, a.xml, b.xml, quad.obj */
   assert_non_null(strstr(s.files[0], "/scene.xml"));
@@ -952,6 +957,12 @@ static void test_include_and_defines(void **state) {
   assert_int_not_equal(rc, 0);
   assert_non_null(strstr(e.msg, "parts/b.xml:1:"));
   assert_non_null(strstr(e.msg, "degenerate"));
+  /* an unused -D is a warning, which --strict makes the error, naming the main file */
+  pc_scene_load_opts strict_d = {.defines = &d, .strict = true};
+  rc = load_body_opts(&t, body, &strict_d, &s, &e);
+  assert_int_equal(rc, PC_EUNSUPPORTED);
+  assert_non_null(strstr(e.msg, "scene.xml:"));
+  assert_non_null(strstr(e.msg, "-D zeta=1: the scene names no $zeta, so the value changes nothing"));
   /* an error inside an included file names it and its line */
   rc = load_body_opts(&t, "<include filename=\"parts/bad.xml\"/>" SENSOR, NULL, &s, &e);
   assert_int_equal(rc, PC_EUNSUPPORTED);
